@@ -1,0 +1,46 @@
+"""Shared benchmark helpers: timing, Markdown tables, output folder."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+
+def parser(name: str, description: str) -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog=f"python -m rain_core.bench {name}", description=description)
+    p.add_argument("--out", default="bench_out", help="folder for the Markdown table and the plot")
+    p.add_argument("--quick", action="store_true", help="fewer repetitions and sizes (for smoke tests)")
+    return p
+
+
+def time_call(fn, repeat: int = 5, warmup: int = 1) -> float:
+    """Median wall time of fn() in seconds."""
+    for _ in range(warmup):
+        fn()
+    samples = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - t0)
+    samples.sort()
+    return samples[len(samples) // 2]
+
+
+def markdown_table(headers, rows) -> str:
+    def fmt(v):
+        if isinstance(v, float):
+            return f"{v:.4g}"
+        return str(v)
+
+    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    lines += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def write_output(out_dir: str, name: str, markdown: str) -> Path:
+    path = Path(out_dir)
+    path.mkdir(parents=True, exist_ok=True)
+    target = path / f"{name}.md"
+    target.write_text(markdown + "\n")
+    return target
