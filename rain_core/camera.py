@@ -1,0 +1,100 @@
+"""Pinhole cameras and the rigs that place them relative to a car (driver's seat, chase)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def _normalize(v) -> np.ndarray:
+    v = np.asarray(v, dtype=np.float64)
+    n = np.linalg.norm(v)
+    return v / n if n > 0 else v
+
+
+@dataclass
+class Camera:
+    """A perspective camera. position (m, world), forward/up unit vectors, vertical fov (deg), near/far (m)."""
+
+    position: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.5, 0.0]))
+    forward: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
+    up: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
+    fov_y_deg: float = 70.0
+    near_m: float = 0.05
+    far_m: float = 2000.0
+    inside_car: bool = False  # the windshield effect draws only when the camera looks through the glass
+
+    def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(right, up, forward) orthonormal, world frame."""
+        f = _normalize(self.forward)
+        r = _normalize(np.cross(f, self.up))
+        if not np.any(r):
+            r = np.array([1.0, 0.0, 0.0])
+        u = np.cross(r, f)
+        return r, u, f
+
+    def view_matrix(self, shift=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """World→view 4×4 (row-major, column vectors). ``shift`` (m) is subtracted from the camera position."""
+        r, u, f = self.basis()
+        eye = np.asarray(self.position, dtype=np.float64) - np.asarray(shift, dtype=np.float64)
+        m = np.eye(4)
+        m[0, :3], m[1, :3], m[2, :3] = r, u, -f
+        m[:3, 3] = -m[:3, :3] @ eye
+        return m
+
+    def projection_matrix(self, aspect: float) -> np.ndarray:
+        """OpenGL clip-space projection (row-major)."""
+        t = 1.0 / math.tan(math.radians(self.fov_y_deg) / 2.0)
+        n, f = self.near_m, self.far_m
+        m = np.zeros((4, 4))
+        m[0, 0] = t / aspect
+        m[1, 1] = t
+        m[2, 2] = (f + n) / (n - f)
+        m[2, 3] = 2.0 * f * n / (n - f)
+        m[3, 2] = -1.0
+        return m
+
+
+def look_at(position, target, fov_y_deg: float = 60.0, **kwargs) -> Camera:
+    """A camera at position (m) looking at target (m)."""
+    position = np.asarray(position, dtype=np.float64)
+    return Camera(position=position, forward=_normalize(np.asarray(target, dtype=np.float64) - position),
+                  fov_y_deg=fov_y_deg, **kwargs)
+
+
+def driver_camera(car, eye_local, fov_y_deg: float = 70.0, pitch_deg: float = -4.0) -> Camera:
+    """The in-cabin view from the driver's eye (car-local m), looking along the car, slightly down at the road."""
+    m = car.model_matrix()
+    eye = m[:3, :3] @ np.asarray(eye_local, dtype=np.float64) + m[:3, 3]
+    pitch = math.radians(pitch_deg)
+    fwd = car.forward() * math.cos(pitch) + np.array([0.0, math.sin(pitch), 0.0])
+    return Camera(position=eye, forward=fwd, fov_y_deg=fov_y_deg, near_m=0.05, inside_car=True)
+
+
+class ChaseRig:
+    """A camera behind and above a car that follows it smoothly (critically damped, frame-rate independent).
+
+    ``side_m`` > 0 moves it to the car's right (a beside-the-car chase view)."""
+
+    def __init__(self, distance_m: float = 7.0, height_m: float = 2.6, side_m: float = 0.0,
+                 stiffness_per_s: float = 6.0):
+        self.distance_m, self.height_m, self.side_m = distance_m, height_m, side_m
+        self.stiffness_per_s = stiffness_per_s
+        self._pos: np.ndarray | None = None
+
+    def camera(self, car, dt_s: float, fov_y_deg: float = 60.0) -> Camera:
+        target_pos = (car.position - car.forward() * self.distance_m + car.right() * self.side_m
+                      + np.array([0.0, self.height_m, 0.0]))
+        if self._pos is None or not np.all(np.isfinite(self._pos)):
+            self._pos = target_pos
+        else:
+            # Exact exponential approach: the same result for one big step or many small ones.
+            a = 1.0 - math.exp(-self.stiffness_per_s * max(dt_s, 0.0))
+            self._pos = self._pos + (target_pos - self._pos) * a
+        look = car.position + car.forward() * 6.0 + np.array([0.0, 1.0, 0.0])
+        return look_at(self._pos, look, fov_y_deg=fov_y_deg)
+
+    def reset(self):
+        self._pos = None

@@ -1,0 +1,8 @@
+#version 330 core
+// Copy the display image to a window of another size.
+uniform sampler2D u_image;
+in vec2 v_uv;
+out vec4 f_color;
+void main() {
+    f_color = vec4(texture(u_image, v_uv).rgb, 1.0);
+}

@@ -1,0 +1,51 @@
+// Surface shading: sun, sky ambient, street lamps and headlights (point / spot lights in candela).
+#include "brdf.glsl"
+#include "sky.glsl"
+
+#define MAX_LIGHTS 32
+uniform vec4 u_light_pos[MAX_LIGHTS];    // xyz m, w range m
+uniform vec4 u_light_dir[MAX_LIGHTS];    // xyz unit, w cos(outer cone) (-1 = point light)
+uniform vec4 u_light_color[MAX_LIGHTS];  // rgb = colour × intensity (cd), w cos(inner cone)
+uniform int u_light_count;
+
+struct Surface {
+    vec3 position;   // m, world (wrapped frame)
+    vec3 normal;
+    vec3 albedo;     // linear
+    float roughness;
+    float metallic;
+    float f0;        // dielectric reflectance at normal incidence (0.04 default, 0.02 water)
+    float ambient_occlusion;
+};
+
+float spot_factor(int i, vec3 L) {
+    float cos_outer = u_light_dir[i].w;
+    if (cos_outer <= -1.0) return 1.0;
+    float cd = dot(-L, u_light_dir[i].xyz);
+    return smoothstep(cos_outer, u_light_color[i].w, cd);
+}
+
+// Luminance (cd/m²) leaving the surface towards V from the lights (no emission).
+vec3 shade_surface(Surface s, vec3 V) {
+    vec3 N = s.normal;
+    vec3 f0 = mix(vec3(s.f0), s.albedo, s.metallic);
+    vec3 diffuse_color = s.albedo * (1.0 - s.metallic);
+    vec3 color = brdf_direct(N, V, u_sun_dir, diffuse_color, f0, s.roughness) * u_sun_illum;
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 d = u_light_pos[i].xyz - s.position;
+        float dist2 = dot(d, d);
+        float range = u_light_pos[i].w;
+        if (dist2 > range * range) continue;
+        vec3 L = d * inversesqrt(dist2);
+        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);  // smooth cut at range
+        vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);  // lux
+        color += brdf_direct(N, V, L, diffuse_color, f0, s.roughness) * E;
+    }
+    float NoV = max(dot(N, V), 1e-4);
+    vec3 spec_env = env_brdf_approx(f0, s.roughness, NoV);
+    vec3 R = reflect(-V, N);
+    R.y = abs(R.y) * (1.0 - s.roughness) + R.y * s.roughness;  // rough lobes see more of the sky average
+    vec3 env = mix(sky_radiance(normalize(R), false), sky_ambient(N), s.roughness);
+    color += (diffuse_color * sky_ambient(N) * (1.0 - spec_env) + env * spec_env) * s.ambient_occlusion;
+    return color;
+}

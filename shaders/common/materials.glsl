@@ -1,0 +1,17 @@
+// Material ids: keep in sync with rain_core/mesh.py.
+#define MAT_GENERIC 0
+#define MAT_ASPHALT 1
+#define MAT_PAINT 2
+#define MAT_CONCRETE 3
+#define MAT_METAL 4
+#define MAT_GLASS 5
+#define MAT_FOLIAGE 6
+#define MAT_EMISSIVE 7
+#define MAT_CAR_PAINT 8
+#define MAT_RUBBER 9
+// Emissive albedo is luminance in kcd/m² (1 = 1000 cd/m²).
+const float EMISSIVE_NITS_PER_UNIT = 1000.0;
+
+// Hook where surface effects change a material before lighting (the wet road takes it over). Dry: unchanged.
+void apply_surface_effects(inout Surface s, int material) {
+}

@@ -1,0 +1,33 @@
+#version 330 core
+// Opaque scene: world tile, vehicles, cabin. Output is pre-exposed HDR luminance.
+#include "common/frame.glsl"
+#include "common/lighting.glsl"
+#include "common/atmosphere.glsl"
+#include "common/materials.glsl"
+in vec3 v_world;
+in vec3 v_normal;
+in vec3 v_albedo;
+in vec3 v_params;
+out vec4 f_color;
+void main() {
+    int material = int(v_params.z + 0.5);
+    vec3 V = normalize(u_camera_pos - v_world);
+    float dist = length(u_camera_pos - v_world);
+    vec3 radiance;
+    if (material == MAT_EMISSIVE) {
+        radiance = v_albedo * EMISSIVE_NITS_PER_UNIT * mix(0.04, 1.0, u_night);
+    } else {
+        Surface s;
+        s.position = v_world;
+        s.normal = normalize(v_normal) * (gl_FrontFacing ? 1.0 : -1.0);
+        s.albedo = v_albedo;
+        s.roughness = clamp(v_params.x, 0.02, 1.0);
+        s.metallic = v_params.y;
+        s.f0 = material == MAT_GLASS ? 0.04 : 0.04;
+        s.ambient_occlusion = 1.0;
+        apply_surface_effects(s, material);
+        radiance = shade_surface(s, V);
+    }
+    radiance = apply_atmosphere(radiance, dist);
+    f_color = vec4(radiance * u_exposure, 1.0);
+}
