@@ -1,0 +1,50 @@
+"""Keyboard driving: held keys → smoothed throttle, brake and steering (the car model takes [0,1] and [-1,1])."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass
+class DriveInput:
+    throttle: float = 0.0  # [0, 1]
+    brake: float = 0.0  # [0, 1]
+    steer: float = 0.0  # [-1, 1], +1 = left
+    reverse: bool = False
+
+
+class KeyboardDriver:
+    """Tracks held keys by name ("up", "down", "left", "right") and eases the steering so a tap is not a jerk."""
+
+    STEER_RATE_PER_S = 2.5  # full lock in 0.4 s
+    RETURN_RATE_PER_S = 4.0
+
+    def __init__(self):
+        self.held: set[str] = set()
+        self.state = DriveInput()
+        self.autopilot = True  # until the user touches a driving key
+
+    def press(self, name: str):
+        self.held.add(name)
+        self.autopilot = False
+
+    def release(self, name: str):
+        self.held.discard(name)
+
+    def update(self, dt_s: float, speed_m_s: float) -> DriveInput:
+        dt_s = min(max(dt_s, 0.0), 0.1) if math.isfinite(dt_s) else 0.0
+        forward, back = "up" in self.held, "down" in self.held
+        s = self.state
+        # "down" brakes while moving forward and reverses once stopped, as in most driving games.
+        if back and speed_m_s <= 0.5:
+            s.reverse, s.throttle, s.brake = True, 1.0, 0.0
+        else:
+            s.reverse = False if forward else s.reverse and back
+            s.throttle = 1.0 if forward else 0.0
+            s.brake = 1.0 if back else 0.0
+        target = (1.0 if "left" in self.held else 0.0) - (1.0 if "right" in self.held else 0.0)
+        rate = self.STEER_RATE_PER_S if target != 0.0 else self.RETURN_RATE_PER_S
+        delta = target - s.steer
+        s.steer += max(-rate * dt_s, min(rate * dt_s, delta))
+        return DriveInput(s.throttle, s.brake, s.steer, s.reverse)
