@@ -177,10 +177,7 @@ class Renderer:
         self.stats: list[PassStat] = []
         self.timing_source = "none"
 
-        self.hdr = float_target(ctx, self.size, 4, "f2", depth=True)
-        self.ldr_color = ctx.texture(self.size, 4)
-        self.ldr_color.filter = (moderngl.LINEAR, moderngl.LINEAR)
-        self.ldr = ctx.framebuffer(color_attachments=[self.ldr_color])
+        self._make_targets()
 
         self.scene_prog = self.shaders.program("scene.vert", "scene.frag")
         self.sky_prog = self.shaders.program("fullscreen.vert", "sky.frag")
@@ -193,6 +190,23 @@ class Renderer:
         self._vehicle_vaos: dict[int, tuple[moderngl.VertexArray, int]] = {}
         self._cabin: tuple[moderngl.VertexArray, int] | None = None
         self._timers: dict[str, PassTimer] = {}
+
+    def _make_targets(self):
+        self.hdr = float_target(self.ctx, self.size, 4, "f2", depth=True)
+        self.ldr_color = self.ctx.texture(self.size, 4)
+        self.ldr_color.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self.ldr = self.ctx.framebuffer(color_attachments=[self.ldr_color])
+
+    def resize(self, size: tuple[int, int]) -> None:
+        """New frame size in pixels (a minimised window reports 0: keep the old targets then)."""
+        width, height = (int(v) for v in size)
+        if width <= 0 or height <= 0 or (width, height) == self.size:
+            return
+        self.hdr.release()
+        self.ldr.release()
+        self.ldr_color.release()
+        self.size = (width, height)
+        self._make_targets()
 
     # --- geometry -------------------------------------------------------------------------------------------
     def _vao(self, vertices: np.ndarray) -> tuple[moderngl.VertexArray, int]:

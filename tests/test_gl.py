@@ -22,7 +22,8 @@ def test_paths_exist():
 
 def test_include_error_names_the_included_file_and_line(gl_ctx, tmp_path):
     _write(tmp_path, "v.vert", VERT)
-    _write(tmp_path, "common/helpers.glsl", "float ok() { return 1.0; }\n\nfloat broken() {\n  return undefined_x;\n}\n")
+    _write(tmp_path, "common/helpers.glsl",
+           "float ok() { return 1.0; }\n\nfloat broken() {\n  return undefined_x;\n}\n")
     _write(tmp_path, "f.frag", '#version 330 core\n#include "common/helpers.glsl"\nout vec4 c;\n'
                                'void main() { c = vec4(ok()); }\n')
     lib = ShaderLibrary(gl_ctx, root=tmp_path)
