@@ -17,7 +17,7 @@ MAT_CONCRETE = 3  # kerbs, sidewalks, building walls
 MAT_METAL = 4
 MAT_GLASS = 5
 MAT_FOLIAGE = 6
-MAT_EMISSIVE = 7  # lamp bulbs, light lenses: albedo is emitted radiance (linear, W/sr/m² scaled)
+MAT_EMISSIVE = 7  # lamp heads, light lenses: albedo is emitted radiance W/(sr·m²); ×683 lm/W = luminance cd/m²
 MAT_CAR_PAINT = 8
 MAT_RUBBER = 9
 

@@ -9,8 +9,8 @@
 #define MAT_EMISSIVE 7
 #define MAT_CAR_PAINT 8
 #define MAT_RUBBER 9
-// Emissive albedo is luminance in kcd/m² (1 = 1000 cd/m²).
-const float EMISSIVE_NITS_PER_UNIT = 1000.0;
+// Emissive albedo is radiance in W/(sr·m²) at 555 nm; × 683 lm/W gives luminance in cd/m² (rain_core/mesh.py).
+const float EMISSIVE_NITS_PER_UNIT = 683.0;
 
 // Hook where surface effects change a material before lighting (the wet road takes it over). Dry: unchanged.
 void apply_surface_effects(inout Surface s, int material) {
