@@ -1,0 +1,476 @@
+"""Everything the user can set, as one validated tree of dataclasses, with TOML scenario files.
+
+Each leaf is declared in one line with ``field(default, range=(lo, hi), unit=..., choices=..., doc=...)``; its
+type comes from the annotation (float, int, bool, str, or ``float | None`` for "unset / automatic"). The same
+validation serves every entrance — ``Settings(...)``, ``from_dict``, ``load_scenario`` (TOML), ``set_value``
+(CLI, ImGui panel) — and an invalid value raises ``SettingsError`` naming the field path, the value and what is
+allowed. Booleans never pass as numbers, integers are accepted for float fields (stored as float), unknown keys
+are errors. ``field_info``/``all_fields`` give the panel each field's type, range, unit and choices.
+
+Scenario files are TOML: one table per section (``[rain]``, ``[road]``, ...); missing keys take their defaults,
+an unset optional field is simply left out. ``save_scenario`` writes floats with ``repr`` so that save → load
+gives back an identical Settings. Shipped presets live in ``assets/scenarios/<name>.toml``.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import json
+import math
+import re
+import tomllib
+import typing
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rain_core import physics
+from rain_core.paths import ASSETS_DIR
+
+SCENARIOS_DIR = ASSETS_DIR / "scenarios"
+
+
+class SettingsError(ValueError):
+    """An invalid setting. Attributes: field_path ("rain.rate_mm_h"), value, allowed (a description of the
+    allowed values), source (the file, if any) and line (TOML syntax errors only)."""
+
+    def __init__(self, field_path: str, value: Any, allowed: str, source: str | None = None,
+                 line: int | None = None, message: str | None = None):
+        self.field_path, self.value, self.allowed, self.source, self.line = field_path, value, allowed, source, line
+        where = f"{source}: " if source else ""
+        super().__init__(message or f"{where}{field_path} = {value!r} is not allowed: expected {allowed}")
+
+
+class ScenarioSyntaxError(SettingsError):
+    """A scenario file that is not valid TOML; ``line`` is the line of the error (1-based) when known."""
+
+    def __init__(self, source: str, detail: str, line: int | None):
+        at = f" at line {line}" if line else ""
+        super().__init__("<file>", None, "valid TOML", source, line, f"{source}: invalid TOML{at}: {detail}")
+
+
+def field(default: Any, *, range: tuple[float, float] | None = None, unit: str = "",
+          choices: tuple[str, ...] | None = None, doc: str = ""):
+    """Declare a setting: its default, closed range (lo, hi) for numbers, unit, choices for strings, and a doc."""
+    meta = {"range": range, "unit": unit, "choices": choices, "doc": doc}
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def _section(cls):
+    return dataclasses.field(default_factory=cls, metadata={"section": True})
+
+
+@dataclass(frozen=True)
+class FieldInfo:
+    """What the UI needs to show one setting: path ("rain.rate_mm_h"), kind ("float", "int", "bool", "str"),
+    optional (None allowed), default, range (lo, hi) or None, unit, choices or None, doc."""
+
+    path: str
+    kind: str
+    optional: bool
+    default: Any
+    range: tuple[float, float] | None
+    unit: str
+    choices: tuple[str, ...] | None
+    doc: str
+
+    def allowed(self) -> str:
+        """The allowed values, in words (used in error messages)."""
+        unit = f" {self.unit}" if self.unit else ""
+        if self.kind == "bool":
+            text = "true or false"
+        elif self.kind == "str":
+            text = "one of " + ", ".join(repr(c) for c in self.choices) if self.choices else "a string"
+        else:
+            noun = "an integer" if self.kind == "int" else "a number"
+            lo, hi = (str(b) if self.kind == "int" else f"{b:g}" for b in self.range or (0, 0))
+            text = f"{noun} in [{lo}, {hi}]{unit}" if self.range else f"{noun}{unit}"
+        return text + (", or unset (automatic)" if self.optional else "")
+
+
+_KINDS = {float: "float", int: "int", bool: "bool", str: "str"}
+
+
+def _unknown(path: str, value: Any, allowed: str, source: str | None = None) -> SettingsError:
+    where = f"{source}: " if source else ""
+    return SettingsError(path, value, allowed, source,
+                         message=f"{where}unknown setting {path} (value {value!r}): {allowed}")
+
+
+def _field_infos(cls, prefix: str) -> dict[str, FieldInfo]:
+    hints = typing.get_type_hints(cls)
+    infos = {}
+    for f in dataclasses.fields(cls):
+        hint = hints[f.name]
+        args = typing.get_args(hint)
+        optional = type(None) in args
+        base = next(a for a in args if a is not type(None)) if optional else hint
+        infos[f.name] = FieldInfo(f"{prefix}{f.name}", _KINDS[base], optional, f.default, f.metadata["range"],
+                                  f.metadata["unit"], f.metadata["choices"], f.metadata["doc"])
+    return infos
+
+
+def _coerce(info: FieldInfo, value: Any, source: str | None = None) -> Any:
+    """The validated value for a field (int → float for float fields), or a SettingsError."""
+
+    original = value
+
+    def fail():
+        raise SettingsError(info.path, original, info.allowed(), source)
+
+    if value is None:
+        return None if info.optional else fail()
+    if info.kind == "bool":
+        return value if isinstance(value, bool) else fail()
+    if info.kind == "str":
+        if not isinstance(value, str) or (info.choices and value not in info.choices):
+            fail()
+        return value
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        fail()
+    if info.kind == "int":
+        if not isinstance(value, int | np.integer):
+            fail()
+        value = int(value)
+    else:
+        value = float(value)
+        if not math.isfinite(value):
+            fail()
+    if info.range and not info.range[0] <= value <= info.range[1]:
+        fail()
+    return value
+
+
+class _Section:
+    """Base of the settings sections: validates its fields on construction (name in ``SECTION``)."""
+
+    SECTION: ClassVar[str] = ""
+
+    def __post_init__(self):
+        self.validate()
+
+    @classmethod
+    def field_infos(cls) -> dict[str, FieldInfo]:
+        cached = cls.__dict__.get("_infos")
+        if cached is None:
+            cached = _field_infos(cls, f"{cls.SECTION}.")
+            cls._infos = cached
+        return cached
+
+    def validate(self, source: str | None = None) -> None:
+        """Check every field (SettingsError on the first bad one); ints in float fields become floats."""
+        for name, info in self.field_infos().items():
+            object.__setattr__(self, name, _coerce(info, getattr(self, name), source))
+
+
+# --- the sections ----------------------------------------------------------------------------------------
+
+_PRESET_CHOICES = ("custom",) + tuple(physics.RAIN_PRESETS)
+_LEVEL_DOC = "pin the level (0 dry … 1 full); unset lets the weather drive it"
+
+
+@dataclass
+class RainSection(_Section):
+    SECTION: ClassVar[str] = "rain"
+    rate_mm_h: float = field(2.0, range=(0.0, physics.R_MAX_MM_H), unit="mm/h", doc="rain rate")
+    preset: str = field("custom", choices=_PRESET_CHOICES, doc="the preset this came from (a label)")
+    auto_weather: bool = field(True, doc="wetness and floods evolve with rain and time (off: they hold still)")
+    time_scale: float = field(1.0, range=(0.0, 1000.0), unit="×", doc="speed of wetting and drying")
+    drying_delay_s: float = field(10.0, range=(0.0, 3600.0), unit="s", doc="wait after rain before drying")
+    drying_stage_gap_s: float = field(5.0, range=(0.0, 3600.0), unit="s", doc="film → cracks → puddles delay")
+    wetness: float | None = field(None, range=(0.0, 1.0), doc=_LEVEL_DOC)
+    cracks: float | None = field(None, range=(0.0, 1.0), doc=_LEVEL_DOC)
+    puddles: float | None = field(None, range=(0.0, 1.0), doc=_LEVEL_DOC)
+
+
+@dataclass
+class RoadSection(_Section):
+    SECTION: ClassVar[str] = "road"
+    enabled: bool = field(True, doc="wet road shading")
+    puddle_amount: float = field(0.5, range=(0.0, 1.0), doc="how much of the road can hold puddles")
+    puddle_seed: int = field(0, range=(0, 2**31 - 1), doc="seed of the puddle noise map")
+    wave_strength: float = field(0.5, range=(0.0, 1.0), doc="ambient wind waves on standing water")
+    reflections: bool = field(True, doc="planar reflections in water")
+    reflection_scale: float = field(0.5, range=(0.125, 1.0), unit="× frame", doc="reflection resolution")
+    debug_regions: bool = field(False, doc="colour dry / wet / drenched / puddle regions")
+
+
+@dataclass
+class WindSection(_Section):
+    SECTION: ClassVar[str] = "wind"
+    speed_m_s: float = field(2.0, range=(0.0, 40.0), unit="m/s", doc="mean wind speed")
+    direction_deg: float = field(90.0, range=(0.0, 360.0), unit="deg",
+                                 doc="heading the wind blows toward, clockwise from −Z (90 = towards +X)")
+    gustiness: float = field(0.3, range=(0.0, 1.0), doc="0 steady … 1 gusts swing the speed by ±100 %")
+    seed: int = field(0, range=(0, 2**31 - 1), doc="seed of the gust signal")
+
+
+@dataclass
+class WipersSection(_Section):
+    SECTION: ClassVar[str] = "wipers"
+    mode: str = field("auto", choices=("off", "intermittent", "low", "high", "auto"), doc="wiper speed")
+    interval_s: float = field(4.0, range=(1.0, 30.0), unit="s", doc="pause between sweeps (intermittent)")
+
+
+@dataclass
+class CameraSection(_Section):
+    SECTION: ClassVar[str] = "camera"
+    mode: str = field("driver", choices=("driver", "chase", "free"), doc="in-cabin, behind the car, or free")
+    fov_deg: float = field(60.0, range=(20.0, 120.0), unit="deg", doc="vertical field of view")
+    exposure_s: float = field(0.02, range=(1e-4, 0.25), unit="s", doc="shutter time (sets streak length)")
+
+
+@dataclass
+class TimeOfDaySection(_Section):
+    SECTION: ClassVar[str] = "time_of_day"
+    hour: float = field(12.0, range=(0.0, 24.0), unit="h", doc="local time (12 noon, 22 night)")
+
+
+@dataclass
+class TrafficSection(_Section):
+    SECTION: ClassVar[str] = "traffic"
+    count: int = field(6, range=(0, 20), unit="cars", doc="other vehicles on the street")
+    seed: int = field(0, range=(0, 2**31 - 1), doc="seed of their placement and speeds")
+
+
+@dataclass
+class QualitySection(_Section):
+    SECTION: ClassVar[str] = "quality"
+    render_scale: float = field(1.0, range=(0.25, 2.0), unit="× window", doc="internal resolution")
+    particle_budget: int = field(50_000, range=(0, 1_000_000), unit="drops", doc="near-rain streak particles")
+    ripple_grid: int = field(256, range=(32, 2048), unit="cells", doc="ripple simulation grid per side")
+    windshield_resolution: int = field(512, range=(64, 2048), unit="texels", doc="glass water texture side")
+
+
+@dataclass
+class RipplesSection(_Section):
+    SECTION: ClassVar[str] = "ripples"
+    enabled: bool = field(True, doc="interactive water ripples")
+    strength: float = field(1.0, range=(0.0, 4.0), unit="×", doc="disturbance strength")
+    damping: float = field(0.995, range=(0.9, 1.0), unit="per step", doc="energy kept per solver step")
+
+
+@dataclass
+class RainfallSection(_Section):
+    SECTION: ClassVar[str] = "rainfall"
+    enabled: bool = field(True, doc="falling rain streaks")
+    density_scale: float = field(1.0, range=(0.0, 4.0), unit="×", doc="streaks relative to the physical count")
+    streak_brightness: float = field(1.0, range=(0.0, 4.0), unit="×", doc="streak brightness")
+    splashes: bool = field(True, doc="impact splashes on the ground")
+
+
+@dataclass
+class SpraySection(_Section):
+    SECTION: ClassVar[str] = "spray"
+    enabled: bool = field(True, doc="wheel splash and spray")
+    strength: float = field(1.0, range=(0.0, 4.0), unit="×", doc="spray relative to the physical water flux")
+
+
+@dataclass
+class WindshieldSection(_Section):
+    SECTION: ClassVar[str] = "windshield"
+    enabled: bool = field(True, doc="drops and film on the glass (driver camera)")
+    drop_scale: float = field(1.0, range=(0.0, 4.0), unit="×", doc="drops relative to the physical hit rate")
+    refraction: float = field(1.0, range=(0.0, 2.0), unit="×", doc="strength of refraction through water")
+
+
+@dataclass
+class AtmosphereSection(_Section):
+    SECTION: ClassVar[str] = "atmosphere"
+    enabled: bool = field(True, doc="rain fog, extinction and glow")
+    fog_scale: float = field(1.0, range=(0.0, 4.0), unit="×", doc="extinction relative to the rain's β")
+    glow: float = field(1.0, range=(0.0, 4.0), unit="×", doc="glow around lights")
+
+
+@dataclass
+class Settings:
+    """The whole settings tree. ``Settings()`` is valid; construction validates every field."""
+
+    rain: RainSection = _section(RainSection)
+    road: RoadSection = _section(RoadSection)
+    wind: WindSection = _section(WindSection)
+    wipers: WipersSection = _section(WipersSection)
+    camera: CameraSection = _section(CameraSection)
+    time_of_day: TimeOfDaySection = _section(TimeOfDaySection)
+    traffic: TrafficSection = _section(TrafficSection)
+    quality: QualitySection = _section(QualitySection)
+    ripples: RipplesSection = _section(RipplesSection)
+    rainfall: RainfallSection = _section(RainfallSection)
+    spray: SpraySection = _section(SpraySection)
+    windshield: WindshieldSection = _section(WindshieldSection)
+    atmosphere: AtmosphereSection = _section(AtmosphereSection)
+
+    def __post_init__(self):
+        self.validate()
+
+    @classmethod
+    def section_types(cls) -> dict[str, type[_Section]]:
+        """Section name → its dataclass, in file order."""
+        hints = typing.get_type_hints(cls)
+        return {f.name: hints[f.name] for f in dataclasses.fields(cls)}
+
+    def validate(self, source: str | None = None) -> None:
+        """Check every field (SettingsError naming the first bad one)."""
+        for name, typ in self.section_types().items():
+            sec = getattr(self, name)
+            if type(sec) is not typ:
+                raise SettingsError(name, sec, f"a [{name}] table ({typ.__name__})", source)
+            sec.validate(source)
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """Nested plain dict {section: {field: value}}; unset optional fields are None."""
+        return {name: dataclasses.asdict(getattr(self, name)) for name in self.section_types()}
+
+    @classmethod
+    def from_dict(cls, data: dict, base: Settings | None = None, source: str | None = None) -> Settings:
+        """Settings from a nested dict (as read from TOML), on top of ``base`` (default: the defaults).
+
+        Unknown sections or keys, wrong types and out-of-range values raise SettingsError naming the path.
+        """
+        if not isinstance(data, dict):
+            raise SettingsError("<root>", data, "a table of sections", source)
+        result = copy.deepcopy(base) if base is not None else cls()
+        sections = cls.section_types()
+        for sec_name, values in data.items():
+            if sec_name not in sections:
+                raise _unknown(sec_name, values, "sections are " + ", ".join(sections), source)
+            if not isinstance(values, dict):
+                raise SettingsError(sec_name, values, f"a [{sec_name}] table", source)
+            infos = sections[sec_name].field_infos()
+            sec = getattr(result, sec_name)
+            for key, value in values.items():
+                if key not in infos:
+                    raise _unknown(f"{sec_name}.{key}", value, f"[{sec_name}] has " + ", ".join(infos), source)
+                setattr(sec, key, _coerce(infos[key], value, source))
+        return result
+
+    def copy(self) -> Settings:
+        """A deep copy."""
+        return copy.deepcopy(self)
+
+
+RainSettings = Settings
+
+
+# --- access by path (CLI, panel) -------------------------------------------------------------------------
+
+
+def _resolve(path: str) -> tuple[str, str, FieldInfo]:
+    parts = path.split(".") if isinstance(path, str) else []
+    sections = Settings.section_types()
+    if len(parts) != 2 or parts[0] not in sections:
+        raise _unknown(str(path), None, "a path is 'section.key' with section one of " + ", ".join(sections))
+    infos = sections[parts[0]].field_infos()
+    if parts[1] not in infos:
+        raise _unknown(path, None, f"[{parts[0]}] has " + ", ".join(infos))
+    return parts[0], parts[1], infos[parts[1]]
+
+
+def field_info(path: str) -> FieldInfo:
+    """Type, range, unit, choices and doc of the setting at ``path`` ("rain.rate_mm_h")."""
+    return _resolve(path)[2]
+
+
+def all_fields() -> list[FieldInfo]:
+    """Every setting, in section and declaration order."""
+    return [info for typ in Settings.section_types().values() for info in typ.field_infos().values()]
+
+
+def get_value(settings: Settings, path: str) -> Any:
+    """The value at ``path`` ("section.key")."""
+    sec, key, _ = _resolve(path)
+    return getattr(getattr(settings, sec), key)
+
+
+def set_value(settings: Settings, path: str, value: Any) -> None:
+    """Validate ``value`` for ``path`` ("section.key") and store it in ``settings`` (SettingsError if invalid)."""
+    sec, key, info = _resolve(path)
+    setattr(getattr(settings, sec), key, _coerce(info, value))
+
+
+def apply_rain_preset(settings: Settings, name: str) -> None:
+    """Set rain.rate_mm_h to the named preset's rate and label rain.preset with it (the rest is untouched)."""
+    try:
+        rate = physics.preset_rate(name)
+    except ValueError:
+        raise SettingsError("rain.preset", name, "one of " + ", ".join(physics.RAIN_PRESETS)) from None
+    key = name.strip().lower().replace(" ", "_").replace("-", "_")
+    set_value(settings, "rain.rate_mm_h", rate)
+    set_value(settings, "rain.preset", key)
+
+
+# --- TOML files ------------------------------------------------------------------------------------------
+
+
+def load_scenario(path: str | Path, base: Settings | None = None) -> Settings:
+    """Read a TOML scenario file into Settings (on top of ``base``; default: the defaults).
+
+    A syntax error raises ScenarioSyntaxError (a SettingsError) naming the file and line; a bad value raises
+    SettingsError naming the file, the field path, the value and the allowed range.
+    """
+    path = Path(path)
+    raw = path.read_bytes()
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ScenarioSyntaxError(str(path), f"not UTF-8 ({exc.reason})", None) from None
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise ScenarioSyntaxError(str(path), str(exc), int(m.group(1)) if m else None) from None
+    return Settings.from_dict(data, base=base, source=str(path))
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)  # shortest string that reads back to the same float; always has '.' or 'e'
+    return json.dumps(value)  # a JSON string is a valid TOML basic string
+
+
+def to_toml(settings: Settings, title: str = "") -> str:
+    """The TOML text of a scenario file, with each field's unit and range as a comment."""
+    settings.validate()
+    lines = [f"# {line}" for line in title.splitlines()] if title else []
+    lines.append("# Rainroad scenario. Units and allowed values in the comments; missing keys take defaults.")
+    for sec_name, typ in Settings.section_types().items():
+        lines += ["", f"[{sec_name}]"]
+        sec = getattr(settings, sec_name)
+        for key, info in typ.field_infos().items():
+            value = getattr(sec, key)
+            comment = f"  # {info.allowed()}"
+            if value is None:
+                lines.append(f"# {key} = (unset){comment}")
+            else:
+                lines.append(f"{key} = {_toml_value(value)}{comment}")
+    return "\n".join(lines) + "\n"
+
+
+def save_scenario(settings: Settings, path: str | Path, title: str = "") -> Path:
+    """Write ``settings`` as a TOML scenario file (parents created); load_scenario gives back an equal Settings."""
+    path = Path(path)
+    text = to_toml(settings, title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def list_presets() -> list[str]:
+    """Names of the shipped scenario files: the rain presets in intensity order, then any others by name."""
+    names = sorted(p.stem for p in SCENARIOS_DIR.glob("*.toml")) if SCENARIOS_DIR.is_dir() else []
+    order = {name: i for i, name in enumerate(physics.RAIN_PRESETS)}
+    return sorted(names, key=lambda n: (order.get(n, len(order)), n))
+
+
+def preset_settings(name: str) -> Settings:
+    """Settings of the shipped scenario ``assets/scenarios/<name>.toml`` ("very heavy" = "very_heavy")."""
+    key = str(name).strip().lower().replace(" ", "_").replace("-", "_")
+    available = list_presets()
+    if key not in available:
+        raise SettingsError("preset", name, "one of " + ", ".join(available))
+    return load_scenario(SCENARIOS_DIR / f"{key}.toml")

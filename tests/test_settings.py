@@ -1,0 +1,186 @@
+"""rain_core.settings: defaults, validation with named fields, TOML round trips, shipped presets."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rain_core import physics
+from rain_core.settings import (
+    RainSection,
+    RainSettings,
+    ScenarioSyntaxError,
+    Settings,
+    SettingsError,
+    all_fields,
+    apply_rain_preset,
+    field_info,
+    get_value,
+    list_presets,
+    load_scenario,
+    preset_settings,
+    save_scenario,
+    set_value,
+    to_toml,
+)
+
+
+def test_defaults_are_valid_and_described():
+    s = Settings()
+    s.validate()
+    assert RainSettings is Settings
+    infos = all_fields()
+    assert len({i.path for i in infos}) == len(infos) > 40
+    sections = {i.path.split(".")[0] for i in infos}
+    assert {"rain", "road", "wind", "wipers", "camera", "time_of_day", "traffic", "quality", "ripples",
+            "rainfall", "spray", "windshield", "atmosphere"} <= sections
+    for info in infos:
+        assert get_value(s, info.path) == info.default
+        if info.range:
+            assert info.range[0] <= info.range[1]
+        assert info.kind in ("float", "int", "bool", "str")
+    assert field_info("rain.rate_mm_h").unit == "mm/h"
+    assert field_info("rain.rate_mm_h").range == (0.0, physics.R_MAX_MM_H)
+
+
+@pytest.mark.parametrize(
+    "path, value",
+    [
+        ("rain.rate_mm_h", -0.1),
+        ("rain.rate_mm_h", 500.5),
+        ("rain.rate_mm_h", math.nan),
+        ("rain.rate_mm_h", math.inf),
+        ("rain.rate_mm_h", "heavy"),
+        ("rain.rate_mm_h", True),
+        ("rain.rate_mm_h", None),
+        ("rain.wetness", 1.2),
+        ("traffic.count", True),
+        ("traffic.count", 2.5),
+        ("traffic.count", 21),
+        ("road.enabled", 1),
+        ("camera.mode", "top"),
+        ("wipers.mode", 3),
+        ("time_of_day.hour", 25.0),
+    ],
+)
+def test_invalid_values_name_field_value_and_range(path, value):
+    s = Settings()
+    before = get_value(s, path)
+    with pytest.raises(SettingsError) as exc:
+        set_value(s, path, value)
+    err = exc.value
+    assert isinstance(err, ValueError)
+    assert err.field_path == path
+    msg = str(err)
+    assert path in msg and repr(value) in msg and err.allowed in msg
+    assert get_value(s, path) == before  # nothing stored
+
+
+def test_range_is_in_the_message():
+    with pytest.raises(SettingsError, match=r"\[0, 500\] mm/h"):
+        set_value(Settings(), "rain.rate_mm_h", -1)
+
+
+def test_valid_values_are_stored_and_ints_become_floats():
+    s = Settings()
+    set_value(s, "rain.rate_mm_h", 7)
+    assert s.rain.rate_mm_h == 7.0 and isinstance(s.rain.rate_mm_h, float)
+    set_value(s, "traffic.count", np.int64(3))
+    assert s.traffic.count == 3 and type(s.traffic.count) is int
+    set_value(s, "rain.puddles", 0.4)
+    set_value(s, "rain.puddles", None)
+    assert s.rain.puddles is None
+
+
+def test_construction_validates():
+    with pytest.raises(SettingsError, match="rain.rate_mm_h"):
+        RainSection(rate_mm_h=-1.0)
+    with pytest.raises(SettingsError, match="rain"):
+        Settings(rain="heavy")
+
+
+@pytest.mark.parametrize("path", ["rain.rate", "rainfall", "weather.rate_mm_h", "rain.rate_mm_h.x", 3])
+def test_unknown_paths(path):
+    with pytest.raises(SettingsError, match="unknown setting"):
+        set_value(Settings(), path, 1.0)
+
+
+def test_round_trip_is_identical(tmp_path):
+    s = Settings()
+    set_value(s, "rain.rate_mm_h", 0.1 + 0.2)  # not representable in short decimal
+    set_value(s, "rain.wetness", 1 / 3)
+    set_value(s, "camera.exposure_s", 1e-4)
+    set_value(s, "wind.direction_deg", 359.99999999999994)
+    set_value(s, "road.puddle_seed", 2**31 - 1)
+    set_value(s, "wipers.mode", "intermittent")
+    set_value(s, "road.debug_regions", True)
+    path = save_scenario(s, tmp_path / "sub" / "a.toml", title="round trip\nsecond line")
+    back = load_scenario(path)
+    assert back == s
+    assert back.rain.rate_mm_h == 0.1 + 0.2 and back.rain.cracks is None
+    assert Settings.from_dict(s.to_dict()) == s
+    assert to_toml(back) == to_toml(s)
+
+
+def test_partial_file_overrides_defaults_or_base(tmp_path):
+    p = tmp_path / "p.toml"
+    p.write_text("[rain]\nrate_mm_h = 12\npuddles = 0.5\n")
+    s = load_scenario(p)
+    assert s.rain.rate_mm_h == 12.0 and s.rain.puddles == 0.5 and s.road == Settings().road
+    base = Settings()
+    set_value(base, "traffic.count", 0)
+    assert load_scenario(p, base=base).traffic.count == 0 and base.rain.rate_mm_h == 2.0
+
+
+@pytest.mark.parametrize(
+    "text, path, fragment",
+    [
+        ("[rain]\nrate = 3.0\n", "rain.rate", "unknown setting"),
+        ("[weather]\nrate_mm_h = 3.0\n", "weather", "unknown setting"),
+        ('[rain]\nrate_mm_h = "heavy"\n', "rain.rate_mm_h", "a number in [0, 500] mm/h"),
+        ("[rain]\nrate_mm_h = -2.0\n", "rain.rate_mm_h", "a number in [0, 500] mm/h"),
+        ("[traffic]\ncount = true\n", "traffic.count", "an integer in [0, 20]"),
+        ("[road]\nenabled = 1\n", "road.enabled", "true or false"),
+        ("rain = 3\n", "rain", "table"),
+        ("[rain]\nrate_mm_h = nan\n", "rain.rate_mm_h", "[0, 500]"),
+    ],
+)
+def test_bad_files_name_file_and_field(tmp_path, text, path, fragment):
+    p = tmp_path / "bad.toml"
+    p.write_text(text)
+    with pytest.raises(SettingsError) as exc:
+        load_scenario(p)
+    msg = str(exc.value)
+    assert exc.value.field_path == path and path in msg and fragment in msg and str(p) in msg
+
+
+def test_toml_syntax_error_names_file_and_line(tmp_path):
+    p = tmp_path / "broken.toml"
+    p.write_text("[rain]\nrate_mm_h = 3.0\nwetness = = 0.2\n")
+    with pytest.raises(ScenarioSyntaxError) as exc:
+        load_scenario(p)
+    assert exc.value.line == 3
+    assert str(p) in str(exc.value) and "line 3" in str(exc.value)
+    assert isinstance(exc.value, SettingsError)
+
+
+def test_shipped_presets(tmp_path):
+    names = list_presets()
+    assert names[: len(physics.RAIN_PRESETS)] == list(physics.RAIN_PRESETS)
+    for name in physics.RAIN_PRESETS:
+        s = preset_settings(name)
+        assert s.rain.rate_mm_h == physics.RAIN_PRESETS[name] and s.rain.preset == name
+        assert load_scenario(save_scenario(s, tmp_path / f"{name}.toml")) == s
+    heavy = [preset_settings(n) for n in physics.RAIN_PRESETS]
+    assert [s.rain.rate_mm_h for s in heavy] == sorted(s.rain.rate_mm_h for s in heavy)
+    assert preset_settings("very heavy") == preset_settings("very_heavy")
+    with pytest.raises(SettingsError, match="drizzle"):
+        preset_settings("monsoon")
+
+
+def test_apply_rain_preset():
+    s = Settings()
+    apply_rain_preset(s, "Very Heavy")
+    assert s.rain.rate_mm_h == physics.RAIN_PRESETS["very_heavy"] and s.rain.preset == "very_heavy"
+    with pytest.raises(SettingsError, match="rain.preset"):
+        apply_rain_preset(s, "monsoon")
