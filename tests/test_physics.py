@@ -261,3 +261,13 @@ def test_rates_above_the_maximum_are_rejected_and_extremes_are_finite():
         out = fn(extremes)
         assert np.all(np.isfinite(out)) and np.all(out >= 0)
     assert np.all(np.isfinite(P.marshall_palmer(np.array([0.0, 1e6]), np.array([[0.0], [1e-6], [500.0]]))))
+
+
+def test_benchmark_quick_run_writes_tables(tmp_path, capsys):
+    from rain_core.bench import physics as bench
+
+    assert bench.main(["--quick", "--out", str(tmp_path)]) == 0
+    md = (tmp_path / "physics.md").read_text()
+    for heading in ("Terminal velocity", "Self-consistency", "Drop-size sampling"):
+        assert heading in md
+    assert (tmp_path / "physics.png").stat().st_size > 0
