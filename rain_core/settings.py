@@ -232,7 +232,7 @@ class TimeOfDaySection(_Section):
 @dataclass
 class TrafficSection(_Section):
     SECTION: ClassVar[str] = "traffic"
-    count: int = field(6, range=(0, 20), unit="cars", doc="other vehicles on the street")
+    count: int = field(5, range=(0, 20), unit="cars", doc="other vehicles on the street")
     seed: int = field(0, range=(0, 2**31 - 1), doc="seed of their placement and speeds")
 
 
