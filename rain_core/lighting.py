@@ -86,7 +86,7 @@ def lighting_for_hour(hour: float, overcast: float = 0.0) -> Lighting:
     horizon = horizon * (1 - overcast) + grey * mean_h * 0.6 * overcast
     night = 1.0 - _smoothstep(-6.0, 4.0, math.degrees(elev))
     # Metered illuminance on the ground: sun + sky (π·L for a uniform hemisphere) + lamp-lit street at night.
-    e_key = float(sun.mean() * sin_e + math.pi * 0.5 * (zenith.mean() + horizon.mean()) + 25.0 * night)
+    e_key = float(sun.mean() * sin_e + math.pi * 0.5 * (zenith.mean() + horizon.mean()) + 60.0 * night)
     ev100 = math.log2(max(e_key, 1e-3) / 2.5)
     return Lighting(hour, sun_dir, sun, zenith, horizon, 0.15, night, ev100)
 
