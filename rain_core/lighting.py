@@ -27,6 +27,7 @@ class Light:
     cos_outer: float = -1.0
     cos_inner: float = -1.0
     range_m: float = 80.0
+    low_beam: bool = False  # a headlight: the shader applies a vertical cut-off below the horizon
 
 
 @dataclass(frozen=True)
@@ -86,7 +87,7 @@ def lighting_for_hour(hour: float, overcast: float = 0.0) -> Lighting:
     horizon = horizon * (1 - overcast) + grey * mean_h * 0.6 * overcast
     night = 1.0 - _smoothstep(-6.0, 4.0, math.degrees(elev))
     # Metered illuminance on the ground: sun + sky (π·L for a uniform hemisphere) + lamp-lit street at night.
-    e_key = float(sun.mean() * sin_e + math.pi * 0.5 * (zenith.mean() + horizon.mean()) + 60.0 * night)
+    e_key = float(sun.mean() * sin_e + math.pi * 0.5 * (zenith.mean() + horizon.mean()) + 120.0 * night)
     ev100 = math.log2(max(e_key, 1e-3) / 2.5)
     return Lighting(hour, sun_dir, sun, zenith, horizon, 0.15, night, ev100)
 
@@ -110,9 +111,9 @@ def lights_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift
         for v in vehicles:
             for pos, direction in v.headlights():
                 q = np.asarray(pos, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
-                lights.append(Light(q, np.asarray(direction, float), 25000.0, np.array([1.0, 0.96, 0.88]),
-                                    cos_outer=math.cos(math.radians(28)), cos_inner=math.cos(math.radians(10)),
-                                    range_m=150.0))
+                lights.append(Light(q, np.asarray(direction, float), 20000.0, np.array([1.0, 0.96, 0.88]),
+                                    cos_outer=math.cos(math.radians(30)), cos_inner=math.cos(math.radians(12)),
+                                    range_m=150.0, low_beam=True))
             for pos in v.taillights():
                 q = np.asarray(pos, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
                 lights.append(Light(q, -v.forward(), 60.0, np.array([1.0, 0.05, 0.02]),
@@ -127,7 +128,7 @@ def pack_lights(lights: list[Light], max_lights: int = MAX_LIGHTS) -> tuple[byte
     dirs = np.zeros((max_lights, 4), np.float32)
     col = np.zeros((max_lights, 4), np.float32)
     for i, light in enumerate(lights[:max_lights]):
-        pos[i] = (*light.position, light.range_m)
+        pos[i] = (*light.position, -light.range_m if light.low_beam else light.range_m)
         dirs[i] = (*light.direction, light.cos_outer)
         col[i] = (*(light.color * light.intensity_cd), light.cos_inner)
     return pos.tobytes(), dirs.tobytes(), col.tobytes(), min(len(lights), max_lights)

@@ -30,6 +30,9 @@ from rain_core.gl import PassTimer, RenderTarget, ShaderLibrary, float_target
 from rain_core.lighting import Lighting, lights_for_frame, pack_lights
 from rain_core.mesh import VERTEX_ATTRIBUTES, VERTEX_FORMAT
 
+# Share of direct sun/lamp light that reaches the cabin interior (the roof and pillars shade most of it).
+CABIN_DIRECT_LIGHT = 0.2
+
 STAGES = ("prepare", "transparent", "post", "overlay")
 
 # A clear day's aerial perspective: β ≈ 3.912 / 40 km (meteorological visibility 40 km).
@@ -294,7 +297,9 @@ class Renderer:
             model[2, 3] -= rc.shift_z
             prog["u_model"].write(_mat(model))
             vao, n = self._cabin_vao(frame.ego)
+            prog["u_direct_scale"].value = CABIN_DIRECT_LIGHT
             vao.render(moderngl.TRIANGLES, vertices=n)
+            prog["u_direct_scale"].value = 1.0
 
     def render(self, frame: Frame) -> None:
         """Run every pass of one frame into the HDR target and tone-map it."""

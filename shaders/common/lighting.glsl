@@ -3,10 +3,13 @@
 #include "sky.glsl"
 
 #define MAX_LIGHTS 32
-uniform vec4 u_light_pos[MAX_LIGHTS];    // xyz m, w range m
+uniform vec4 u_light_pos[MAX_LIGHTS];    // xyz m, w range m (negative: a low-beam headlight, see below)
 uniform vec4 u_light_dir[MAX_LIGHTS];    // xyz unit, w cos(outer cone) (-1 = point light)
 uniform vec4 u_light_color[MAX_LIGHTS];  // rgb = colour × intensity (cd), w cos(inner cone)
 uniform int u_light_count;
+// Direct light (sun, lamps) reaching this draw: 1 outdoors; < 1 inside the cabin, whose roof shades it
+// (the scene has no shadow maps).
+uniform float u_direct_scale = 1.0;
 
 struct Surface {
     vec3 position;   // m, world (wrapped frame)
@@ -22,7 +25,14 @@ float spot_factor(int i, vec3 L) {
     float cos_outer = u_light_dir[i].w;
     if (cos_outer <= -1.0) return 1.0;
     float cd = dot(-L, u_light_dir[i].xyz);
-    return smoothstep(cos_outer, u_light_color[i].w, cd);
+    float f = smoothstep(cos_outer, u_light_color[i].w, cd);
+    if (u_light_pos[i].w < 0.0) {
+        // Low beam: intensity falls steeply below ~1.5° under the horizon (ECE R112-like pattern), so the road
+        // right in front of the car is not lit as hard as the hotspot 20–40 m ahead.
+        float below_deg = degrees(asin(clamp(L.y, -1.0, 1.0)));  // L points to the light: +y = light above
+        f *= exp(-max(below_deg - 1.5, 0.0) / 3.0);
+    }
+    return f;
 }
 
 // Luminance (cd/m²) leaving the surface towards V from the lights (no emission).
@@ -34,13 +44,14 @@ vec3 shade_surface(Surface s, vec3 V) {
     for (int i = 0; i < u_light_count; ++i) {
         vec3 d = u_light_pos[i].xyz - s.position;
         float dist2 = dot(d, d);
-        float range = u_light_pos[i].w;
+        float range = abs(u_light_pos[i].w);
         if (dist2 > range * range) continue;
         vec3 L = d * inversesqrt(dist2);
         float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);  // smooth cut at range
         vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);  // lux
         color += brdf_direct(N, V, L, diffuse_color, f0, s.roughness) * E;
     }
+    color *= u_direct_scale;
     float NoV = max(dot(N, V), 1e-4);
     vec3 spec_env = env_brdf_approx(f0, s.roughness, NoV);
     vec3 R = reflect(-V, N);
