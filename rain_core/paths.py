@@ -1,19 +1,20 @@
-"""Where shaders/ and assets/ are, from the source tree or from an installed package."""
+"""Where shaders/ and assets/ are, from an installed package or from the source tree."""
 
 from __future__ import annotations
 
-from importlib import resources
 from pathlib import Path
 
-_REPO_ROOT = Path(__file__).resolve().parent.parent
+_PACKAGE = Path(__file__).resolve().parent
+_REPO_ROOT = _PACKAGE.parent
 
 
 def _locate(name: str) -> Path:
-    in_tree = _REPO_ROOT / name
-    if in_tree.is_dir():
-        return in_tree
-    # Installed wheel: pyproject maps the folder to the data package rain_core.<name>.
-    return Path(str(resources.files(f"rain_core.{name}")))
+    # Installed wheel: pyproject maps the top-level folder into the package as rain_core/<name>.
+    installed = _PACKAGE / name
+    if installed.is_dir():
+        return installed
+    # Source tree (and editable installs): the folder sits beside rain_core/.
+    return _REPO_ROOT / name
 
 
 SHADERS_DIR = _locate("shaders")
