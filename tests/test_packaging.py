@@ -5,17 +5,12 @@ import sys
 import zipfile
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_wheel_contains_shaders_and_assets(tmp_path):
-    pytest.importorskip("setuptools")
-    result = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+    result = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q",
                              "-w", str(tmp_path), str(ROOT)], capture_output=True, text=True, timeout=300)
-    if result.returncode != 0 and "No module named" in result.stderr:
-        pytest.skip(f"cannot build a wheel here: {result.stderr.strip()[-200:]}")
     assert result.returncode == 0, result.stderr
     wheel = next(tmp_path.glob("rainroad-*.whl"))
     names = set(zipfile.ZipFile(wheel).namelist())
