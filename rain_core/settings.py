@@ -283,6 +283,14 @@ class AtmosphereSection(_Section):
     enabled: bool = field(True, doc="rain fog, extinction and glow")
     fog_scale: float = field(1.0, range=(0.0, 4.0), unit="×", doc="extinction relative to the rain's β")
     glow: float = field(1.0, range=(0.0, 4.0), unit="×", doc="glow around lights")
+    haze_per_km: float = field(0.0, range=(0.0, 60.0), unit="1/km",
+                               doc="extra haze or fog extinction, independent of the rain (visibility ≈ 3/β km)")
+    sky_darkening: float | None = field(None, range=(0.0, 1.0),
+                                        doc="rain-grey sky, 0 clear … 1 dark overcast; unset follows the rain rate")
+    light_scattering: float = field(1.0, range=(0.0, 4.0), unit="×",
+                                    doc="light scattered in the rain around lamps and in headlight beams")
+    scatter_lights: int = field(8, range=(0, 32), unit="lights", doc="nearest lights traced per pixel")
+    glow_resolution: float = field(0.25, range=(0.0625, 1.0), unit="× frame", doc="resolution of the glow blur")
 
 
 @dataclass
