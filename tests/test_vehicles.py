@@ -1,0 +1,387 @@
+"""Vehicles: bicycle-model kinematics, wheel contacts, dt robustness, autopilot, traffic and the periodic world."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rain_core import layout
+from rain_core.vehicles import (
+    CAR_SPEC,
+    PERIOD_M,
+    TRUCK_SPEC,
+    VAN_SPEC,
+    Autopilot,
+    EgoCar,
+    Traffic,
+    Vehicle,
+    VehicleSpec,
+    wrap_z,
+)
+
+
+def _fit_circle(xz: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares circle (Kåsa fit) through (n, 2) points → (centre, radius)."""
+    x, z = xz[:, 0], xz[:, 1]
+    a = np.column_stack([2 * x, 2 * z, np.ones_like(x)])
+    (cx, cz, c), *_ = np.linalg.lstsq(a, x * x + z * z, rcond=None)
+    return np.array([cx, cz]), math.sqrt(c + cx * cx + cz * cz)
+
+
+def _hold_speed(car: EgoCar, target: float) -> float:
+    """Throttle that holds ``target`` m/s against drag and rolling resistance (test helper)."""
+    need = 2.0 * (target - car.speed_m_s) + car.spec.resistance(car.speed_m_s)
+    return min(max(need / car.spec.engine_accel(car.speed_m_s), 0.0), 1.0)
+
+
+@pytest.mark.parametrize("steer", [1.0, 0.5, -0.4])
+def test_turn_radius_matches_bicycle_model(steer):
+    car = EgoCar(speed_m_s=3.0)
+    for _ in range(300):  # let the rate-limited steering settle
+        car.step(0.01, _hold_speed(car, 3.0), 0.0, steer)
+    delta = steer * CAR_SPEC.max_steer_rad  # full lock is allowed at 3 m/s
+    assert car.steer_rad == pytest.approx(delta, rel=1e-6)
+    path = []
+    for _ in range(1500):
+        car.step(0.02, _hold_speed(car, 3.0), 0.0, steer)
+        path.append(car.rear_axle()[[0, 2]])
+    centre, radius = _fit_circle(np.array(path))
+    expected = CAR_SPEC.wheelbase_m / math.tan(abs(delta))
+    assert radius == pytest.approx(expected, rel=0.02)
+    # Positive steer turns left: seen from the car (yaw ≈ heading), the centre lies on its left.
+    to_centre = np.array([centre[0], 0.0, centre[1]]) - car.rear_axle()
+    assert np.sign(to_centre @ -car.right()) == np.sign(steer)
+    assert np.sign(car.yaw_rate_rad_s) == np.sign(steer)
+
+
+def test_top_speed_is_200_kmh_and_acceleration_plausible():
+    car = EgoCar()
+    t, t100 = 0.0, None
+    while t < 180.0:
+        car.step(1.0 / 30.0, 1.0, 0.0, 0.0)
+        t += 1.0 / 30.0
+        if t100 is None and car.speed_m_s >= 100.0 / 3.6:
+            t100 = t
+    assert car.speed_m_s * 3.6 == pytest.approx(200.0, rel=0.05)
+    assert car.speed_m_s <= CAR_SPEC.max_speed_m_s + 1e-9
+    assert 6.0 < t100 < 14.0  # 0–100 km/h of a mid-size saloon
+
+
+def test_larger_vehicles_are_slower():
+    for spec in (VAN_SPEC, TRUCK_SPEC):
+        car = EgoCar(spec=spec)
+        for _ in range(4000):
+            car.step(0.05, 1.0, 0.0, 0.0)
+        assert car.speed_m_s == pytest.approx(spec.max_speed_m_s, rel=0.05)
+        assert spec.max_speed_m_s < CAR_SPEC.max_speed_m_s
+
+
+def test_steering_is_limited_at_speed():
+    car = EgoCar(speed_m_s=50.0)
+    for _ in range(200):
+        car.step(0.01, _hold_speed(car, 50.0), 0.0, 1.0)
+    v = car.speed_m_s
+    lateral = v * v * math.tan(car.steer_rad) / CAR_SPEC.wheelbase_m
+    assert 0.0 < lateral <= CAR_SPEC.max_lat_accel_m_s2 * 1.001
+    assert car.steer_rad < 0.05 * CAR_SPEC.max_steer_rad
+
+
+def test_steering_is_rate_limited():
+    car = EgoCar(speed_m_s=2.0)
+    car.step(0.1, 0.0, 0.0, 1.0)
+    assert car.steer_rad == pytest.approx(CAR_SPEC.steer_rate_rad_s * 0.1, rel=1e-6)
+
+
+def test_wheel_contacts_lie_on_the_road_at_the_track():
+    rng = np.random.default_rng(3)
+    for spec in (CAR_SPEC, VAN_SPEC, TRUCK_SPEC):
+        for _ in range(20):
+            v = Vehicle(spec, position=(rng.uniform(-7, 7), 0.0, rng.uniform(-2000, 2000)),
+                        yaw=rng.uniform(-4, 4))
+            c = v.wheel_contacts()
+            assert c.shape == (4, 3)
+            np.testing.assert_allclose(c[:, 1], 0.0, atol=1e-12)
+            rel = c - v.position
+            np.testing.assert_allclose(rel @ v.right(), [-spec.track_m / 2, spec.track_m / 2] * 2, atol=1e-9)
+            np.testing.assert_allclose(rel @ v.forward(), [spec.wheelbase_m / 2] * 2 + [-spec.wheelbase_m / 2] * 2,
+                                       atol=1e-9)
+            local = np.c_[c, np.ones(4)] @ np.linalg.inv(v.model_matrix()).T
+            np.testing.assert_allclose(local[:, 1], 0.0, atol=1e-9)
+            np.testing.assert_allclose(v.wheel_widths(), spec.tire_width_m)
+
+
+def test_model_matrix_axes():
+    v = Vehicle(CAR_SPEC, position=(1.0, 0.0, 2.0), yaw=0.7)
+    m = v.model_matrix()
+    assert m.dtype == np.float64 and m.shape == (4, 4)
+    np.testing.assert_allclose(m[:3, :3] @ [0, 0, -1], v.forward(), atol=1e-12)
+    np.testing.assert_allclose(m[:3, :3] @ [1, 0, 0], v.right(), atol=1e-12)
+    np.testing.assert_allclose(m[:3, 3], v.position)
+    # yaw 0 faces −Z; a small positive yaw turns the nose toward −X (left).
+    assert Vehicle(CAR_SPEC, yaw=0.1).forward()[0] < 0
+    np.testing.assert_allclose(Vehicle(CAR_SPEC).forward(), [0, 0, -1], atol=1e-12)
+
+
+def test_wheel_speeds_outer_faster_in_a_turn():
+    car = EgoCar(speed_m_s=8.0)
+    for _ in range(200):
+        car.step(0.01, _hold_speed(car, 8.0), 0.0, 0.6)  # left turn
+    fl, fr, rl, rr = car.wheel_speeds()
+    assert fr > fl and rr > rl  # right wheels are outside
+    assert fl > rl and fr > rr  # front wheels run on a larger radius than the rear ones
+    # Rear axle centre moves at the model speed, so the rear wheels straddle it.
+    assert 0.5 * (rl + rr) == pytest.approx(car.speed_m_s, rel=1e-9)
+    # In a kinematic turn each wheel's speed is ω · its distance from the turn centre.
+    radius = CAR_SPEC.wheelbase_m / math.tan(car.steer_rad)
+    assert rr / rl == pytest.approx((radius + CAR_SPEC.track_m / 2) / (radius - CAR_SPEC.track_m / 2), rel=1e-9)
+    straight = EgoCar(speed_m_s=10.0)
+    np.testing.assert_allclose(straight.wheel_speeds(), 10.0)
+    assert np.all(EgoCar(speed_m_s=-2.0).wheel_speeds() < 0)
+
+
+def test_previous_wheel_contacts_sweep_the_last_step():
+    car = EgoCar(speed_m_s=30.0)
+    before = car.wheel_contacts()
+    car.step(0.1, 0.5, 0.0, 0.2)
+    np.testing.assert_array_equal(car.previous_wheel_contacts, before)
+    travelled = np.linalg.norm(car.wheel_contacts() - car.previous_wheel_contacts, axis=1)
+    assert np.all(travelled == pytest.approx(3.0, rel=0.05))
+
+
+def test_velocity_matches_motion():
+    car = EgoCar(speed_m_s=20.0)
+    for _ in range(50):
+        car.step(0.01, 0.3, 0.0, 0.3)
+    p0, v0 = car.position.copy(), car.velocity()
+    car.step(0.001, 0.3, 0.0, 0.3)
+    np.testing.assert_allclose((car.position - p0) / 0.001, v0, rtol=1e-3, atol=1e-3)
+
+
+def test_dt_stress_stays_finite_and_bounded():
+    rng = np.random.default_rng(7)
+    car = EgoCar(speed_m_s=20.0)
+    for _ in range(600):
+        dt = float(10 ** rng.uniform(-6, 0))
+        car.step(dt, rng.uniform(0, 1), rng.uniform(0, 1) * (rng.uniform() < 0.2), rng.uniform(-1, 1),
+                 reverse=bool(rng.uniform() < 0.05))
+        assert np.all(np.isfinite(car.position)) and math.isfinite(car.yaw) and math.isfinite(car.speed_m_s)
+        assert -CAR_SPEC.max_reverse_m_s <= car.speed_m_s <= CAR_SPEC.max_speed_m_s
+        assert car.position[1] == 0.0
+        assert abs(car.steer_rad) <= CAR_SPEC.max_steer_rad + 1e-12
+    for dt in (1e-6, 1.0, 0.0):
+        car.step(dt, 1.0, 0.0, 1.0)
+        assert np.all(np.isfinite(car.wheel_contacts()))
+
+
+def test_huge_dt_is_clamped_and_bad_input_rejected():
+    car = EgoCar(speed_m_s=50.0)
+    z0 = car.position[2]
+    car.step(1e6, 1.0, 0.0, 0.0)
+    assert abs(car.position[2] - z0) <= CAR_SPEC.max_speed_m_s * 1.0 + 1e-6
+    for bad in (float("nan"), float("inf"), -0.1):
+        with pytest.raises(ValueError):
+            car.step(bad, 0.0, 0.0, 0.0)
+    with pytest.raises(ValueError):
+        car.step(0.1, float("nan"), 0.0, 0.0)
+    with pytest.raises(ValueError):
+        car.step(0.1, 0.0, 0.0, float("inf"))
+    with pytest.raises(ValueError):
+        Autopilot().controls(car, float("nan"))
+    with pytest.raises(ValueError):
+        Traffic(count=3).step(float("nan"))
+
+
+def test_result_does_not_depend_much_on_dt():
+    def drive(dt):
+        car = EgoCar(speed_m_s=10.0)
+        for second in range(12):  # inputs held for whole seconds, so both frame rates see the same inputs
+            for _ in range(round(1.0 / dt)):
+                car.step(dt, 0.6, 0.0, 0.4 * math.sin(second))
+        return car.position.copy()
+
+    a, b = drive(1.0 / 240.0), drive(0.25)
+    assert np.linalg.norm(a - b) < 0.3  # after ~200 m of curvy driving
+
+
+def test_brake_stops_and_holds_and_reverse_goes_back():
+    car = EgoCar(speed_m_s=30.0)
+    z0 = car.position[2]
+    for _ in range(600):
+        car.step(0.01, 0.0, 1.0, 0.0)
+    assert car.speed_m_s == 0.0
+    stop = z0 - car.position[2]
+    assert stop == pytest.approx(30.0 ** 2 / (2 * CAR_SPEC.max_brake_m_s2), rel=0.1)
+    z1 = car.position[2]
+    for _ in range(100):
+        car.step(0.05, 0.0, 0.0, 0.0)
+    assert car.position[2] == z1  # rolling resistance holds a stopped car; no creeping
+    for _ in range(300):
+        car.step(0.05, 1.0, 0.0, 0.0, reverse=True)
+    assert car.position[2] > z1  # backwards is +Z at yaw 0
+    assert car.speed_m_s == pytest.approx(-CAR_SPEC.max_reverse_m_s, rel=0.02)
+
+
+def _run_autopilot(lane, seconds, start_offset=0.0, yaw_error=0.0, dt=1.0 / 60.0, seed=0):
+    x = layout.LANE_CENTRES_X[lane]
+    yaw = layout.LANE_YAW[lane] + yaw_error
+    car = EgoCar(position=(x + start_offset, 0.0, 30.0), yaw=yaw, speed_m_s=100.0 / 3.6)
+    pilot = Autopilot(lane_index=lane, target_speed_m_s=100.0 / 3.6, seed=seed)
+    t, rows = 0.0, []
+    while t < seconds:
+        throttle, brake, steer = pilot.controls(car, dt)
+        car.step(dt, throttle, brake, steer)
+        t += dt
+        rows.append((t, car.position[0] - x, car.position[2], car.speed_m_s))
+    return car, np.array(rows)
+
+
+@pytest.mark.parametrize("lane", [0, 3])
+def test_autopilot_keeps_lane_at_100_kmh_through_a_wrap(lane):
+    car, rows = _run_autopilot(lane, 60.0, start_offset=0.8, yaw_error=-0.02)
+    settled = rows[rows[:, 0] > 8.0]
+    assert np.max(np.abs(settled[:, 1])) < 0.3
+    assert np.abs(settled[:, 3] * 3.6 - 100.0).max() < 3.0
+    travelled = abs(rows[-1, 2] - 30.0)
+    assert travelled > PERIOD_M  # the raw z crossed at least one period boundary
+    assert np.floor(rows[0, 2] / PERIOD_M) != np.floor(rows[-1, 2] / PERIOD_M)
+
+
+def test_autopilot_is_deterministic_and_seeded():
+    _, a = _run_autopilot(1, 20.0, seed=5)
+    _, b = _run_autopilot(1, 20.0, seed=5)
+    _, c = _run_autopilot(1, 20.0, seed=6)
+    np.testing.assert_array_equal(a, b)
+    assert np.abs(a[:, 1] - c[:, 1]).max() > 1e-3  # the seed sets the lateral wander
+
+
+def test_autopilot_follows_a_slower_car():
+    ego = EgoCar(position=(layout.LANE_CENTRES_X[0], 0.0, 0.0), speed_m_s=100.0 / 3.6)
+    slow = Vehicle(CAR_SPEC, position=(layout.LANE_CENTRES_X[0], 0.0, -80.0), speed_m_s=50.0 / 3.6)
+    pilot = Autopilot(lane_index=0, target_speed_m_s=100.0 / 3.6, wander_m=0.0)
+    gaps = []
+    for _ in range(60 * 40):
+        throttle, brake, steer = pilot.controls(ego, 1.0 / 60.0, others=[slow])
+        ego.step(1.0 / 60.0, throttle, brake, steer)
+        slow.position = slow.position + slow.velocity() / 60.0
+        gaps.append((ego.position[2] - slow.position[2]) - CAR_SPEC.length_m)
+    assert min(gaps) > 5.0
+    assert ego.speed_m_s == pytest.approx(slow.speed_m_s, abs=0.5)
+
+
+def test_wrap_z():
+    assert wrap_z(0.0, 0.0) == 0.0
+    assert wrap_z(PERIOD_M * 3 + 5.0, 10.0) == pytest.approx(5.0)
+    assert wrap_z(-PERIOD_M * 0.6, 0.0) == pytest.approx(PERIOD_M * 0.4)
+    z = np.linspace(-5000, 5000, 101)
+    w = wrap_z(z, 777.0)
+    assert np.all(np.abs(w - 777.0) <= PERIOD_M / 2 + 1e-9)
+    k = (w - z) / PERIOD_M
+    np.testing.assert_allclose(k, np.round(k), atol=1e-12)  # shifted by whole periods only
+
+
+def test_traffic_composition_and_lanes():
+    ego = EgoCar()
+    traffic = Traffic(count=5, seed=0, ego=ego)
+    assert len(traffic.vehicles) == 5
+    kinds = [v.spec.kind for v in traffic.vehicles]
+    assert "truck" in kinds or "van" in kinds
+    assert any(v.spec.kind in ("van", "truck") for v in Traffic(count=3, seed=9).vehicles)
+    for v, lane in zip(traffic.vehicles, traffic.lanes, strict=True):
+        assert v.position[0] == pytest.approx(layout.LANE_CENTRES_X[lane])
+        assert v.yaw == pytest.approx(layout.LANE_YAW[lane])
+        assert abs(v.position[2] - ego.position[2]) <= PERIOD_M / 2
+        assert np.all(np.isfinite(v.color))
+    speeds = np.array(traffic.desired_speeds_m_s) * 3.6
+    assert np.all((speeds >= 40.0) & (speeds <= 110.0))
+    assert len(np.unique(np.round(speeds, 3))) == 5
+    assert len(Traffic(count=0).vehicles) == 0
+    with pytest.raises(ValueError):
+        Traffic(count=-1)
+    with pytest.raises(ValueError):
+        Traffic(count=10_000)
+
+
+def _lane_gaps(traffic: Traffic, ego: EgoCar) -> float:
+    """Smallest bumper-to-bumper gap (m) between any two vehicles in the same lane, the ego included."""
+    smallest = math.inf
+    for lane in range(4):
+        d = np.array([0.0, 0.0, -1.0]) if layout.LANE_YAW[lane] == 0.0 else np.array([0.0, 0.0, 1.0])
+        members = [(v.position @ d, v.spec.length_m / 2) for v, l in zip(traffic.vehicles, traffic.lanes,
+                                                                           strict=True) if l == lane]
+        if abs(ego.position[0] - layout.LANE_CENTRES_X[lane]) < 1.0:
+            members.append((ego.position @ d, ego.spec.length_m / 2))
+        for i, (si, hi) in enumerate(members):
+            for j, (sj, hj) in enumerate(members):
+                if i != j:
+                    smallest = min(smallest, (sj - si) % PERIOD_M - hi - hj)
+    return smallest
+
+
+def test_traffic_keeps_gaps_and_stays_near_ego():
+    ego = EgoCar(position=(layout.LANE_CENTRES_X[0], 0.0, 0.0), speed_m_s=90.0 / 3.6)
+    pilot = Autopilot(lane_index=0, target_speed_m_s=90.0 / 3.6, seed=1)
+    traffic = Traffic(count=14, seed=2, ego=ego)
+    dt = 1.0 / 20.0
+    smallest = math.inf
+    for _ in range(int(120.0 / dt)):
+        throttle, brake, steer = pilot.controls(ego, dt, others=traffic.vehicles)
+        ego.step(dt, throttle, brake, steer)
+        traffic.step(dt)
+        smallest = min(smallest, _lane_gaps(traffic, ego))
+        for v in traffic.vehicles:
+            assert abs(v.position[2] - ego.position[2]) <= PERIOD_M / 2 + 1e-6
+            # A wrap must not turn into a 1200 m sweep of the wheel path.
+            assert np.abs(v.wheel_contacts() - v.previous_wheel_contacts).max() < 5.0
+    assert smallest > 4.0
+    speeds = [v.speed_m_s for v in traffic.vehicles]
+    assert np.ptp(speeds) > 3.0  # not all at one speed
+
+
+def test_traffic_stops_behind_a_stopped_ego():
+    ego = EgoCar(position=(layout.LANE_CENTRES_X[1], 0.0, -100.0), speed_m_s=0.0)
+    traffic = Traffic(count=1, seed=0, ego=ego)
+    car = traffic.vehicles[0]
+    traffic.lanes[0] = 1
+    traffic.desired_speeds_m_s[0] = 100.0 / 3.6
+    car.position = np.array([layout.LANE_CENTRES_X[1], 0.0, 60.0])
+    car.yaw, car.speed_m_s = 0.0, 100.0 / 3.6
+    for _ in range(600):
+        traffic.step(0.05)
+    gap = (car.position[2] - ego.position[2]) - (car.spec.length_m + ego.spec.length_m) / 2
+    assert car.speed_m_s < 0.1
+    assert 2.0 < gap < 10.0
+
+
+def test_traffic_is_deterministic():
+    def run(seed):
+        ego = EgoCar(speed_m_s=25.0)
+        traffic = Traffic(count=6, seed=seed, ego=ego)
+        for _ in range(400):
+            ego.step(0.05, 0.5, 0.0, 0.0)
+            traffic.step(0.05)
+        return np.array([v.position for v in traffic.vehicles])
+
+    np.testing.assert_array_equal(run(11), run(11))
+    assert not np.array_equal(run(11), run(12))
+
+
+def test_lights():
+    for spec in (CAR_SPEC, VAN_SPEC, TRUCK_SPEC):
+        v = Vehicle(spec, position=(3.0, 0.0, -40.0), yaw=0.4)
+        heads = v.headlights()
+        assert len(heads) == 2
+        for pos, direction in heads:
+            assert (pos - v.position) @ v.forward() == pytest.approx(spec.length_m / 2)
+            assert np.linalg.norm(direction) == pytest.approx(1.0)
+            assert direction @ v.forward() > 0.99 and direction[1] < 0  # aimed ahead, slightly down
+            assert 0.4 < pos[1] < 1.5
+        tails = v.taillights()
+        assert tails.shape == (2, 3)
+        np.testing.assert_allclose((tails - v.position) @ v.forward(), -spec.length_m / 2)
+
+
+def test_spec_validation():
+    with pytest.raises(ValueError):
+        VehicleSpec("bus", 10, 2.5, 3, 6, 2, 0.5, 0.3, 0.5, 25, 1, 5)
+    with pytest.raises(ValueError):
+        VehicleSpec("car", 4, 1.8, 1.4, 5.0, 1.5, 0.3, 0.2, 0.5, 50, 3, 9)  # wheelbase longer than the car
