@@ -66,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--preset", help="named rain preset (drizzle, light, moderate, heavy, very_heavy, extreme)")
     p.add_argument("--rain-rate", type=_finite(0.0, 500.0, "mm/h"), help="rain rate in mm/h")
     p.add_argument("--panel", action="store_true", help="headless: draw the Rain Manager panel into the frames")
+    p.add_argument("--frames", type=_int_in(1, 10**9), help="window: close after this many frames (smoke tests)")
     p.add_argument("--window", default="pyglet", help="moderngl-window backend for the window (pyglet, glfw, ...)")
     return p
 

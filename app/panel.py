@@ -1,0 +1,161 @@
+"""The Rain Manager: an ImGui window that shows and edits the settings live.
+
+Widgets are generated from the settings declarations (type, range, unit, choices), and every edit goes through
+``rain_core.settings.set_value``, the same validation as the CLI and scenario files. A refused value is shown in
+red next to its widget instead of reaching the simulation.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+from imgui_bundle import imgui
+
+from app.imgui_layer import ImGuiLayer
+from rain_core import physics
+from rain_core.settings import SettingsError, all_fields, apply_rain_preset, get_value, set_value
+
+# The sections in panel order: (settings section or None, title). A section is "wired" when an effect or the
+# scene reads it; the others show what will arrive instead of controls that would do nothing.
+SECTIONS = (
+    ("rain", "Rain"), ("road", "Road"), ("wind", "Wind"), ("wipers", "Wipers"), ("camera", "Camera"),
+    ("time_of_day", "Time of day"), ("traffic", "Traffic"), ("quality", "Quality"), ("ripples", "Ripples"),
+    ("rainfall", "Rainfall"), ("spray", "Spray"), ("windshield", "Windshield"), ("atmosphere", "Atmosphere"),
+)
+WIRED = {"rain", "wind", "camera", "time_of_day", "traffic"}
+# Fields the generic widgets should not show (edited by dedicated widgets).
+CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks", "rain.puddles"}
+LOG_FIELDS = {"rain.time_scale"}
+
+
+class RainManagerPanel:
+    """Draws the Rain Manager for a ``Scene`` over a framebuffer."""
+
+    def __init__(self, ctx, window_size, scene, framebuffer_size=None):
+        self.layer = ImGuiLayer(ctx, tuple(window_size), framebuffer_size)
+        self.scene = scene
+        self.cameras = None  # the app's CameraModes, when there is a window
+        self.errors: dict[str, str] = {}
+        self.frame_ms = deque(maxlen=120)
+        self.fields = {}
+        for info in all_fields():
+            self.fields.setdefault(info.path.split(".")[0], []).append(info)
+
+    # --- editing --------------------------------------------------------------------------------------------
+    def _set(self, path: str, value) -> None:
+        try:
+            set_value(self.scene.settings, path, value)
+            self.errors.pop(path, None)
+        except SettingsError as exc:
+            self.errors[path] = str(exc)
+
+    def _field_widget(self, info) -> None:
+        settings = self.scene.settings
+        value = get_value(settings, info.path)
+        label = info.path.split(".")[1].replace("_", " ") + (f" ({info.unit})" if info.unit else "")
+        if info.optional:
+            auto = value is None
+            changed, auto = imgui.checkbox(f"auto##{info.path}", auto)
+            if changed:
+                self._set(info.path, None if auto else float(info.default if info.default is not None else 0.0))
+            imgui.same_line()
+            if auto:
+                imgui.text_disabled(label)
+                return
+            value = get_value(settings, info.path)
+        if info.kind == "bool":
+            changed, new = imgui.checkbox(label, bool(value))
+        elif info.kind == "str" and info.choices:
+            index = info.choices.index(value) if value in info.choices else 0
+            changed, index = imgui.combo(label, index, list(info.choices))
+            new = info.choices[index]
+        elif info.kind == "int":
+            lo, hi = info.range
+            changed, new = imgui.slider_int(label, int(value), int(lo), int(min(hi, 10**6)))
+        elif info.kind == "float":
+            lo, hi = info.range
+            flags = imgui.SliderFlags_.logarithmic.value if info.path in LOG_FIELDS else 0
+            changed, new = imgui.slider_float(label, float(value), float(lo), float(hi), "%.3g", flags)
+        else:
+            imgui.text(f"{label}: {value}")
+            return
+        if imgui.is_item_hovered() and info.doc:
+            imgui.set_tooltip(info.doc)
+        if changed:
+            self._set(info.path, new)
+        if info.path in self.errors:
+            imgui.text_colored(imgui.ImVec4(1.0, 0.35, 0.3, 1.0), self.errors[info.path])
+
+    # --- sections -------------------------------------------------------------------------------------------
+    def _rain_section(self) -> None:
+        settings = self.scene.settings
+        presets = list(physics.RAIN_PRESETS)
+        current = settings.rain.preset
+        index = presets.index(current) + 1 if current in presets else 0
+        changed, index = imgui.combo("preset", index, ["custom", *presets])
+        if changed and index > 0:
+            try:
+                apply_rain_preset(settings, presets[index - 1])
+            except SettingsError as exc:
+                self.errors["rain.preset"] = str(exc)
+        rate = settings.rain.rate_mm_h
+        changed, rate = imgui.slider_float("rate (mm/h)", rate, 0.0, 200.0, "%.2f",
+                                           imgui.SliderFlags_.logarithmic.value)
+        if changed:
+            self._set("rain.rate_mm_h", rate)
+            self._set("rain.preset", "custom")
+        category = physics.rain_category(settings.rain.rate_mm_h) if settings.rain.rate_mm_h > 0 else "none"
+        imgui.text(f"category: {category}")
+        state = self.scene.weather_state
+        imgui.separator_text("road water (auto = weather drives it)")
+        for level in ("wetness", "cracks", "puddles"):
+            imgui.progress_bar(float(getattr(state, level)), imgui.ImVec2(120, 0), f"{getattr(state, level):.2f}")
+            imgui.same_line()
+            self._field_widget(next(f for f in self.fields["rain"] if f.path == f"rain.{level}"))
+
+    def _performance_section(self) -> None:
+        renderer = self.scene.renderer
+        if self.frame_ms:
+            mean = sum(self.frame_ms) / len(self.frame_ms)
+            width, height = renderer.size
+            imgui.text(f"{1000.0 / max(mean, 1e-6):.1f} FPS  ({mean:.2f} ms/frame)  {width}x{height}")
+        imgui.text(f"speed {self.scene.ego.speed_m_s * 3.6:.0f} km/h   GPU timing: {renderer.timing_source}")
+        flags = imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
+        if imgui.begin_table("passes", 4, flags):
+            for title in ("pass", "ran", "CPU ms", "GPU ms"):
+                imgui.table_setup_column(title)
+            imgui.table_headers_row()
+            for name, ran, cpu_ms, gpu_ms in renderer.pass_table():
+                imgui.table_next_row()
+                for text in (name, "yes" if ran else "skipped", f"{cpu_ms:.2f}" if ran else "-",
+                             f"{gpu_ms:.2f}" if (ran and gpu_ms is not None) else "-"):
+                    imgui.table_next_column()
+                    imgui.text(text)
+            imgui.end_table()
+
+    def draw(self, dt_s: float, fbo) -> None:
+        """Build and draw one frame of the panel into ``fbo``."""
+        self.frame_ms.append(dt_s * 1e3)
+        layer = self.layer
+        layer.new_frame(dt_s)
+        imgui.set_next_window_pos(imgui.ImVec2(10, 10), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(380, 520), imgui.Cond_.first_use_ever.value)
+        imgui.begin("Rain Manager")
+        for section, title in SECTIONS:
+            open_by_default = imgui.TreeNodeFlags_.default_open.value if section in ("rain", "camera") else 0
+            if not imgui.collapsing_header(title, open_by_default):
+                continue
+            if section not in WIRED:
+                imgui.text_disabled("arrives with its effect")
+                continue
+            if section == "rain":
+                self._rain_section()
+            for info in self.fields.get(section, []):
+                if info.path not in CUSTOM_FIELDS:
+                    self._field_widget(info)
+            if section == "camera" and self.cameras is not None:
+                self.cameras.mode = self.scene.settings.camera.mode
+        if imgui.collapsing_header("Performance", imgui.TreeNodeFlags_.default_open.value):
+            self._performance_section()
+        imgui.end()
+        layer.render(fbo)

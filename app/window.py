@@ -1,0 +1,131 @@
+"""The interactive window: drive with WASD/arrows, C switches camera, F12 saves a screenshot, Esc quits."""
+
+from __future__ import annotations
+
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+
+from app.cameras import CameraModes
+from app.controls import KeyboardDriver
+from app.recording import save_png
+from rain_core.car_mesh import DRIVER_EYE_LOCAL
+from rain_core.scene import Scene
+
+KEY_NAMES = {"W": "up", "UP": "up", "S": "down", "DOWN": "down", "A": "left", "LEFT": "left", "D": "right",
+             "RIGHT": "right"}
+
+
+def create_window(backend: str, size: tuple[int, int], title: str = "Rainroad"):
+    """A moderngl-window window of the given backend (pyglet, glfw, … or headless), GL 3.3 core."""
+    import moderngl_window
+    from moderngl_window.conf import settings as mglw_settings
+
+    mglw_settings.WINDOW["class"] = f"moderngl_window.context.{backend}.Window"
+    mglw_settings.WINDOW["gl_version"] = (3, 3)
+    mglw_settings.WINDOW["size"] = tuple(size)
+    mglw_settings.WINDOW["aspect_ratio"] = None
+    mglw_settings.WINDOW["title"] = title
+    mglw_settings.WINDOW["vsync"] = True
+    mglw_settings.WINDOW["resizable"] = True
+    if backend == "headless":
+        mglw_settings.WINDOW["backend"] = "egl"
+    return moderngl_window.create_window_from_settings()
+
+
+class RainroadApp:
+    """Connects a window's events to the scene, the driving input, the camera modes and the Rain Manager."""
+
+    def __init__(self, wnd, settings, seed: int = 1, screenshot_dir: Path = Path("screenshots")):
+        from app.panel import RainManagerPanel
+
+        self.wnd = wnd
+        self.ctx = wnd.ctx
+        self.screenshot_dir = screenshot_dir
+        self.scene = Scene(self.ctx, wnd.buffer_size, settings=settings, seed=seed)
+        self.driver = KeyboardDriver()
+        self.cameras = CameraModes(settings.camera.mode)
+        self.panel = RainManagerPanel(self.ctx, wnd.size, self.scene, framebuffer_size=wnd.buffer_size)
+        self.panel.cameras = self.cameras
+        self._keys = {getattr(wnd.keys, name, None): name for name in (*KEY_NAMES, "C", "F12", "ESCAPE")}
+        self._keys.pop(None, None)
+        self._last = time.perf_counter()
+        wnd.render_func = self.render
+        wnd.resize_func = self.resize
+        wnd.key_event_func = self.key_event
+        layer = self.panel.layer
+        wnd.mouse_position_event_func = layer.mouse_position_event
+        wnd.mouse_drag_event_func = self.mouse_drag_event
+        wnd.mouse_press_event_func = layer.mouse_press_event
+        wnd.mouse_release_event_func = layer.mouse_release_event
+        wnd.mouse_scroll_event_func = layer.mouse_scroll_event
+        wnd.unicode_char_entered_func = layer.unicode_char_entered
+
+    def key_event(self, key, action, modifiers):
+        self.panel.layer.key_event(key, action, modifiers, keys=self.wnd.keys)
+        name = self._keys.get(key)
+        if name is None or (self.panel.layer.want_capture_keyboard and name not in ("F12",)):
+            return
+        pressed = action == self.wnd.keys.ACTION_PRESS
+        if name in KEY_NAMES:
+            (self.driver.press if pressed else self.driver.release)(KEY_NAMES[name])
+        elif pressed and name == "C":
+            self.cameras.cycle(self.scene.ego)
+            self.scene.settings.camera.mode = self.cameras.mode
+        elif pressed and name == "F12":
+            self.screenshot()
+        elif pressed and name == "ESCAPE":
+            self.wnd.close()
+
+    def mouse_drag_event(self, x, y, dx, dy):
+        self.panel.layer.mouse_drag_event(x, y, dx, dy)
+        if not self.panel.layer.want_capture_mouse and self.cameras.mode == "free":
+            self.cameras.free.turn(dx, dy)
+
+    def resize(self, width, height):
+        self.panel.layer.resize(self.wnd.size, self.wnd.buffer_size)
+        self.scene.renderer.resize(self.wnd.buffer_size)
+
+    def screenshot(self) -> Path:
+        stamp = datetime.now().strftime("%Y%m%d-%H%M%S-%f")
+        path = save_png(self.scene.image(), self.screenshot_dir / f"rainroad-{stamp}.png")
+        print(f"rainroad: screenshot {path}")
+        return path
+
+    def render(self, time_s: float, frame_time_s: float):
+        now = time.perf_counter()
+        dt = now - self._last
+        self._last = now
+        ego = self.scene.ego
+        if self.cameras.mode == "free":
+            self.cameras.free.move(dt, self.driver.held)
+            drive = None  # the keys fly the camera; the car keeps its lane on autopilot
+        else:
+            drive = None if self.driver.autopilot else self.driver.update(dt, ego.speed_m_s)
+        self.scene.step(dt, drive)
+        self.scene.settings.camera.mode = self.cameras.mode
+        camera = self.cameras.camera(ego, DRIVER_EYE_LOCAL, self.scene.last_dt_s, self.scene.settings.camera.fov_deg)
+        self.scene.render(camera)
+        self.scene.renderer.present(self.wnd.fbo, (0, 0, *self.wnd.buffer_size))
+        self.panel.draw(dt, self.wnd.fbo)
+
+
+def run_window(args, settings, max_frames: int | None = None) -> int:
+    try:
+        wnd = create_window(args.window, args.size)
+    except Exception as exc:  # no display, no GL, unknown backend: say so instead of a traceback
+        print(f"rainroad: could not open a window ({args.window}): {exc}\n"
+              "  Without a display use the headless variant: python -m app --headless --screenshot out.png",
+              file=sys.stderr)
+        return 1
+    app = RainroadApp(wnd, settings, seed=args.seed)
+    frames = 0
+    while not wnd.is_closing and (max_frames is None or frames < max_frames):
+        wnd.clear()
+        wnd.render(0.0, 0.0)
+        wnd.swap_buffers()
+        frames += 1
+    app.panel.layer.shutdown()
+    wnd.destroy()
+    return 0

@@ -1,0 +1,107 @@
+"""A whole driving scene: settings → weather → world, ego car, traffic → effects → renderer (DESIGN §1).
+
+The app, the headless runs and the benchmarks all drive the same ``Scene``, so what is measured is what is shown.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rain_core import layout
+from rain_core.camera import Camera, ChaseRig, driver_camera
+from rain_core.car_mesh import DRIVER_EYE_LOCAL
+from rain_core.lighting import lighting_for_hour
+from rain_core.renderer import Frame, Renderer
+from rain_core.settings import Settings
+from rain_core.vehicles import Autopilot, EgoCar, Traffic
+from rain_core.weather import Weather
+from rain_core.world import build_world
+
+MAX_FRAME_DT_S = 0.25  # s; a longer stall (debugger, window drag) is simulated as this much time
+
+
+def default_effects(ctx, settings) -> list:
+    """The rain effects in draw order. Each decides per frame whether it runs (``active``)."""
+    return []
+
+
+class Scene:
+    """Owns the simulation state and the renderer for one street.
+
+    ``step(dt_s, drive=None)`` advances time (``drive``: a DriveInput-like object with throttle, brake, steer,
+    reverse; None lets the autopilot drive). ``render(camera=None)`` draws a frame (default: the camera mode in
+    settings) and returns it; ``image()`` gives the tone-mapped uint8 picture.
+    """
+
+    def __init__(self, ctx, size: tuple[int, int], settings: Settings | None = None, seed: int = 1,
+                 effects=None, gpu_timing: bool = True):
+        self.ctx = ctx
+        self.settings = settings if settings is not None else Settings()
+        self.settings.validate()
+        self.seed = int(seed)
+        self.world = build_world(seed=self.seed)
+        self.ego = EgoCar(position=np.array([layout.LANE_CENTRES_X[0], 0.0, layout.PERIOD_M * 0.5]),
+                          speed_m_s=16.0)
+        self.autopilot = Autopilot(lane_index=0, target_speed_m_s=22.0, seed=self.seed)
+        self.traffic = Traffic(count=self.settings.traffic.count, seed=self.seed + int(self.settings.traffic.seed),
+                               ego=self.ego)
+        self.weather = Weather.from_settings(self.settings)
+        self.weather_state = self.weather.state
+        self.time_s = 0.0
+        self.last_dt_s = 0.0
+        self.chase = ChaseRig()
+        self.effects = default_effects(ctx, self.settings) if effects is None else list(effects)
+        self.renderer = Renderer(ctx, size, self.world, effects=self.effects, gpu_timing=gpu_timing)
+
+    # --- simulation -----------------------------------------------------------------------------------------
+    def set_traffic_count(self, count: int):
+        if count != len(self.traffic.vehicles):
+            self.traffic = Traffic(count=count, seed=self.seed + int(self.settings.traffic.seed), ego=self.ego)
+
+    def step(self, dt_s: float, drive=None) -> None:
+        """Advance the scene by dt_s seconds (clamped to [0, MAX_FRAME_DT_S]; non-finite → ValueError)."""
+        if not math.isfinite(dt_s) or dt_s < 0:
+            raise ValueError(f"dt_s must be a finite number ≥ 0 s, got {dt_s!r}")
+        dt_s = min(dt_s, MAX_FRAME_DT_S)
+        self.weather.apply_settings(self.settings)
+        self.weather_state = self.weather.step(dt_s, self.settings.rain.rate_mm_h)
+        if drive is None:
+            throttle, brake, steer = self.autopilot.controls(self.ego, dt_s, others=self.traffic.vehicles)
+            self.ego.step(dt_s, throttle, brake, steer)
+        else:
+            self.ego.step(dt_s, drive.throttle, drive.brake, drive.steer, reverse=drive.reverse)
+        self.set_traffic_count(self.settings.traffic.count)
+        self.traffic.step(dt_s)
+        self.time_s += dt_s
+        self.last_dt_s = dt_s
+
+    @property
+    def vehicles(self) -> list:
+        return [self.ego, *self.traffic.vehicles]
+
+    def camera(self, mode: str | None = None) -> Camera:
+        mode = mode or self.settings.camera.mode
+        fov = self.settings.camera.fov_deg
+        if mode == "driver":
+            return driver_camera(self.ego, DRIVER_EYE_LOCAL, fov_y_deg=fov)
+        return self.chase.camera(self.ego, self.last_dt_s, fov_y_deg=min(fov, 65.0))
+
+    def frame(self, camera: Camera | None = None) -> Frame:
+        lighting = lighting_for_hour(self.settings.time_of_day.hour)
+        raining = self.weather_state.rate_mm_h > 0.0
+        return Frame(time_s=self.time_s, dt_s=self.last_dt_s, camera=camera or self.camera(), lighting=lighting,
+                     world=self.world, ego=self.ego, vehicles=self.vehicles, weather=self.weather_state,
+                     settings=self.settings, headlights_on=raining or lighting.night_factor > 0.05)
+
+    def render(self, camera: Camera | None = None) -> Frame:
+        frame = self.frame(camera)
+        self.renderer.render(frame)
+        return frame
+
+    def image(self) -> np.ndarray:
+        return self.renderer.image()
+
+    def release(self):
+        self.renderer.release()

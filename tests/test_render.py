@@ -1,0 +1,93 @@
+"""Headless frames are real pictures: sky and road differ, day and night differ, no NaN, deterministic."""
+
+import numpy as np
+import pytest
+
+from rain_core.scene import Scene
+from rain_core.settings import Settings, set_value
+
+SIZE = (128, 72)
+
+
+def make_scene(gl_ctx, hour=12.0, camera="driver", seed=1, rate=0.0):
+    settings = Settings()
+    set_value(settings, "time_of_day.hour", hour)
+    set_value(settings, "camera.mode", camera)
+    set_value(settings, "rain.rate_mm_h", rate)
+    return Scene(gl_ctx, SIZE, settings=settings, seed=seed)
+
+
+def run(scene, frames=10, dt=1 / 30):
+    for _ in range(frames):
+        scene.step(dt)
+    scene.render()
+    return scene.image()
+
+
+@pytest.fixture(scope="module")
+def noon_chase(gl_ctx):
+    with gl_ctx:  # module fixtures run before the per-test fixture that makes the context current
+        scene = make_scene(gl_ctx, camera="chase")
+        image = run(scene)
+    yield scene, image
+    scene.release()
+
+
+def test_frame_is_a_real_picture(noon_chase):
+    scene, image = noon_chase
+    assert image.shape == (SIZE[1], SIZE[0], 3) and image.dtype == np.uint8
+    sky = image[: SIZE[1] // 8, 2 * SIZE[0] // 5: 3 * SIZE[0] // 5].reshape(-1, 3).mean(axis=0)
+    road = image[-SIZE[1] // 6:, SIZE[0] // 3: 2 * SIZE[0] // 3].reshape(-1, 3).mean(axis=0)
+    assert sky[2] > sky[0]  # a blue day sky above
+    assert np.abs(sky - road).max() > 30  # and something else below
+    assert image.std() > 20
+    assert np.isfinite(scene.renderer.hdr_image()).all()
+
+
+def test_passes_are_recorded(noon_chase):
+    scene, _ = noon_chase
+    names = [row[0] for row in scene.renderer.pass_table()]
+    assert "scene" in names and names[-1] == "tonemap"
+    for _name, ran, cpu_ms, gpu_ms in scene.renderer.pass_table():
+        if ran:
+            assert cpu_ms >= 0 and (gpu_ms is None or gpu_ms >= 0)
+
+
+def test_night_is_darker_but_lamps_light_the_road(gl_ctx):
+    day = make_scene(gl_ctx, hour=12.0)
+    night = make_scene(gl_ctx, hour=22.0)
+    day_img, night_img = run(day, 3).astype(float), run(night, 3).astype(float)
+    assert night_img.mean() < 0.6 * day_img.mean()
+    assert night_img.max() > 200  # lamps and lit windows still glow
+    day.release()
+    night.release()
+
+
+def test_same_seed_same_frame_other_seed_other_frame(gl_ctx):
+    images = []
+    for seed in (5, 5, 6):
+        scene = make_scene(gl_ctx, camera="chase", seed=seed)
+        images.append(run(scene, 20))
+        scene.release()
+    np.testing.assert_array_equal(images[0], images[1])
+    assert np.abs(images[0].astype(int) - images[2]).mean() > 1.0
+
+
+def test_driver_view_shows_cabin_and_road(gl_ctx):
+    scene = make_scene(gl_ctx, camera="driver")
+    image = run(scene, 5)
+    assert scene.frame().camera.inside_car
+    # The bottom rows are the car's hood/dashboard, much darker than the sky at the top.
+    assert image[-8:].mean() < image[:8].mean()
+    scene.release()
+
+
+def test_bad_dt_is_rejected_and_huge_dt_is_clamped(gl_ctx):
+    scene = make_scene(gl_ctx)
+    with pytest.raises(ValueError, match="dt_s"):
+        scene.step(float("nan"))
+    scene.step(1e6)
+    assert scene.last_dt_s <= 0.25
+    scene.render()
+    assert np.isfinite(scene.renderer.hdr_image()).all()
+    scene.release()

@@ -1,0 +1,73 @@
+"""A real window under Xvfb opens, renders frames with the Rain Manager and closes; the panel also renders
+headlessly."""
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.window
+
+
+@pytest.fixture(scope="module")
+def display():
+    if os.environ.get("DISPLAY"):
+        yield os.environ["DISPLAY"]
+        return
+    xvfb = shutil.which("Xvfb")
+    if xvfb is None:
+        pytest.skip("Xvfb is not installed (.ci/run installs it)")
+    number = 90 + os.getpid() % 9
+    proc = subprocess.Popen([xvfb, f":{number}", "-screen", "0", "640x480x24", "-nolisten", "tcp"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(1.0)
+    if proc.poll() is not None:
+        pytest.skip("Xvfb could not start")
+    yield f":{number}"
+    proc.terminate()
+    proc.wait(timeout=10)
+
+
+def test_real_window_opens_renders_and_closes(display):
+    env = dict(os.environ, DISPLAY=display)
+    result = subprocess.run([sys.executable, "-m", "app", "--window", "pyglet", "--size", "320x200", "--frames", "4"],
+                            env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+
+
+def test_panel_draws_over_the_frame(gl_ctx, tmp_path):
+    from app.panel import RainManagerPanel
+    from rain_core.scene import Scene
+
+    scene = Scene(gl_ctx, (640, 360), seed=2)
+    scene.step(1 / 30)
+    scene.render()
+    before = scene.image().astype(int)
+    panel = RainManagerPanel(gl_ctx, (640, 360), scene)
+    for _ in range(3):  # the first frames lay the window out
+        scene.render()
+        panel.draw(1 / 30, scene.renderer.ldr)
+    after = scene.image().astype(int)
+    changed = np.abs(after - before).sum(axis=2) > 30
+    assert changed[20:100, 20:100].mean() > 0.5  # the panel sits at the top left
+    assert changed[:, 420:].mean() < 0.02  # and leaves the rest of the frame alone
+    panel.layer.shutdown()
+    scene.release()
+
+
+def test_panel_edit_goes_through_validation(gl_ctx):
+    from app.panel import RainManagerPanel
+    from rain_core.scene import Scene
+
+    scene = Scene(gl_ctx, (160, 120), seed=2)
+    panel = RainManagerPanel(gl_ctx, (160, 120), scene)
+    panel._set("rain.rate_mm_h", 12.0)
+    assert scene.settings.rain.rate_mm_h == 12.0
+    panel._set("rain.rate_mm_h", -1.0)
+    assert scene.settings.rain.rate_mm_h == 12.0 and "rain.rate_mm_h" in panel.errors["rain.rate_mm_h"]
+    panel.layer.shutdown()
+    scene.release()
