@@ -191,7 +191,7 @@ class Renderer:
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._world_vao = self._vao(world.vertices)
         self._vehicle_vaos: dict[int, tuple[moderngl.VertexArray, int]] = {}
-        self._cabin: tuple[moderngl.VertexArray, int] | None = None
+        self._cabin: list[tuple[moderngl.VertexArray, int, float]] | None = None
         self._timers: dict[str, PassTimer] = {}
 
     def _make_targets(self):
@@ -226,11 +226,17 @@ class Renderer:
             self._vehicle_vaos[key] = self._vao(vehicle_mesh(vehicle.spec, np.asarray(color, np.float32)))
         return self._vehicle_vaos[key]
 
-    def _cabin_vao(self, ego):
+    def _cabin_vaos(self, ego):
+        """The cabin as (vao, count, direct-light share): painted outside parts (hood, mirrors) get full direct
+        light, the interior the share its roof lets in."""
         if self._cabin is None:
             from rain_core.car_mesh import cabin_mesh
+            from rain_core.mesh import MAT_CAR_PAINT
 
-            self._cabin = self._vao(cabin_mesh(ego.spec))
+            vertices = cabin_mesh(ego.spec)
+            outside = np.round(vertices["params"][:, 2]) == MAT_CAR_PAINT
+            self._cabin = [(*self._vao(part), share) for part, share in
+                           ((vertices[outside], 1.0), (vertices[~outside], CABIN_DIRECT_LIGHT)) if len(part)]
         return self._cabin
 
     # --- passes ---------------------------------------------------------------------------------------------
@@ -296,9 +302,9 @@ class Renderer:
             model = frame.ego.model_matrix().copy()
             model[2, 3] -= rc.shift_z
             prog["u_model"].write(_mat(model))
-            vao, n = self._cabin_vao(frame.ego)
-            prog["u_direct_scale"].value = CABIN_DIRECT_LIGHT
-            vao.render(moderngl.TRIANGLES, vertices=n)
+            for vao, n, share in self._cabin_vaos(frame.ego):
+                prog["u_direct_scale"].value = share
+                vao.render(moderngl.TRIANGLES, vertices=n)
             prog["u_direct_scale"].value = 1.0
 
     def render(self, frame: Frame) -> None:
