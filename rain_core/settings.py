@@ -213,6 +213,10 @@ class WipersSection(_Section):
     SECTION: ClassVar[str] = "wipers"
     mode: str = field("auto", choices=("off", "intermittent", "low", "high", "auto"), doc="wiper speed")
     interval_s: float = field(4.0, range=(1.0, 30.0), unit="s", doc="pause between sweeps (intermittent)")
+    low_cycles_per_min: float = field(45.0, range=(20.0, 90.0), unit="cycles/min", doc="sweep rate in low")
+    high_cycles_per_min: float = field(70.0, range=(40.0, 120.0), unit="cycles/min", doc="sweep rate in high")
+    auto_sensitivity: float = field(1.0, range=(0.25, 4.0), unit="×", doc="rain sensor: higher wipes sooner")
+    blade_wear: float = field(0.2, range=(0.0, 1.0), doc="0 new blade … 1 worn (thicker residue streaks)")
 
 
 @dataclass
@@ -275,6 +279,8 @@ class WindshieldSection(_Section):
     enabled: bool = field(True, doc="drops and film on the glass (driver camera)")
     drop_scale: float = field(1.0, range=(0.0, 4.0), unit="×", doc="drops relative to the physical hit rate")
     refraction: float = field(1.0, range=(0.0, 2.0), unit="×", doc="strength of refraction through water")
+    drop_budget: int = field(6000, range=(0, 50_000), unit="drops",
+                             doc="most drops simulated one by one (beyond it new water joins the film)")
 
 
 @dataclass
