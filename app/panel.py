@@ -28,6 +28,19 @@ CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks",
 LOG_FIELDS = {"rain.time_scale"}
 
 
+UNIT_SUFFIXES = ("_mm_h", "_m_s", "_per_km", "_deg", "_s", "_m")
+
+
+def field_label(info) -> str:
+    """"fov_deg" with unit "deg" → "fov (deg)": the unit is shown once, in brackets."""
+    name = info.path.split(".")[1]
+    for suffix in UNIT_SUFFIXES:
+        if name.endswith(suffix):
+            name = name[: -len(suffix)]
+            break
+    return name.replace("_", " ") + (f" ({info.unit})" if info.unit else "")
+
+
 class RainManagerPanel:
     """Draws the Rain Manager for a ``Scene`` over a framebuffer."""
 
@@ -52,7 +65,7 @@ class RainManagerPanel:
     def _field_widget(self, info) -> None:
         settings = self.scene.settings
         value = get_value(settings, info.path)
-        label = info.path.split(".")[1].replace("_", " ") + (f" ({info.unit})" if info.unit else "")
+        label = field_label(info)
         if info.optional:
             auto = value is None
             changed, auto = imgui.checkbox(f"auto##{info.path}", auto)
@@ -139,7 +152,7 @@ class RainManagerPanel:
         layer = self.layer
         layer.new_frame(dt_s)
         imgui.set_next_window_pos(imgui.ImVec2(10, 10), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(380, 520), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(440, 520), imgui.Cond_.first_use_ever.value)
         imgui.begin("Rain Manager")
         for section, title in SECTIONS:
             open_by_default = imgui.TreeNodeFlags_.default_open.value if section in ("rain", "camera") else 0
