@@ -106,6 +106,9 @@ class RenderContext:
     projection: np.ndarray
     lights: tuple  # packed (pos, dir, color, count) for common/lighting.glsl
     renderer: Renderer
+    # What one effect publishes for others this frame (e.g. "water_normals" from ripples for the road), so
+    # effects share data through the frame instead of importing each other. Filled during update().
+    resources: dict = field(default_factory=dict)
 
     @property
     def view_proj(self) -> np.ndarray:
