@@ -525,21 +525,26 @@ class WaveSolverF32(WaveSolver):
     def _alloc(self):
         super()._alloc()
         self._scratch = np.zeros((self.n - 2, self.n - 2), np.float32)
+        self._scratch4 = np.zeros((self.n - 2, self.n - 2), np.float32)
 
     def _advance(self, k: int, alpha: float, kc2: float):
-        z, zp, s = self._z, self._zp, self._scratch
-        a, kk, c = np.float32(alpha), np.float32(kc2), np.float32(1.0 - 4.0 * kc2)
+        z, zp, s, t = self._z, self._zp, self._scratch, self._scratch4
+        a, kk = np.float32(alpha), np.float32(kc2)
         mask = None if self._mask is None else self._mask[1:-1, 1:-1]
         for _ in range(k):
             zi, pi = z[1:-1, 1:-1], zp[1:-1, 1:-1]
-            np.subtract(zi, pi, out=pi)  # the previous level becomes the new one: α(z − z⁻) + kΣ + (1 − 4k)z
+            # The previous level becomes the new one, z + α(z − z⁻) + k(Σ − 4z), in the shader's order: Σ − 4z
+            # is exactly 0 for a flat patch, so smooth (slow) modes keep their frequency in float32; folding
+            # it into (1 − 4k)z + kΣ would detune them by the rounding of the coefficients.
+            np.subtract(zi, pi, out=pi)
             pi *= a
+            pi += zi
             np.add(z[:-2, 1:-1], z[2:, 1:-1], out=s)
             s += z[1:-1, :-2]
             s += z[1:-1, 2:]
+            np.multiply(zi, np.float32(4.0), out=t)
+            s -= t
             s *= kk
-            pi += s
-            np.multiply(zi, c, out=s)
             pi += s
             if mask is not None:
                 pi *= mask
