@@ -28,6 +28,6 @@ void main() {
         apply_surface_effects(s, material);
         radiance = shade_surface(s, V);
     }
-    radiance = apply_atmosphere(radiance, dist);
+    radiance = apply_atmosphere_dir(radiance, dist, -V);
     f_color = vec4(radiance * u_exposure, 1.0);
 }

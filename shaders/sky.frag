@@ -10,5 +10,6 @@ void main() {
     vec4 p = u_inv_view_proj * vec4(v_uv * 2.0 - 1.0, 1.0, 1.0);
     vec3 dir = normalize(p.xyz / p.w - u_camera_pos);
     vec3 radiance = sky_radiance(dir, true);
+    radiance = apply_sky_atmosphere(radiance, dir);
     f_color = vec4(radiance * u_exposure, 1.0);
 }

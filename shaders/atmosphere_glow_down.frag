@@ -1,0 +1,31 @@
+#version 330 core
+// Glow, step 1: the light each pixel loses to scattering on its way to the eye, box-averaged down to the glow
+// resolution. A pixel at distance d keeps exp(−β·d) of its light; a share (1 − exp(−β·d)) is scattered, and its
+// forward part reaches the eye from nearby directions: that is the halo (blurred next, added back last).
+#include "common/frame.glsl"
+#include "common/atmosphere.glsl"
+#include "atmosphere_depth.glsl"
+uniform sampler2D u_color;   // pre-exposed HDR scene
+uniform int u_factor;        // full-resolution pixels per glow texel (per axis)
+out vec4 f_color;
+
+void main() {
+    ivec2 base = ivec2(gl_FragCoord.xy) * u_factor;
+    ivec2 size = textureSize(u_color, 0);
+    vec3 sum = vec3(0.0);
+    float n = 0.0;
+    for (int j = 0; j < u_factor; ++j) {
+        for (int i = 0; i < u_factor; ++i) {
+            ivec2 p = base + ivec2(i, j);
+            if (p.x >= size.x || p.y >= size.y) continue;
+            vec3 dir;
+            bool sky;
+            float d = atmosphere_pixel_ray(p, vec2(size), u_camera_pos, 0.0, dir, sky);
+            if (sky) d = atmosphere_sky_path_m(dir);
+            vec3 c = max(texelFetch(u_color, p, 0).rgb, vec3(0.0));
+            sum += c * (1.0 - exp(-u_medium_extinction_per_m * d));
+            n += 1.0;
+        }
+    }
+    f_color = vec4(sum / max(n, 1.0), 1.0);
+}
