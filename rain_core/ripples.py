@@ -17,7 +17,7 @@ the centred damping γ'·(v⁺ + v⁻), γ'Δt = tanh(γΔt). α is the per-step
 velocity decays by e^(−2γT) whatever the sub-step, so damping does not depend on dt, and a slowly oscillating
 mode's amplitude e-folds at γ (``damping_per_s``). γ = 0 gives Gomez's undamped scheme exactly.
 
-Discrete energy (the scheme's conserved quantity, m⁴/s²; multiply by ρ for joules per metre of depth)::
+Discrete energy (the scheme's conserved quantity, in m⁴/s²: a quadratic invariant, not joules)::
 
     E^(n−½) = h²·Σ ½·((zⁿ − zⁿ⁻¹)/Δt)² + ½·s²·Σ_edges Δzⁿ⁻¹·Δzⁿ
 
@@ -860,7 +860,7 @@ class RippleField:
             if ctx is None:
                 backend = "numpy32"
             else:
-                backend, self.backend_timings = choose_backend(ctx, min(self.n, 512), cell_m=self.cell_m,
+                backend, self.backend_timings = choose_backend(ctx, self.n, cell_m=self.cell_m,
                                                                speed_m_s=speed_m_s)
         self.backend = backend
         if shaders is None and ctx is not None:

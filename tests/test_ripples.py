@@ -602,3 +602,15 @@ def test_rain_ripple_texture(gl_ctx, shaders):
         assert np.all(d_heavy > d_light) and s_heavy > s_light > 0
     finally:
         tile.release()
+
+
+def test_benchmark_quick_writes_table_and_plot(tmp_path, capsys):
+    from rain_core.bench import ripples as bench
+
+    assert bench.main(["--quick", "--out", str(tmp_path)]) == 0
+    text = (tmp_path / "ripples.md").read_text()
+    assert "order vs continuous" in text and "chosen" in text and "asleep" in text
+    assert (tmp_path / "ripples.png").stat().st_size > 1000
+    orders = [float(line.split("|")[-2]) for line in text.splitlines()
+              if line.startswith("| 256 |") and "NumPy float64" in line]
+    assert orders and abs(orders[0] - 2.0) < 0.1
