@@ -210,8 +210,8 @@ class WaveSolver:
 
     def _apply_mask_to_state(self):
         if self._mask is not None:
-            z, zp = self._get_state()
-            self._set_state(z * self._mask, zp * self._mask)
+            self._z *= self._mask
+            self._zp *= self._mask
 
     # -- maths shared by every backend (float64) --
 
@@ -837,7 +837,7 @@ class RippleField:
     def __init__(self, ctx=None, n: int = 512, extent_m: float = 25.0, speed_m_s: float = CAPILLARY_SPEED_M_S,
                  damping_per_s: float = DEFAULT_DAMPING_PER_S, backend: str = "auto", *, seed: int = 0,
                  shaders=None, recenter_margin_cells: int = 4, max_drops_per_frame: int = 4096,
-                 rain_gain: float = 1.0, wake_gain: float = 1.0, mask_refresh_s: float = 0.25,
+                 rain_gain: float = 1.0, wake_gain: float = 1.0, mask_refresh_s: float = 1.0,
                  reuse_tolerance: float = 0.25):
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
@@ -873,7 +873,9 @@ class RippleField:
         self._anchor = (-half, -half)  # world lattice index of cell (0, 0); the window starts centred on 0
         self._centred = False
         self._water_cells: np.ndarray | None = None  # flat indices of water cells (None: all interior)
-        self._mask_age_s = math.inf
+        self._film_fn: FilmDepthFn | None = None
+        self._depth_mm: np.ndarray | None = None  # film depth of each cell from _film_fn (NaN: not yet asked)
+        self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
         self._dirty = True
         self._normals = self._height_tex = None
         if ctx is not None:
@@ -925,7 +927,9 @@ class RippleField:
         if dx or dz:
             self.solver.shift(dx, dz)
             self._anchor = target
-            self._mask_age_s = math.inf  # new cells need their film depth
+            if self._depth_mm is not None:  # keep what is known, ask only about the cells that entered
+                self._depth_mm = _shifted(self._depth_mm, dx, dz, np.nan)
+                self._fill_unknown_depths()
             self._update_water_cells()
             self._dirty = True
         return dx, dz
@@ -933,18 +937,71 @@ class RippleField:
     # -- water --
 
     def set_water_mask(self, mask):
-        """(n, n) bool, or film depth in mm (> 0: water), indexed [iz, ix] over the window; None: all water."""
+        """(n, n) bool, or film depth in mm (> 0: water), indexed [iz, ix] over the window; None: all water.
+        Replaces any film-depth function given to ``update``."""
+        self._film_fn = None
+        self._depth_mm = None
+        self._set_mask(mask)
+
+    def _set_mask(self, mask):
         self.solver.set_water_mask(mask)
         self._update_water_cells()
         self._dirty = True
 
     def refresh_water_mask(self, film_depth_fn: FilmDepthFn):
-        """Evaluate film_depth_fn(x_m, z_m) -> depth in mm (vectorised over (n, n) arrays of world positions)
-        at every cell and hold the cells without water at rest."""
-        xs, zs = self.cell_centres_xz()
-        depth = np.asarray(film_depth_fn(xs, zs), dtype=np.float64)
-        self.set_water_mask(np.broadcast_to(depth, (self.n, self.n)))
-        self._mask_age_s = 0.0
+        """Evaluate film_depth_fn(x_m, z_m) -> depth in mm (vectorised over arrays of world positions in m) at
+        every cell now, hold the cells without water at rest, and keep following the function: after a
+        scroll only the cells that enter are asked, and ``update`` re-asks a band of rows each frame so the
+        whole window is renewed every ``mask_refresh_s`` (puddles fill and dry over seconds; one full
+        evaluation of the road's film depth at 512² costs tens of ms)."""
+        self._film_fn = film_depth_fn
+        self._depth_mm = np.full((self.n, self.n), np.nan)
+        self._fill_unknown_depths()
+
+    def _ask_depths(self, rows, cols) -> np.ndarray:
+        ox, oz = self.origin_xz
+        xs, zs = np.meshgrid(ox + np.asarray(cols) * self.cell_m, oz + np.asarray(rows) * self.cell_m)
+        depth = np.asarray(self._film_fn(xs, zs), dtype=np.float64)
+        depth = np.broadcast_to(depth, xs.shape)
+        if not np.all(np.isfinite(depth)) or np.any(depth < 0.0):
+            raise ValueError("film_depth_fn must return finite depths >= 0 mm")
+        return depth
+
+    def _fill_unknown_depths(self):
+        """Ask the film-depth function about the rows and columns not known yet (after a scroll, whole strips)
+        and update the mask."""
+        unknown = np.isnan(self._depth_mm)
+        if not unknown.any():
+            return
+        rows = np.flatnonzero(unknown.all(axis=1))
+        if rows.size:
+            self._depth_mm[rows, :] = self._ask_depths(rows, np.arange(self.n))
+            unknown[rows, :] = False
+        cols = np.flatnonzero(unknown.any(axis=0))
+        if cols.size:
+            self._depth_mm[:, cols] = self._ask_depths(np.arange(self.n), cols)
+        self._apply_depth_mask()
+
+    def _apply_depth_mask(self):
+        water = self._depth_mm > 0.0
+        current = self.solver.water_mask
+        if current is None or not np.array_equal(water, current > 0.5):
+            self._set_mask(water)
+
+    def _refresh_depth_band(self, dt: float):
+        """Re-ask the film depth of the next band of rows (the whole window every mask_refresh_s)."""
+        if self.mask_refresh_s == 0.0:
+            self._depth_mm[:] = self._ask_depths(np.arange(self.n), np.arange(self.n))
+        else:
+            start = int(self._refresh_row)
+            self._refresh_row += self.n * dt / self.mask_refresh_s
+            stop = min(int(self._refresh_row), start + self.n)
+            if stop <= start:
+                return
+            rows = np.arange(start, stop) % self.n
+            self._refresh_row %= self.n
+            self._depth_mm[rows, :] = self._ask_depths(rows, np.arange(self.n))
+        self._apply_depth_mask()
 
     def _update_water_cells(self):
         mask = self.solver.water_mask
@@ -1063,15 +1120,19 @@ class RippleField:
 
     def update(self, dt_s: float, center_xz=None, rate_mm_h: float = 0.0, wheels: Iterable = (),
                film_depth_fn: FilmDepthFn | None = None) -> dict:
-        """One frame: recenter on center_xz (world m; None keeps the window), refresh the water mask from
-        film_depth_fn(x_m, z_m) -> mm (after a scroll, and every ``mask_refresh_s``), lay raindrops for
+        """One frame: recenter on center_xz (world m; None keeps the window), follow the water mask of
+        film_depth_fn(x_m, z_m) -> mm (see ``refresh_water_mask``: evaluated in full the first time, then in
+        strips and bands, so it may be a new function object every frame), lay raindrops for
         rate_mm_h (mm/h) and the wheel sweeps (``WheelSweep`` or 5-tuples in ``add_wheel_sweep`` order:
         p0, p1, speed, film depth mm, tyre width), then step by dt_s (s). Returns what it did."""
         dt = _finite("dt_s", dt_s, 0.0, math.inf, "s")
         shift = (0, 0) if center_xz is None else self.recenter(*center_xz)
-        self._mask_age_s += dt
-        if film_depth_fn is not None and self._mask_age_s >= self.mask_refresh_s:
-            self.refresh_water_mask(film_depth_fn)
+        if film_depth_fn is not None:
+            if self._depth_mm is None:
+                self.refresh_water_mask(film_depth_fn)
+            else:  # a new function object each frame (the weather moves on): keep rolling, no full re-ask
+                self._film_fn = film_depth_fn
+                self._refresh_depth_band(dt)
         drops = self.add_raindrops(rate_mm_h, dt)
         bumps = 0
         for wheel in wheels:

@@ -614,3 +614,31 @@ def test_benchmark_quick_writes_table_and_plot(tmp_path, capsys):
     orders = [float(line.split("|")[-2]) for line in text.splitlines()
               if line.startswith("| 256 |") and "NumPy float64" in line]
     assert orders and abs(orders[0] - 2.0) < 0.1
+
+
+def test_film_depth_followed_with_strips_and_bands():
+    """After a scroll only the entering cells are asked; each frame re-asks a band of rows; the mask always
+    equals the function's verdict on the current window."""
+    asked = []
+    puddle_x = [0.5]
+
+    def film(x, z):
+        asked.append(np.size(x))
+        return np.where(np.asarray(x) > puddle_x[0], 4.0, 0.0)
+
+    n = 64
+    field = RippleField(None, n=n, extent_m=6.3, backend="numpy32", recenter_margin_cells=1, mask_refresh_s=0.5)
+    field.update(1 / 60, center_xz=(0.0, 0.0), film_depth_fn=film)
+    assert asked == [n * n]
+    asked.clear()
+    field.update(1 / 60, center_xz=(0.31, 0.0), film_depth_fn=film)  # 3 cells east
+    assert sum(asked) < 8 * n  # the 3 new columns and a band of rows, not the window
+    xs, _ = field.cell_centres_xz()
+    np.testing.assert_array_equal(field.solver.water_mask > 0.5, xs > 0.5)
+    puddle_x[0] = 1.0  # the puddle shrinks: within mask_refresh_s every row has been re-asked
+    for _ in range(31):
+        field.update(1 / 60, film_depth_fn=lambda x, z: film(x, z))  # a new function object every frame
+    assert max(asked[-31:]) < n * n
+    np.testing.assert_array_equal(field.solver.water_mask > 0.5, xs > 1.0)
+    with pytest.raises(ValueError):
+        field.refresh_water_mask(lambda x, z: np.full(np.shape(x), np.nan))
