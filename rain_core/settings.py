@@ -224,7 +224,7 @@ class CameraSection(_Section):
     SECTION: ClassVar[str] = "camera"
     mode: str = field("driver", choices=("driver", "chase", "free"), doc="in-cabin, behind the car, or free")
     fov_deg: float = field(60.0, range=(20.0, 120.0), unit="deg", doc="vertical field of view")
-    exposure_s: float = field(0.02, range=(1e-4, 0.25), unit="s", doc="shutter time (sets streak length)")
+    exposure_s: float = field(1.0 / 60.0, range=(1e-4, 0.25), unit="s", doc="shutter time (sets streak length)")
 
 
 @dataclass
@@ -264,6 +264,8 @@ class RainfallSection(_Section):
     density_scale: float = field(1.0, range=(0.0, 4.0), unit="×", doc="streaks relative to the physical count")
     streak_brightness: float = field(1.0, range=(0.0, 4.0), unit="×", doc="streak brightness")
     splashes: bool = field(True, doc="impact splashes on the ground")
+    container_m: float = field(40.0, range=(10.0, 120.0), unit="m",
+                               doc="size of the near-rain box that follows the camera (streaks inside it)")
 
 
 @dataclass
