@@ -461,8 +461,9 @@ class WaveSolver:
         xs, zs, amounts, r_eff = xs[keep], zs[keep], amounts[keep], r_eff[keep]
         if xs.size == 0:
             return np.zeros(0, np.int64), np.zeros(0)
-        m = int(math.ceil(r_eff.max() / h))
-        offsets = np.arange(-m, m + 2)
+        # Cells within r of x lie from floor(x/h) − floor(r/h) to floor(x/h) + ceil(r/h).
+        reach = r_eff.max() / h
+        offsets = np.arange(-math.floor(reach), math.ceil(reach) + 1)
         cols = np.floor(xs / h).astype(np.int64)[:, None] + offsets  # (K, W)
         rows = np.floor(zs / h).astype(np.int64)[:, None] + offsets
         dx = cols * h - xs[:, None]
@@ -505,11 +506,10 @@ class WaveSolver:
             self._mask = _shifted(self._mask, dx, dz, 1.0)
         if self._asleep:
             return
-        z, zp = self._get_state()
-        z, zp = _shifted(z, dx, dz, 0.0), _shifted(zp, dx, dz, 0.0)
+        z, zp = _shifted(self._z, dx, dz, 0.0), _shifted(self._zp, dx, dz, 0.0)
         for a in (z, zp):
             a[0, :] = a[-1, :] = a[:, 0] = a[:, -1] = 0.0
-        self._set_state(z, zp)
+        self._z, self._zp = z, zp
 
 
 # --- float32 NumPy fast path ---------------------------------------------------------------------------------
@@ -915,6 +915,9 @@ class RippleField:
     def recenter(self, x_m: float, z_m: float) -> tuple[int, int]:
         """Keep the window centred on world (x_m, z_m) in m: scroll by whole cells once the centre is
         ``recenter_margin_cells`` off (the first call jumps there). Returns the shift (dx, dz) in cells."""
+        return self._recenter(x_m, z_m, fill=True)
+
+    def _recenter(self, x_m: float, z_m: float, fill: bool) -> tuple[int, int]:
         x = _finite("x_m", x_m, unit="m")
         z = _finite("z_m", z_m, unit="m")
         half = (self.n - 1) / 2.0
@@ -929,7 +932,8 @@ class RippleField:
             self._anchor = target
             if self._depth_mm is not None:  # keep what is known, ask only about the cells that entered
                 self._depth_mm = _shifted(self._depth_mm, dx, dz, np.nan)
-                self._fill_unknown_depths()
+                if fill:
+                    self._fill_unknown_depths()
             self._update_water_cells()
             self._dirty = True
         return dx, dz
@@ -967,13 +971,15 @@ class RippleField:
             raise ValueError("film_depth_fn must return finite depths >= 0 mm")
         return depth
 
-    def _fill_unknown_depths(self):
+    def _fill_unknown_depths(self, extra_rows=None):
         """Ask the film-depth function about the rows and columns not known yet (after a scroll, whole strips)
-        and update the mask."""
+        and about extra_rows, in at most two calls, and update the mask."""
         unknown = np.isnan(self._depth_mm)
-        if not unknown.any():
-            return
         rows = np.flatnonzero(unknown.all(axis=1))
+        if extra_rows is not None:
+            rows = np.union1d(rows, extra_rows)
+        if rows.size == 0 and not unknown.any():
+            return
         if rows.size:
             self._depth_mm[rows, :] = self._ask_depths(rows, np.arange(self.n))
             unknown[rows, :] = False
@@ -989,19 +995,17 @@ class RippleField:
             self._set_mask(water)
 
     def _refresh_depth_band(self, dt: float):
-        """Re-ask the film depth of the next band of rows (the whole window every mask_refresh_s)."""
+        """Re-ask the film depth of the next band of rows (the whole window every mask_refresh_s), together
+        with any cells that scrolled in."""
         if self.mask_refresh_s == 0.0:
-            self._depth_mm[:] = self._ask_depths(np.arange(self.n), np.arange(self.n))
+            rows = np.arange(self.n)
         else:
             start = int(self._refresh_row)
             self._refresh_row += self.n * dt / self.mask_refresh_s
             stop = min(int(self._refresh_row), start + self.n)
-            if stop <= start:
-                return
-            rows = np.arange(start, stop) % self.n
+            rows = np.arange(start, max(stop, start)) % self.n
             self._refresh_row %= self.n
-            self._depth_mm[rows, :] = self._ask_depths(rows, np.arange(self.n))
-        self._apply_depth_mask()
+        self._fill_unknown_depths(rows)
 
     def _update_water_cells(self):
         mask = self.solver.water_mask
@@ -1098,15 +1102,16 @@ class RippleField:
         return drawn
 
     def _flux_weighted_diameters(self, physics, rate: float, count: int) -> np.ndarray:
-        """Diameters (mm) of drops arriving on a surface: Marshall–Palmer samples kept with probability
-        v(D)/v_max (rejection sampling turns the airborne N(D) into the arriving N(D)·v(D))."""
-        v_max = float(physics.terminal_velocity(physics.D_MAX_MM))
-        out = np.empty(0)
-        while out.size < count:
-            batch = physics.sample_drop_diameters(rate, 2 * (count - out.size) + 16, self.rng)
-            keep = self.rng.random(batch.size) * v_max < np.asarray(physics.terminal_velocity(batch))
-            out = np.concatenate([out, batch[keep]])
-        return out[:count]
+        """Diameters (mm) of drops arriving on a surface: the law of ``physics.sample_drop_diameters`` (the
+        airborne N(D), ``physics.drop_diameter_cdf``) weighted by the fall speed v(D), since faster drops of a
+        size class arrive more often; inverse-CDF sampling on a 512-point table built for this rate."""
+        grid = np.linspace(physics.D_MIN_MM, physics.D_MAX_MM, 513)
+        mass = np.diff(np.asarray(physics.drop_diameter_cdf(grid, rate), dtype=np.float64))
+        mid = 0.5 * (grid[1:] + grid[:-1])
+        weights = mass * np.asarray(physics.terminal_velocity(mid), dtype=np.float64)
+        cdf = np.concatenate([[0.0], np.cumsum(weights)])
+        cdf /= cdf[-1]
+        return np.interp(self.rng.random(count), cdf, grid)
 
     # -- time --
 
@@ -1126,7 +1131,9 @@ class RippleField:
         rate_mm_h (mm/h) and the wheel sweeps (``WheelSweep`` or 5-tuples in ``add_wheel_sweep`` order:
         p0, p1, speed, film depth mm, tyre width), then step by dt_s (s). Returns what it did."""
         dt = _finite("dt_s", dt_s, 0.0, math.inf, "s")
-        shift = (0, 0) if center_xz is None else self.recenter(*center_xz)
+        # With a film-depth function the cells that scroll in are asked together with this frame's band.
+        fill = film_depth_fn is None or self._depth_mm is None
+        shift = (0, 0) if center_xz is None else self._recenter(*center_xz, fill=fill)
         if film_depth_fn is not None:
             if self._depth_mm is None:
                 self.refresh_water_mask(film_depth_fn)

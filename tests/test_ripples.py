@@ -642,3 +642,20 @@ def test_film_depth_followed_with_strips_and_bands():
     np.testing.assert_array_equal(field.solver.water_mask > 0.5, xs > 1.0)
     with pytest.raises(ValueError):
         field.refresh_water_mask(lambda x, z: np.full(np.shape(x), np.nan))
+
+
+def test_arriving_drops_are_flux_weighted():
+    """Drops reaching the water follow N(D)·v(D) (the fast, large drops arrive more often than their share
+    of the air), not the airborne N(D)."""
+    from rain_core import physics
+
+    field = RippleField(None, n=16, extent_m=1.0, backend="numpy32", seed=0)
+    rate = 10.0
+    d = np.linspace(physics.D_MIN_MM, physics.D_MAX_MM, 20001)
+    density = np.gradient(np.asarray(physics.drop_diameter_cdf(d, rate)), d)
+    flux = density * np.asarray(physics.terminal_velocity(d))
+    expected = np.trapezoid(d * flux, d) / np.trapezoid(flux, d)
+    airborne = np.trapezoid(d * density, d) / np.trapezoid(density, d)
+    samples = field._flux_weighted_diameters(physics, rate, 200_000)
+    assert samples.mean() == pytest.approx(expected, rel=0.005)
+    assert expected > 1.1 * airborne
