@@ -1199,6 +1199,11 @@ class RippleField:
         self.refresh_textures()
         return self._normals.color
 
+    def water_normals_resource(self) -> dict:
+        """What the road reads from ``rc.resources["water_normals"]``: the slope texture, the world (x, z) in m
+        of the centre of its texel 0, and the extent in m from the first texel centre to the last."""
+        return {"texture": self.normal_texture, "origin_xz_m": self.origin_xz, "extent_m": self.extent_m}
+
     def release(self):
         """Free the GL objects (if any)."""
         if self._normals is not None:

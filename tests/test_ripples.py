@@ -572,6 +572,9 @@ def test_normal_texture_is_central_difference(gl_ctx, shaders, backend):
         assert scale > 0
         assert np.max(np.abs(slopes[1:-1, 1:-1, 0] - dx)) < 2e-3 * scale
         assert np.max(np.abs(slopes[1:-1, 1:-1, 1] - dz)) < 2e-3 * scale
+        resource = field.water_normals_resource()
+        assert resource["texture"] is field.normal_texture
+        assert resource["origin_xz_m"] == field.origin_xz and resource["extent_m"] == pytest.approx(6.3)
         h = np.frombuffer(field.height_texture.read(), np.float32)
         h = h.reshape(64, 64, -1)[..., 0]
         np.testing.assert_allclose(h, z, atol=1e-7)
