@@ -23,6 +23,7 @@ void main() {
             float d = atmosphere_pixel_ray(p, vec2(size), u_camera_pos, 0.0, dir, sky);
             if (sky) d = atmosphere_sky_path_m(dir);
             vec3 c = max(texelFetch(u_color, p, 0).rgb, vec3(0.0));
+            if (any(isnan(c)) || any(isinf(c))) c = vec3(0.0);  // one bad pixel must not become a blurred disc
             sum += c * (1.0 - exp(-u_medium_extinction_per_m * d));
             n += 1.0;
         }

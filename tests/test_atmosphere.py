@@ -269,3 +269,20 @@ def test_light_scattering_matches_single_scattering_reference(gl_ctx, shaders):
 def test_extinction_matches_physics_module():
     np.testing.assert_allclose(atm.rain_extinction_per_m([1.0, 8.0]) * 1e3,
                                physics.rain_extinction_per_km(np.array([1.0, 8.0])))
+
+
+@pytest.mark.parametrize("hour", [12.0, 22.0])
+def test_extreme_rain_and_fog_stay_finite(gl_ctx, shaders, hour):
+    world = _world([_box((0.0, 5.0, 560.0), (20.0, 10.0, 2.0), (0.3, 0.3, 0.3))],
+                   [StreetLamp(np.array([0.0, 7.0, 590.0]), np.array([0.0, -1.0, 0.0]), 6000.0, np.ones(3))])
+    camera = look_at((0.0, 1.5, 600.0), (0.0, 4.0, 500.0), fov_y_deg=60.0)
+    settings = Settings()
+    settings.atmosphere.haze_per_km = 60.0
+    settings.atmosphere.glow = 4.0
+    settings.atmosphere.light_scattering = 4.0
+    settings.atmosphere.glow_resolution = 0.0625
+    r = _renderer(gl_ctx, shaders, world, (64, 36))
+    r.render(_frame(camera, world, settings, physics.R_MAX_MM_H, hour))
+    img = r.hdr_image()
+    assert np.all(np.isfinite(img)) and img.min() >= 0.0
+    r.release()

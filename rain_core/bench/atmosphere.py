@@ -160,7 +160,7 @@ def glow_rows(scene, settings, frames: int) -> list[tuple]:
         settings.atmosphere.glow_resolution = scale
         _post_ms(scene, frame, 1)  # new targets
         ms, img = _post_ms(scene, frame, frames)
-        halo = (img - base) @ LUMA
+        halo = np.nan_to_num((img - base) @ LUMA)  # a NaN the scene pass made stays one pixel: leave it out
         if reference is None:
             reference = halo
         err = halo - reference
