@@ -134,14 +134,14 @@ class RainManagerPanel:
             imgui.text(f"{1000.0 / max(mean, 1e-6):.1f} FPS  ({mean:.2f} ms/frame)  {width}x{height}")
         imgui.text(f"speed {self.scene.ego.speed_m_s * 3.6:.0f} km/h   GPU timing: {renderer.timing_source}")
         flags = imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
-        if imgui.begin_table("passes", 4, flags):
-            for title in ("pass", "ran", "CPU ms", "GPU ms"):
+        if imgui.begin_table("passes", 5, flags):
+            for title in ("pass", "ran", "CPU ms", "GPU ms", "note"):
                 imgui.table_setup_column(title)
             imgui.table_headers_row()
-            for name, ran, cpu_ms, gpu_ms in renderer.pass_table():
+            for name, ran, cpu_ms, gpu_ms, note in renderer.pass_table():
                 imgui.table_next_row()
                 for text in (name, "yes" if ran else "skipped", f"{cpu_ms:.2f}" if ran else "-",
-                             f"{gpu_ms:.2f}" if (ran and gpu_ms is not None) else "-"):
+                             f"{gpu_ms:.2f}" if (ran and gpu_ms is not None) else "-", note):
                     imgui.table_next_column()
                     imgui.text(text)
             imgui.end_table()

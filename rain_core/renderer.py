@@ -35,6 +35,8 @@ CABIN_DIRECT_LIGHT = 0.2
 
 STAGES = ("prepare", "transparent", "post", "overlay")
 
+GL_CLIP_DISTANCE0 = 0x3000  # not in moderngl's enable flags: toggled with ctx.enable_direct
+
 # A clear day's aerial perspective: β ≈ 3.912 / 40 km (meteorological visibility 40 km).
 CLEAR_AIR_EXTINCTION_PER_M = 3.912 / 40000.0
 
@@ -65,6 +67,7 @@ class PassStat:
     ran: bool
     cpu_ms: float = 0.0
     gpu_ms: float | None = None
+    note: str = ""  # e.g. which backend an effect chose
 
 
 class Effect:
@@ -87,6 +90,10 @@ class Effect:
 
     def unbind_scene(self, program: moderngl.Program, rc: RenderContext) -> None:
         """Reset those inputs to their neutral values (called when the effect is inactive)."""
+
+    def describe(self) -> str:
+        """A short state for the performance table (e.g. the backend a simulation chose)."""
+        return ""
 
     def release(self) -> None:
         pass
@@ -277,6 +284,10 @@ class Renderer:
         ctx.enable(moderngl.DEPTH_TEST)
         prog = self.scene_prog
         rc.set_frame_uniforms(prog)
+        # Clip plane (reflection passes): keep dot((x, y, z, 1), plane) >= 0, wrapped-frame world positions.
+        prog["u_clip_plane"].value = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
+        if clip_plane is not None:
+            ctx.enable_direct(GL_CLIP_DISTANCE0)
         for effect in self.effects:
             if effect in active_effects:
                 effect.bind_scene(prog, rc)
@@ -309,6 +320,8 @@ class Renderer:
                 prog["u_direct_scale"].value = share
                 vao.render(moderngl.TRIANGLES, vertices=n)
             prog["u_direct_scale"].value = 1.0
+        if clip_plane is not None:
+            ctx.disable_direct(GL_CLIP_DISTANCE0)
 
     def render(self, frame: Frame) -> None:
         """Run every pass of one frame into the HDR target and tone-map it."""
@@ -323,6 +336,7 @@ class Renderer:
                 self.stats.append(PassStat(effect.name, False))
         for effect in active:
             self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
+            self.stats[-1].note = effect.describe()
         for effect in active:
             if "prepare" in effect.stages:
                 self._timed(f"{effect.name}.prepare", lambda e=effect: e.render("prepare", rc))
@@ -374,8 +388,9 @@ class Renderer:
         self.blit_prog["u_image"].value = 0
         self._blit_vao.render(moderngl.TRIANGLES, vertices=3)
 
-    def pass_table(self) -> list[tuple[str, bool, float, float | None]]:
-        return [(s.name, s.ran, s.cpu_ms, s.gpu_ms) for s in self.stats]
+    def pass_table(self) -> list[tuple[str, bool, float, float | None, str]]:
+        """(pass, ran, CPU ms, GPU ms or None, note) for each pass of the last frame."""
+        return [(s.name, s.ran, s.cpu_ms, s.gpu_ms, s.note) for s in self.stats]
 
     def release(self) -> None:
         for effect in self.effects:

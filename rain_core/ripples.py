@@ -60,6 +60,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rain_core.renderer import Effect
+
 # Wave speed. Shallow-water gravity waves on a 5 mm film travel at sqrt(g·d) ≈ 0.22 m/s, and capillary-gravity
 # ripples of 1–10 cm wavelength at 0.23–0.4 m/s; 0.22 m/s reads as sluggish at driving-view scale, so the
 # default sits in the capillary-gravity range.
@@ -1307,3 +1309,92 @@ class RainRippleTexture:
         _unbind(self.ctx, [self.target])
         self.target.release()
         self._vao.release()
+
+
+# --- the effect: the field and the rain tiles driven by the frame ------------------------------------------
+
+class RipplesEffect(Effect):
+    """Interactive water (DESIGN §3): wakes of every wheel in the window and raindrop rings on the simulated field
+    around the ego car, plus the tiled rain-ring map for puddles beyond it.
+
+    It only runs where there is standing water (flood levels above 0) — a dry or merely wet road costs nothing —
+    and the solver itself sleeps once the water has settled. It reads the road's ``film_depth_fn`` from
+    ``rc.resources`` and publishes ``water_normals`` (the field's slopes) and ``rain_ripples`` (the tiled map) there
+    for the road's water shading. Settings: ``settings.ripples`` and ``settings.quality.ripple_grid``."""
+
+    name = "ripples"
+    stages = ()
+
+    def __init__(self, ctx, settings=None, seed: int = 0, backend: str = "auto"):
+        self.ctx = ctx
+        self.seed = int(seed)
+        self.backend = backend
+        self.field: RippleField | None = None
+        self._config = None
+        self.rain_tiles = RainRippleTexture(ctx, seed=self.seed) if ctx is not None else None
+        self.last_report: dict = {}
+
+    def _ensure_field(self, settings) -> RippleField:
+        r = settings.ripples
+        config = (settings.quality.ripple_grid, r.extent_m, r.speed_m_s, r.damping_per_s)
+        if config != self._config:
+            if self.field is not None:
+                self.field.release()
+            n, extent, speed, damping = config
+            self.field = RippleField(self.ctx, n=n, extent_m=extent, speed_m_s=speed, damping_per_s=damping,
+                                     backend=self.backend, seed=self.seed)
+            self._config = config
+        self.field.wake_gain = r.wheel_strength
+        self.field.rain_gain = r.rain_strength
+        return self.field
+
+    def active(self, frame) -> bool:
+        settings, weather = frame.settings, frame.weather
+        if settings is None or weather is None or not settings.ripples.enabled:
+            return False
+        return max(weather.cracks, weather.puddles) > 0.0
+
+    def wheel_sweeps(self, frame, field: RippleField) -> list[WheelSweep]:
+        """The wheels whose contact path this frame lies in the window (world m, speeds m/s)."""
+        ox, oz = field.origin_xz
+        sweeps = []
+        for vehicle in frame.vehicles:
+            now = vehicle.wheel_contacts()
+            before = getattr(vehicle, "previous_wheel_contacts", None)
+            before = now if before is None else before
+            xs, zs = np.concatenate([now[:, 0], before[:, 0]]), np.concatenate([now[:, 2], before[:, 2]])
+            if xs.max() < ox or xs.min() > ox + field.extent_m or zs.max() < oz or zs.min() > oz + field.extent_m:
+                continue
+            speeds, widths = np.abs(vehicle.wheel_speeds()), vehicle.wheel_widths()
+            for i in range(4):
+                sweeps.append(WheelSweep((before[i, 0], before[i, 2]), (now[i, 0], now[i, 2]), float(speeds[i]),
+                                         float(widths[i])))
+        return sweeps
+
+    def update(self, frame, rc) -> None:
+        field = self._ensure_field(frame.settings)
+        film_fn = rc.resources.get("film_depth_fn")
+        if film_fn is None:  # the road effect is off: keep the water flat rather than guessing where it is
+            return
+        ego = frame.ego
+        center = None if ego is None else (float(ego.position[0]), float(ego.position[2]))
+        rate = frame.rain_rate_mm_h
+        self.last_report = field.update(frame.dt_s, center_xz=center, rate_mm_h=rate,
+                                        wheels=self.wheel_sweeps(frame, field), film_depth_fn=film_fn)
+        if self.ctx is not None:
+            rc.resources["water_normals"] = field.water_normals_resource()
+            if rate > 0.0 and self.rain_tiles is not None:
+                self.rain_tiles.render(frame.time_s, rate)
+                rc.resources["rain_ripples"] = {"texture": self.rain_tiles.texture, "tile_m": self.rain_tiles.tile_m}
+
+    def describe(self) -> str:
+        if self.field is None:
+            return ""
+        state = "asleep" if self.field.asleep else f"{self.last_report.get('substeps', 0)} sub-steps"
+        return f"{self.field.backend} {self.field.n}², {state}"
+
+    def release(self) -> None:
+        if self.field is not None:
+            self.field.release()
+        if self.rain_tiles is not None and hasattr(self.rain_tiles, "release"):
+            self.rain_tiles.release()

@@ -245,7 +245,7 @@ class QualitySection(_Section):
     SECTION: ClassVar[str] = "quality"
     render_scale: float = field(1.0, range=(0.25, 2.0), unit="× window", doc="internal resolution")
     particle_budget: int = field(50_000, range=(0, 1_000_000), unit="drops", doc="near-rain streak particles")
-    ripple_grid: int = field(256, range=(32, 2048), unit="cells", doc="ripple simulation grid per side")
+    ripple_grid: int = field(512, range=(32, 2048), unit="cells", doc="ripple simulation grid per side")
     windshield_resolution: int = field(512, range=(64, 2048), unit="texels", doc="glass water texture side")
 
 
@@ -253,8 +253,12 @@ class QualitySection(_Section):
 class RipplesSection(_Section):
     SECTION: ClassVar[str] = "ripples"
     enabled: bool = field(True, doc="interactive water ripples")
-    strength: float = field(1.0, range=(0.0, 4.0), unit="×", doc="disturbance strength")
-    damping: float = field(0.995, range=(0.9, 1.0), unit="per step", doc="energy kept per solver step")
+    extent_m: float = field(25.0, range=(5.0, 100.0), unit="m", doc="side of the simulated window around the car")
+    speed_m_s: float = field(0.35, range=(0.05, 2.0), unit="m/s", doc="wave speed (capillary-gravity ripples)")
+    damping_per_s: float = field(0.5, range=(0.0, 20.0), unit="1/s", doc="amplitude decay rate, independent of dt")
+    wheel_strength: float = field(1.0, range=(0.0, 10.0), unit="×", doc="wakes behind wheels in water")
+    rain_strength: float = field(1.0, range=(0.0, 10.0), unit="×", doc="rings from raindrops")
+    show_heights: bool = field(False, doc="show the simulated height field in the panel")
 
 
 @dataclass

@@ -48,7 +48,7 @@ def test_passes_are_recorded(noon_chase):
     scene, _ = noon_chase
     names = [row[0] for row in scene.renderer.pass_table()]
     assert "scene" in names and names[-1] == "tonemap"
-    for _name, ran, cpu_ms, gpu_ms in scene.renderer.pass_table():
+    for _name, ran, cpu_ms, gpu_ms, _note in scene.renderer.pass_table():
         if ran:
             assert cpu_ms >= 0 and (gpu_ms is None or gpu_ms >= 0)
 
