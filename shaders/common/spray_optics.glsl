@@ -1,0 +1,35 @@
+// Scattering by water drops much larger than the wavelength, per unit extinction (1/sr): half diffraction
+// (a narrow forward lobe), half geometric: refraction (a forward Henyey–Greenstein lobe) and external reflection
+// F(i)/(4π), i = (π − θ)/2. The GLSL twin of rain_core.spray.phase_function; the constants come from Python as
+// #defines (SPRAY_G_DIFFRACTION, SPRAY_G_REFRACTION, SPRAY_REFLECTION_SHARE, SPRAY_WATER_IOR).
+const float SPRAY_PI = 3.14159265358979;
+
+float spray_hg(float mu, float g) {
+    float d = 1.0 + g * g - 2.0 * g * mu;
+    return (1.0 - g * g) / (4.0 * SPRAY_PI * d * sqrt(d));
+}
+
+float spray_fresnel(float cos_i) {
+    float n = SPRAY_WATER_IOR;
+    float ci = clamp(cos_i, 0.0, 1.0);
+    float ct = sqrt(max(1.0 - (1.0 - ci * ci) / (n * n), 0.0));
+    float rs = (ci - n * ct) / (ci + n * ct);
+    float rp = (n * ci - ct) / (n * ci + ct);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// External reflection per unit geometric cross-section and steradian.
+float spray_reflection(float mu) {
+    return spray_fresnel(sqrt(clamp(0.5 * (1.0 - mu), 0.0, 1.0))) / (4.0 * SPRAY_PI);
+}
+
+// Diffraction + refraction: the smooth part of the phase function.
+float spray_phase_smooth(float mu) {
+    return 0.5 * spray_hg(mu, SPRAY_G_DIFFRACTION)
+         + 0.5 * (1.0 - SPRAY_REFLECTION_SHARE) * spray_hg(mu, SPRAY_G_REFRACTION);
+}
+
+// The whole phase function; glint scales the reflection lobe (1 = its mean).
+float spray_phase(float mu, float glint) {
+    return spray_phase_smooth(mu) + 0.5 * glint * spray_reflection(mu);
+}
