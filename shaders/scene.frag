@@ -16,6 +16,7 @@ void main() {
     vec3 radiance;
     if (material == MAT_EMISSIVE) {
         radiance = v_albedo * EMISSIVE_NITS_PER_UNIT * mix(0.04, 1.0, u_night);
+        radiance = emission_effects(v_albedo, radiance);
     } else {
         Surface s;
         s.position = v_world;
@@ -27,6 +28,7 @@ void main() {
         s.ambient_occlusion = 1.0;
         apply_surface_effects(s, material);
         radiance = shade_surface(s, V);
+        radiance = finish_surface_effects(s, V, radiance);
     }
     radiance = apply_atmosphere_dir(radiance, dist, -V);
     f_color = vec4(radiance * u_exposure, 1.0);

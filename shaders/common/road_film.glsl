@@ -1,0 +1,48 @@
+// Standing water and the wet film on the road: the GLSL twin of rain_core/road.py (water_depths_mm,
+// film_depth_mm). Keep the constants equal to the Python ones (tests/test_road.py compares them).
+// Positions are in the renderer's wrapped frame (world z − shift_z, a multiple of the period): every map is
+// periodic in 1200 m along z, so the wrapped and world frames give the same water.
+uniform sampler2D u_road_height;  // unit 4: road heightmap R (0 lowest), G smoothed (no cracks); clamp x, repeat z
+uniform sampler2D u_road_maps;    // unit 5: R puddle noise (uniform in 0..1), G shelter (1 under a roof)
+uniform vec4 u_road_levels;       // wetness, crack level (cracks·CRACK_LEVEL), puddle level L, unused
+uniform vec2 u_road_height_extent;  // m: heightmap size across x, along z (14, 48)
+
+const float ROAD_HALF_WIDTH_M = 7.0;
+const float ROAD_PERIOD_M = 1200.0;
+const float WET_FILM_MM = 0.2;
+const float CRACK_MAX_MM = 3.0;
+const float CRACK_DEPTH_SPAN = 0.2;
+const float PUDDLE_MAX_MM = 10.0;
+const float PUDDLE_NOISE_WEIGHT = 0.45;
+const float PUDDLE_DEPTH_SPAN = 0.35;
+const float MACROTEXTURE_MM = 2.0;
+
+// (height01, smoothed height01) at xz (m).
+vec2 road_height01(vec2 xz) {
+    vec2 uv = vec2((xz.x + 0.5 * u_road_height_extent.x) / u_road_height_extent.x, xz.y / u_road_height_extent.y);
+    return texture(u_road_height, uv).rg;
+}
+
+// (puddle noise, shelter) at xz (m).
+vec2 road_maps(vec2 xz) {
+    vec2 uv = vec2((xz.x + ROAD_HALF_WIDTH_M) / (2.0 * ROAD_HALF_WIDTH_M), xz.y / ROAD_PERIOD_M);
+    return texture(u_road_maps, uv).rg;
+}
+
+// (standing water in cracks and puddles, wet film) depths in mm at xz (m) on the road; 0 off the asphalt.
+vec2 road_water_depths_mm(vec2 xz) {
+    if (abs(xz.x) > ROAD_HALF_WIDTH_M) return vec2(0.0);
+    vec2 h = road_height01(xz);
+    vec2 maps = road_maps(xz);
+    float crack = CRACK_MAX_MM * clamp((u_road_levels.y - h.x) / CRACK_DEPTH_SPAN, 0.0, 1.0);
+    float ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h.y + PUDDLE_NOISE_WEIGHT * maps.r;
+    float puddle = PUDDLE_MAX_MM * clamp((u_road_levels.z - ground) / PUDDLE_DEPTH_SPAN, 0.0, 1.0);
+    float dry = 1.0 - maps.g;
+    return vec2(max(crack, puddle) * dry, WET_FILM_MM * u_road_levels.x * dry);
+}
+
+// Water film depth (mm, ≤ 10): what the ripples and the spray read.
+float road_film_depth_mm(vec2 xz) {
+    vec2 d = road_water_depths_mm(xz);
+    return max(d.x, d.y);
+}
