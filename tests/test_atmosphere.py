@@ -22,6 +22,14 @@ from rain_core.world import StreetLamp
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
+@pytest.fixture(autouse=True)
+def _clean_gl(gl_ctx):
+    """Each test leaves no GL error behind, and a live framebuffer bound (the session shares one context)."""
+    assert gl_ctx.error == "GL_NO_ERROR"
+    yield
+    assert gl_ctx.error == "GL_NO_ERROR"
+
+
 def _box(center, extents, albedo, material=MAT_CONCRETE):
     mesh = trimesh.creation.box(extents=extents)
     mesh.apply_translation(center)
@@ -40,6 +48,14 @@ def _frame(camera, world, settings, rate, hour):
 def _renderer(ctx, shaders, world, size, effect=True):
     effects = [atm.Atmosphere(ctx, shaders)] if effect else []
     return Renderer(ctx, size, world, effects=effects, shaders=shaders, gpu_timing=False)
+
+
+def _release(*renderers):
+    """Release renderers and bind the default framebuffer: a released framebuffer left bound would make every
+    later framebuffer creation on the shared context fail with GL_INVALID_OPERATION."""
+    for r in renderers:
+        r.release()
+    renderers[0].ctx.detect_framebuffer(0).use()
 
 
 def _bottom_first(renderer):
@@ -139,8 +155,7 @@ def test_contrast_of_a_dark_building_falls_as_exp_minus_beta_d(gl_ctx, shaders, 
         contrast = (l_obj - l_sky) / l_sky
         expected = (l0 - l_sky) / l_sky * math.exp(-beta * d)
         assert contrast == pytest.approx(expected, rel=0.10), (rate, d, contrast, expected)
-        fogged.release()
-        plain.release()
+        _release(fogged, plain)
 
 
 def test_no_rain_no_haze_skips_the_pass_and_a_rate_drop_returns_to_clear_air(gl_ctx, shaders):
@@ -164,8 +179,7 @@ def test_no_rain_no_haze_skips_the_pass_and_a_rate_drop_returns_to_clear_air(gl_
     r.render(_frame(camera, world, settings, 0.0, 22.0))
     np.testing.assert_array_equal(r.hdr_image(), clear)
     assert r.extinction_per_m == CLEAR_AIR_EXTINCTION_PER_M and r.airlight is None
-    r.release()
-    plain.release()
+    _release(r, plain)
 
 
 def _glow_scene(gl_ctx, shaders, rate, glow, resolution=1.0):
@@ -190,7 +204,7 @@ def _glow_scene(gl_ctx, shaders, rate, glow, resolution=1.0):
         dist, dirs = atm.pixel_distances(depth, rc.view_proj, rc.camera_position)
         w = 1.0 - np.exp(-effect.state.medium_per_m * dist)
         out.append((color, w, effect.glow_sigma_px, effect.state.glow_strength))
-        r.release()
+        _release(r)
     (before, w, sigma, _), (after, _, _, k) = out
     return before, after, w, sigma, k
 
@@ -251,7 +265,7 @@ def test_light_scattering_matches_single_scattering_reference(gl_ctx, shaders):
         r.render(frame)
         images.append(_bottom_first(r)[0])
         state, rc = r.effects[0].state, r.render_context(frame)
-        r.release()
+        _release(r)
     shader = (images[1] - images[0])[1::3, 1::3]  # every third pixel: the reference is dense and slow
     _, dirs = atm.pixel_distances(np.ones(size[::-1]), rc.view_proj, rc.camera_position)
     ref = sum(atm.light_inscatter_reference(rc.camera_position, dirs[1::3, 1::3], atm.SCATTER_MAX_M, light,
@@ -285,4 +299,4 @@ def test_extreme_rain_and_fog_stay_finite(gl_ctx, shaders, hour):
     r.render(_frame(camera, world, settings, physics.R_MAX_MM_H, hour))
     img = r.hdr_image()
     assert np.all(np.isfinite(img)) and img.min() >= 0.0
-    r.release()
+    _release(r)

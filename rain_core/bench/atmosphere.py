@@ -63,6 +63,7 @@ def rendered_extinction_per_m(ctx, shaders, rate_mm_h: float, size=(160, 90)) ->
     l_sky = float(np.median(img[rows][:, sky_cols]))
     fogged.release()
     plain.release()
+    ctx.detect_framebuffer(0).use()  # never leave a released framebuffer bound
     ratio = (l_obj - l_sky) / (l0 - l_sky)
     return -math.log(ratio) / d
 

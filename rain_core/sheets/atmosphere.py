@@ -46,6 +46,7 @@ def render(ctx, rate_mm_h: float, view: str, size=SIZE) -> np.ndarray:
     scene.renderer.render(frame)
     image = scene.image()
     scene.release()
+    ctx.detect_framebuffer(0).use()  # never leave a released framebuffer bound
     return image
 
 
