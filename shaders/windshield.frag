@@ -1,0 +1,155 @@
+#version 330 core
+// The driver's view through the wet windshield. The street behind the glass is the frame drawn so far (without
+// the glass); each pixel of the glass looks it up along the view ray refracted by the water on the glass:
+// into the water through the flat glass, out through the water surface (normal from the water texture). A drop
+// is a small ball lens, so that is a tiny inverted fish-eye of what lies behind it; where the exit angle is past
+// the critical angle (drop rims at the grazing view of a raked glass) the ray is reflected back into the dark
+// cabin. Drops show the street slightly blurred and brighter or darker as they gather light from a wide field;
+// a thin film hazes and, at night, smears the lights along the wiper's streaks. Lights (lamps, headlights, the
+// sun) glint in the drops. The wiper blades are drawn on the glass. Output is premultiplied over the HDR frame.
+#include "common/frame.glsl"
+#include "common/lighting.glsl"
+#include "common/windshield_glass.glsl"
+uniform sampler2D u_water;    // unit 12: thickness (mm), film (µm), slope along s, t
+uniform sampler2D u_frame;    // unit 13: the frame without the glass (pre-exposed HDR), mipmapped
+uniform sampler2D u_depth;    // unit 14: its depth
+uniform vec2 u_near_far;      // camera near, far (m)
+uniform float u_cabin_depth;  // m: what the frame shows nearer than this is the cabin, not the street
+uniform vec3 u_axis_s;        // world direction of +s (the car's right)
+uniform vec3 u_axis_t;        // world direction of +t (up the glass)
+uniform float u_refraction;   // × the physical bending
+uniform float u_drop_lod;     // mip level of u_frame for the slight blur through water
+uniform float u_haze_lod;     // mip level for the haze of a film
+uniform vec4 u_blade[2];      // pivot s, t (m), r inner, r outer (m)
+uniform float u_blade_angle[2];
+uniform float u_aperture_m;  // radius of the eye's pupil (m): the blur circle on the glass when focused far
+uniform vec3 u_cabin;         // luminance seen by total internal reflection (the dark cabin), pre-exposed
+in vec3 v_pos;
+in vec3 v_nrm;
+in vec2 v_uv;
+out vec4 f_color;
+
+const float N_WATER = 1.333;
+
+vec2 screen_of(vec3 origin, vec3 dir) {
+    vec4 clip = u_view_proj * vec4(origin + dir * 50.0, 1.0);
+    if (clip.w <= 1e-4) return vec2(-1.0);
+    return clip.xy / clip.w * 0.5 + 0.5;
+}
+
+float view_depth(vec2 uv) {
+    float z = textureLod(u_depth, uv, 0.0).r * 2.0 - 1.0;
+    float n = u_near_far.x, f = u_near_far.y;
+    return 2.0 * n * f / (f + n - z * (f - n));
+}
+
+// What a ray leaving the glass at v_pos along dir sees: the frame where it shows the street, else (off screen,
+// or where the frame shows the cabin in front of the glass) the sky and the lit ground.
+vec3 behind_glass(vec3 dir, float lod) {
+    vec3 sky = sky_radiance(dir, false) * u_exposure;
+    vec2 uv = screen_of(v_pos, dir);
+    vec2 edge = min(uv, 1.0 - uv);
+    float on_screen = smoothstep(0.0, 0.02, min(edge.x, edge.y));
+    if (on_screen <= 0.0) return sky;
+    float street = on_screen * smoothstep(0.8, 1.0, view_depth(uv) / u_cabin_depth);
+    return mix(sky, textureLod(u_frame, uv, lod).rgb, street);
+}
+
+float segment_distance(vec2 p, vec2 a, vec2 b) {
+    vec2 ab = b - a;
+    float x = clamp(dot(p - a, ab) / dot(ab, ab), 0.0, 1.0);
+    return length(p - a - ab * x);
+}
+
+// Glints: lights seen through the drop along the refracted ray (a narrow lobe around each light's direction).
+vec3 glints(vec3 dir) {
+    vec3 sum = u_sun_illum * 0.3 * pow(max(dot(dir, u_sun_dir), 0.0), 3000.0) * 3001.0 / 6.2832;
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 d = u_light_pos[i].xyz - v_pos;
+        float dist2 = dot(d, d);
+        float range = u_light_pos[i].w;
+        if (dist2 > range * range) continue;
+        vec3 L = d * inversesqrt(dist2);
+        float c = dot(dir, L);
+        if (c < 0.99) continue;
+        vec3 lux = u_light_color[i].rgb * spot_factor(i, L) / max(dist2, 0.25);
+        sum += lux * pow(c, 600.0) * 601.0 / 6.2832;
+    }
+    return sum;
+}
+
+void main() {
+    vec2 st = glass_st(v_uv);
+    // Wiper blades and arms, opaque, on the outside of the glass.
+    float blade = 0.0;
+    for (int b = 0; b < 2; ++b) {
+        vec2 dir = vec2(cos(u_blade_angle[b]), sin(u_blade_angle[b]));
+        vec2 pivot = u_blade[b].xy;
+        float rubber = segment_distance(st, pivot + dir * u_blade[b].z, pivot + dir * u_blade[b].w) - 0.011;
+        float arm = segment_distance(st, pivot, pivot + dir * 0.55 * (u_blade[b].z + u_blade[b].w)) - 0.013;
+        float dist = min(rubber, arm);
+        float aa = max(fwidth(dist), 1e-5);
+        blade = max(blade, clamp(0.5 - dist / aa, 0.0, 1.0));
+    }
+
+    vec3 V = normalize(v_pos - u_camera_pos);
+    vec3 N = normalize(v_nrm);
+    if (dot(N, V) < 0.0) N = -N;  // outward = away from the eye
+    vec3 Ts = normalize(u_axis_s - N * dot(N, u_axis_s));
+    vec3 Tt = normalize(cross(N, Ts));
+    if (dot(Tt, u_axis_t) < 0.0) Tt = -Tt;
+    vec4 water = texture(u_water, v_uv);
+    float film = water.y;
+    vec2 here = gl_FragCoord.xy / vec2(textureSize(u_frame, 0));
+
+    // Drops: refraction through the water surface, averaged over the eye's pupil. The eye is focused on the
+    // road, so each point of the glass is seen through a disc the size of the pupil (u_aperture_m): drops of a
+    // millimetre or two are soft blobs of their inverted images and dark rims, not sharp dots.
+    vec3 in_water = refract(V, -N, 1.0 / N_WATER);
+    float cover = 0.0;
+    vec3 drop_col = vec3(0.0);
+    vec3 glint = vec3(0.0);
+    const vec2 taps[4] = vec2[4](vec2(0.5, 0.17), vec2(-0.17, 0.5), vec2(-0.5, -0.17), vec2(0.17, -0.5));
+    for (int k = 0; k < 4; ++k) {
+        vec2 uv_k = glass_uv(st + taps[k] * u_aperture_m);
+        vec4 w = texture(u_water, uv_k);
+        float c = smoothstep(0.004, 0.03, w.x - 1e-3 * w.y);
+        if (c <= 0.0) continue;
+        vec3 Nw = normalize(N - u_refraction * (w.z * Ts + w.w * Tt));
+        vec3 out_dir = refract(in_water, -Nw, N_WATER);
+        vec3 col;
+        if (dot(out_dir, out_dir) < 0.5) {
+            col = u_cabin;  // total internal reflection: the ray turns back into the dark cabin
+        } else {
+            float cosx = abs(dot(out_dir, Nw));
+            float transmit = 1.0 - (0.02 + 0.98 * pow(1.0 - cosx, 5.0));
+            col = behind_glass(out_dir, u_drop_lod) * transmit;
+            glint += glints(out_dir) * u_exposure * transmit * c;
+        }
+        drop_col += col * c;
+        cover += c;
+    }
+    drop_col /= max(cover, 1e-6);
+    cover *= 0.25;
+    glint *= 0.25;
+    // Film: haze towards a blurred view; along the wiper's arcs bright lights smear.
+    float haze = 1.0 - exp(-film / 6.0);
+    vec3 haze_col = textureLod(u_frame, here, u_haze_lod).rgb;
+    // Along the wiper's arcs a streaky film smears bright lights (only what is brighter than white).
+    float smear = clamp(film / 0.3, 0.0, 1.0) * 0.35;
+    vec3 glare = vec3(0.0);
+    if (smear > 0.0) {
+        vec2 rel = st - u_blade[0].xy;
+        vec2 tang_st = normalize(vec2(-rel.y, rel.x));
+        vec2 along = screen_of(v_pos + 0.05 * (tang_st.x * u_axis_s + tang_st.y * u_axis_t), V) - here;
+        along /= max(length(along), 1e-6);
+        for (int k = -3; k <= 3; ++k)
+            glare += max(textureLod(u_frame, here + along * float(k) * 0.012, 2.0).rgb - vec3(1.0), 0.0);
+        glare *= smear / 7.0;
+    }
+    float alpha = 1.0 - (1.0 - haze) * (1.0 - cover);
+    vec3 color = haze_col * haze * (1.0 - cover) + drop_col * cover + glint + glare;
+
+    vec3 blade_col = vec3(0.012) * sky_ambient(-V) * u_exposure + vec3(0.002) * u_exposure;
+    f_color = vec4(mix(color, blade_col, blade), mix(alpha, 1.0, blade));
+}

@@ -1,0 +1,45 @@
+#version 330 core
+// The film texture's relaxation step (one frame): rescale last frame's film to the CPU truth it was drawn for,
+// then spread (diffusion), dry (subtract: thin parts dry first, so residue dries in streaks), bead up, and clear
+// what the wiper blades swept this frame down to their streaky residue. Thickness in µm.
+#include "common/windshield_glass.glsl"
+uniform sampler2D u_film;     // unit 12: last frame's film (µm), mipmapped
+uniform sampler2D u_coarse;   // unit 13: the CPU film last frame (µm cell means), FILM_CELLS²
+uniform float u_coarse_lod;   // the mip level of u_film whose texels are the CPU cells
+uniform vec2 u_texel;         // 1 / resolution
+uniform float u_diffusion;    // D·dt/h² (≤ 0.2)
+uniform float u_dry_um;       // thickness evaporated this frame (µm)
+uniform float u_bead_mix;     // 1 − exp(−rate·dt)
+uniform vec4 u_blade[2];      // pivot s, t (m), r inner, r outer (m)
+uniform vec4 u_sweep[2];      // swept angle lo, hi (rad), 1 if swept this frame, residue (µm)
+uniform int u_seed;
+in vec2 v_uv;
+out float f_film;
+
+float film_at(vec2 uv) {
+    float f = textureLod(u_film, uv, 0.0).r;
+    float m = textureLod(u_film, uv, u_coarse_lod).r;
+    float c = texture(u_coarse, uv).r;
+    // Rescale the fine structure to the CPU's cell mean; a ratio capped at 4 plus an even remainder keeps the
+    // mean exact without blowing a lone speck up where the texture had almost nothing.
+    float ratio = m > 1e-6 ? min(c / m, 4.0) : 0.0;
+    return f * ratio + max(c - 4.0 * m, 0.0) * float(m > 1e-6) + c * float(m <= 1e-6);
+}
+
+void main() {
+    float f = film_at(v_uv);
+    float lap = film_at(v_uv + vec2(u_texel.x, 0.0)) + film_at(v_uv - vec2(u_texel.x, 0.0))
+              + film_at(v_uv + vec2(0.0, u_texel.y)) + film_at(v_uv - vec2(0.0, u_texel.y)) - 4.0 * f;
+    f = max(f + u_diffusion * lap - u_dry_um, 0.0);
+    vec2 st = glass_st(v_uv);
+    f = mix(f, f * bead_pattern(st), u_bead_mix);
+    for (int b = 0; b < 2; ++b) {
+        if (u_sweep[b].z < 0.5) continue;
+        vec2 rel = st - u_blade[b].xy;
+        float r = length(rel);
+        float phi = atan(rel.y, rel.x);
+        if (r >= u_blade[b].z && r <= u_blade[b].w && phi >= u_sweep[b].x && phi <= u_sweep[b].y)
+            f = min(f, u_sweep[b].w * wiper_streaks(r, uint(u_seed) + uint(b) * 101u));
+    }
+    f_film = f;
+}

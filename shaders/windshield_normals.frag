@@ -1,0 +1,34 @@
+#version 330 core
+// The water texture the glass shader reads: total thickness (mm), film (µm, rescaled to the CPU truth) and the
+// slope of the water surface along s and t (dimensionless), by central differences in metres.
+#include "common/windshield_glass.glsl"
+uniform sampler2D u_drops;    // unit 12: drop and bead heights (mm)
+uniform sampler2D u_film;     // unit 13: film (µm), mipmapped
+uniform sampler2D u_coarse;   // unit 14: the CPU film now (µm cell means)
+uniform float u_coarse_lod;
+uniform vec2 u_texel;
+in vec2 v_uv;
+out vec4 f_water;
+
+float film_at(vec2 uv) {
+    float f = textureLod(u_film, uv, 0.0).r;
+    float m = textureLod(u_film, uv, u_coarse_lod).r;
+    float c = texture(u_coarse, uv).r;
+    // Rescale the fine structure to the CPU's cell mean; a ratio capped at 4 plus an even remainder keeps the
+    // mean exact without blowing a lone speck up where the texture had almost nothing.
+    float ratio = m > 1e-6 ? min(c / m, 4.0) : 0.0;
+    return f * ratio + max(c - 4.0 * m, 0.0) * float(m > 1e-6) + c * float(m <= 1e-6);
+}
+float water_mm(vec2 uv) { return textureLod(u_drops, uv, 0.0).r + 1e-3 * film_at(uv); }
+
+void main() {
+    float film = film_at(v_uv);
+    float h = textureLod(u_drops, v_uv, 0.0).r + 1e-3 * film;
+    vec2 du = vec2(u_texel.x, 0.0), dv = vec2(0.0, u_texel.y);
+    float t = v_uv.y * u_glass.z;
+    float ds = 2.0 * u_texel.x * glass_width(t) * 1000.0;  // mm between the samples
+    float dt = 2.0 * u_texel.y * u_glass.z * 1000.0;
+    float gs = (water_mm(v_uv + du) - water_mm(v_uv - du)) / ds;
+    float gt = (water_mm(v_uv + dv) - water_mm(v_uv - dv)) / dt;
+    f_water = vec4(h, film, gs, gt);
+}
