@@ -22,7 +22,7 @@ SECTIONS = (
     ("time_of_day", "Time of day"), ("traffic", "Traffic"), ("quality", "Quality"), ("ripples", "Ripples"),
     ("rainfall", "Rainfall"), ("spray", "Spray"), ("windshield", "Windshield"), ("atmosphere", "Atmosphere"),
 )
-WIRED = {"rain", "wind", "camera", "time_of_day", "traffic"}
+WIRED = {"rain", "wind", "camera", "time_of_day", "traffic", "ripples", "atmosphere"}
 # Fields the generic widgets should not show (edited by dedicated widgets).
 CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks", "rain.puddles"}
 LOG_FIELDS = {"rain.time_scale"}
@@ -161,6 +161,9 @@ class RainManagerPanel:
             if section not in WIRED:
                 imgui.text_disabled("arrives with its effect")
                 continue
+            effect = next((e for e in self.scene.effects if e.name == section), None)
+            if effect is not None and effect.describe():
+                imgui.text_disabled(effect.describe())
             if section == "rain":
                 self._rain_section()
             for info in self.fields.get(section, []):

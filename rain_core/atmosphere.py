@@ -344,6 +344,11 @@ class Atmosphere(Effect):
             self._restore()
         return on
 
+    def describe(self) -> str:
+        if self.state is None:
+            return "clear air"
+        return f"visibility {self.state.visibility_m / 1000.0:.2f} km (5% contrast)"
+
     def _restore(self) -> None:
         """Give the renderer back its clear air (also the sky's uniforms, which no bind_scene reaches)."""
         renderer, self._renderer, self.state = self._renderer, None, None

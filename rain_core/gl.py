@@ -193,6 +193,9 @@ class RenderTarget:
         return self.color.size
 
     def release(self):
+        # Releasing the bound framebuffer leaves a dead name bound: later framebuffers then fail with
+        # GL_INVALID_OPERATION. Bind the default one first.
+        self.fbo.ctx.detect_framebuffer(0).use()
         for obj in (self.fbo, self.color, self.depth):
             if obj is not None:
                 obj.release()

@@ -216,6 +216,7 @@ class Renderer:
         if width <= 0 or height <= 0 or (width, height) == self.size:
             return
         self.hdr.release()
+        self.ctx.detect_framebuffer(0).use()
         self.ldr.release()
         self.ldr_color.release()
         self.size = (width, height)
@@ -396,6 +397,7 @@ class Renderer:
         for effect in self.effects:
             effect.release()
         self.hdr.release()
+        self.ctx.detect_framebuffer(0).use()  # never leave a released framebuffer bound
         self.ldr.release()
         self.ldr_color.release()
 

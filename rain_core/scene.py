@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from rain_core import layout
+from rain_core.atmosphere import make_atmosphere, sky_overcast
 from rain_core.camera import Camera, ChaseRig, driver_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.lighting import lighting_for_hour
@@ -22,9 +23,10 @@ from rain_core.world import build_world
 MAX_FRAME_DT_S = 0.25  # s; a longer stall (debugger, window drag) is simulated as this much time
 
 
-def default_effects(ctx, settings) -> list:
-    """The rain effects in draw order. Each decides per frame whether it runs (``active``)."""
-    return []
+def default_effects(ctx, settings, seed: int = 0) -> list:
+    """The rain effects in update/draw order. Each decides per frame whether it runs (``active``); the road
+    publishes the film depth that ripples read, so it comes first."""
+    return [make_atmosphere(ctx, settings)]
 
 
 class Scene:
@@ -52,7 +54,7 @@ class Scene:
         self.time_s = 0.0
         self.last_dt_s = 0.0
         self.chase = ChaseRig()
-        self.effects = default_effects(ctx, self.settings) if effects is None else list(effects)
+        self.effects = default_effects(ctx, self.settings, self.seed) if effects is None else list(effects)
         self.renderer = Renderer(ctx, size, self.world, effects=self.effects, gpu_timing=gpu_timing)
 
     # --- simulation -----------------------------------------------------------------------------------------
@@ -89,7 +91,9 @@ class Scene:
         return self.chase.camera(self.ego, self.last_dt_s, fov_y_deg=min(fov, 65.0))
 
     def frame(self, camera: Camera | None = None) -> Frame:
-        lighting = lighting_for_hour(self.settings.time_of_day.hour)
+        # Rain greys and darkens the sky (atmosphere effect's model; manual override in its settings).
+        overcast = sky_overcast(self.settings.atmosphere, self.weather_state.rate_mm_h)
+        lighting = lighting_for_hour(self.settings.time_of_day.hour, overcast)
         raining = self.weather_state.rate_mm_h > 0.0
         return Frame(time_s=self.time_s, dt_s=self.last_dt_s, camera=camera or self.camera(), lighting=lighting,
                      world=self.world, ego=self.ego, vehicles=self.vehicles, weather=self.weather_state,

@@ -16,7 +16,7 @@ float V_SmithGGXCorrelated(float NoV, float NoL, float alpha) {
 }
 
 vec3 F_Schlick(vec3 f0, float VoH) {
-    return f0 + (1.0 - f0) * pow(1.0 - VoH, 5.0);
+    return f0 + (1.0 - f0) * pow(clamp(1.0 - VoH, 0.0, 1.0), 5.0);  // VoH may round above 1: pow(<0) is NaN
 }
 
 // Split-sum environment BRDF, analytic fit (Karis 2014, "Physically Based Shading on Mobile").
