@@ -272,7 +272,9 @@ class PassTimer:
             with self._query:
                 fn()
             cpu = (time.perf_counter() - t0) * 1e3
-            return cpu, self._query.elapsed * 1e-6
+            elapsed_ns = self._query.elapsed
+            # Some drivers answer a query they could not time (e.g. across a shader compile) with 2³²−1 ns.
+            return cpu, (None if elapsed_ns >= 0xFFFFFFFF else elapsed_ns * 1e-6)
         t0 = time.perf_counter()
         fn()
         cpu = (time.perf_counter() - t0) * 1e3
