@@ -22,6 +22,7 @@ Surface model
   ``L = PUDDLE_LEVEL_MAX · (puddles · puddle_amount)^PUDDLE_LEVEL_EXPONENT`` and hold
   ``PUDDLE_MAX_MM · clamp((L − g) / PUDDLE_DEPTH_SPAN, 0, 1)`` mm: they follow the ruts and low spots, and
   the noise decides which stretch of rut floods. The wet film itself is ``WET_FILM_MM · wetness`` mm.
+  Under standing water the asphalt is soaked: the wet material uses max(w, coverage).
 * **Coverage**: standing water shallower than the asphalt's macrotexture (:data:`MACROTEXTURE_MM`) only fills
   the pores (the *drenched* margin: darker, glossier, still textured); deeper water is a full water surface
   (the *puddle*: normal up + wind waves + ripples, a mirror). Coverage = clamp(standing / MACROTEXTURE_MM, 0, 1),

@@ -107,20 +107,22 @@ void road_wet_surface(inout Surface s, int material) {
     }
     float w = u_road_levels.x * exposure;
     g_road_wetness = w;
-    s.albedo *= mix(1.0, WET_ALBEDO_FACTOR, w * ROAD_POROSITY[m]);
-    float smoothness = min(1.0, (1.0 - s.roughness) * mix(1.0, WET_SMOOTHNESS_GAIN, w));
-    s.roughness = max(1.0 - smoothness, 0.02);
-    float cover = w * ROAD_FILM[m];
+    float standing = 0.0;
+    float a = 0.0;
     if ((m == MAT_ASPHALT || m == MAT_PAINT) && abs(s.position.x) <= ROAD_HALF_WIDTH_M && s.position.y < 0.05
         && s.normal.y > 0.9) {
         g_road_plane = true;
-        float standing = road_water_depths_mm(s.position.xz).x;
-        float a = clamp(standing / MACROTEXTURE_MM, 0.0, 1.0);
+        standing = road_water_depths_mm(s.position.xz).x;
+        a = clamp(standing / MACROTEXTURE_MM, 0.0, 1.0);
         g_road_standing = a;
-        // Light crosses the murky water twice: darker and browner with depth, never a saturated colour.
-        s.albedo *= pow(MURK_TINT, vec3(standing / PUDDLE_MAX_MM));
-        cover = max(cover, a);
     }
+    float soaked = max(w, a);  // under standing water the asphalt is soaked whatever the film does
+    s.albedo *= mix(1.0, WET_ALBEDO_FACTOR, soaked * ROAD_POROSITY[m]);
+    // Light crosses the murky water twice: darker and browner with depth, never a saturated colour.
+    s.albedo *= pow(MURK_TINT, vec3(standing / PUDDLE_MAX_MM));
+    float smoothness = min(1.0, (1.0 - s.roughness) * mix(1.0, WET_SMOOTHNESS_GAIN, soaked));
+    s.roughness = max(1.0 - smoothness, 0.02);
+    float cover = max(w * ROAD_FILM[m], a);
     s.f0 = mix(s.f0, UNDERWATER_F0, cover);
     g_road_cover = cover;
 }
@@ -137,11 +139,13 @@ float road_water_spec(vec3 N, vec3 V, vec3 L, float alpha) {
 }
 
 // Highlights of the sun, lamps and headlights on the water layer (cd/m²). At grazing angles the GGX lobe of
-// the rough film is long along the view: the streaks of lights on a wet street.
-vec3 road_light_highlights(vec3 P, vec3 N, vec3 V, float roughness) {
+// the rough film is long along the view: the streaks of lights on a wet street. A thin layer (walls, damp
+// surfaces: coverage below 1/4) takes the sun only: its lamp highlights would be faint, the loop is not.
+vec3 road_light_highlights(vec3 P, vec3 N, vec3 V, float roughness, float cover) {
     float alpha = max(roughness * roughness, 0.002);
     vec3 color = road_water_spec(N, V, u_sun_dir, alpha) * u_sun_illum;
-    for (int i = 0; i < u_light_count; ++i) {
+    int count = cover < 0.25 ? 0 : u_light_count;
+    for (int i = 0; i < count; ++i) {
         vec3 d = u_light_pos[i].xyz - P;
         float dist2 = dot(d, d);
         float range = u_light_pos[i].w;
@@ -185,8 +189,10 @@ vec3 road_reflected_radiance(vec3 N, vec3 R, float roughness, float NoV) {
         wsum += wt;
     }
     vec3 mirrored = sum / (wsum * u_exposure);
-    vec2 edge = min(uv, 1.0 - uv);
-    float inside = clamp(min(edge.x, edge.y) / 0.03, 0.0, 1.0);
+    // Flat water maps a pixel to itself; waves push the ray off the texture: fade to the sky past its edge
+    // (the edge texels stand in for the first 2 %).
+    vec2 outside = max(-uv, uv - 1.0);
+    float inside = 1.0 - clamp((max(outside.x, outside.y) - 0.02) / 0.04, 0.0, 1.0);
     return mix(sky, mirrored, inside);
 }
 
@@ -210,7 +216,7 @@ vec3 road_water_layer(Surface s, vec3 V, vec3 radiance) {
     float F = env_brdf_approx(vec3(WATER_F0), roughness, NoV).x;
     vec3 R = reflect(-V, N);
     vec3 reflected = road_reflected_radiance(N, R, roughness, NoV);
-    vec3 highlights = road_light_highlights(s.position, N, V, max(roughness, LIGHT_MIN_ROUGHNESS));
+    vec3 highlights = road_light_highlights(s.position, N, V, max(roughness, LIGHT_MIN_ROUGHNESS), c);
     return radiance * (1.0 - c * F) + c * (F * reflected + highlights);
 }
 
