@@ -411,3 +411,15 @@ def test_clip_plane_removes_what_lies_below_it(gl_ctx, wet_scene):
     assert scene.image().std() > 5
 
 
+
+
+def test_benchmark_quick_writes_table_and_plot(gl_ctx, tmp_path):
+    from rain_core.bench import road as bench
+
+    assert bench.main(["--quick", "--out", str(tmp_path)], ctx=gl_ctx) == 0
+    text = (tmp_path / "road.md").read_text()
+    assert "effect disabled" in text and "dry road" in text and "reflection scale" in text
+    assert (tmp_path / "road.png").stat().st_size > 1000
+    errors = [float(line.split("|")[4]) for line in text.splitlines() if line.startswith("| 0.125 |")
+              or line.startswith("| 1 |")]
+    assert errors[-1] == 0.0 and errors[0] > 0.0  # scale 1 is the reference; a coarse texture differs
