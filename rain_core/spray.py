@@ -39,8 +39,9 @@ Flight (one closed form shared with the GPU: ``shaders/common/spray_flight.glsl`
 A droplet relaxes from its launch velocity v0 to the drift velocity u = wind − v_t(D)·ŷ (v_t from Gunn &
 Kinzer) with a time constant τ:  x(t) = x0 + u·t + (v0 − u)·τ·(1 − e^(−t/τ)).  Real drops feel quadratic drag
 (dv/dt = g − g·|v − w|(v − w)/v_t²); τ is chosen per drop so the distance it takes to slow from its launch
-speed s0 = |v0 − u| to v_t matches quadratic drag: τ = v_t²·ln(s0/v_t) / (g·(s0 − v_t)) (→ v_t/g as s0 → v_t).
-``python -m rain_core.bench spray`` measures this against an RK4 integration of quadratic drag.
+speed s0 = |v0 − u| to v_t matches quadratic drag: τ = v_t²·ln(s0/v_t) / (g·(s0 − v_t)) (→ v_t/g as s0 → v_t),
+then stretched by up to 1.4 for fast launches (quadratic drag's long 1/t tail), a factor fitted so that
+``python -m rain_core.bench spray`` finds the landing points within ~20 % of an RK4 quadratic-drag flight.
 
 Each drop's fate is decided once, at spawn (the rainfall design): the time it meets the road (y = 0, or the
 kerb-top beyond |x| = 7 m) or the thrower's body (a box with open wheel wells, moving with the vehicle) is its
@@ -58,7 +59,6 @@ next frame), so the picture does not depend on the budget except for its grainin
 
 from __future__ import annotations
 
-import inspect
 import math
 from dataclasses import dataclass, field
 
@@ -86,7 +86,7 @@ DEPTH_BANDS_MM = {"capillary": (0.0, CAPILLARY_MM), "tread": (CAPILLARY_MM, CAPI
 RELEASE_KMH = {"capillary": (48.0, 64.0), "tread": (15.0, 30.0), "side": (5.0, 15.0), "bow": (5.0, 15.0)}
 SPRAY_KMH = (48.0, 100.0)  # tread water atomises to spray over this ramp (jets break up finer with speed)
 TREAD_SPRAY_SHARE = 0.6  # of the tread water, at full atomisation
-MIST_SHARE = 0.15  # of the spray mass: drops < ~0.15 mm that the wake carries (drawn as mist puffs)
+MIST_SHARE = 0.05  # of the spray mass: drops < ~0.15 mm that the wake carries (drawn as mist puffs)
 MIST_D_MM = 0.08  # mm, the mist's drop size (optics and settling speed)
 EXTINCTION_EFFICIENCY = 2.0  # Q_ext of drops much larger than the wavelength
 SPRAY_MAX_MM = 0.5  # spray drops are smaller than this
@@ -105,11 +105,14 @@ HYDRO_DEPTH_MM = (1.0, 3.0)  # film depth over which the tread stops draining th
 # spreads it with an eddy diffusivity K = MIST_DIFFUSIVITY·|V|·height (m²/s).
 WAKE_SHARE = (0.25, 0.45)
 WAKE_TAU_S = 0.8
-WAKE_LIFT = (0.03, 0.1)  # upward launch speed of the mist per unit speed, for a vehicle WAKE_LIFT_HEIGHT_M tall
-WAKE_LIFT_HEIGHT_M = 1.5
+WAKE_LIFT = (0.02, 0.06)  # upward launch speed of the mist per unit speed, for a vehicle WAKE_LIFT_HEIGHT_M tall
+WAKE_LIFT_HEIGHT_M = 2.0
 MIST_DIFFUSIVITY = 0.01
 MIST_LIFE_S = (2.5, 4.0)
 MIST_SIGMA0_M = 0.25
+SPRAY_AIR_SHARE = (0.1, 0.35)  # spray drops drift with this share of the vehicle's velocity (dragged air)
+SPRAY_UPDRAUGHT = 0.6  # up to this share of their settling speed is held up by the wheel's wake
+MIST_SIGMA_MAX = 0.5  # × the vehicle's height: a puff grows no taller than the wake that holds it
 
 # Kinds of parcel (the shader's in_misc.x; +2 = fades out at the end of its life instead of hitting something).
 KIND_DROPLET, KIND_MIST, KIND_FADE = 0, 1, 2
@@ -134,7 +137,7 @@ PARTICLE_DTYPE = np.dtype([
     ("v0", "<f4", 3), ("tau", "<f4"),  # m/s launch velocity; s drag time constant (mist: spread rate)
     ("u", "<f4", 3), ("birth", "<f4"),  # m/s drift velocity; s since the effect's epoch
     ("life", "<f4"), ("sigma0", "<f4"), ("growth", "<f4"), ("area", "<f4"),  # s, m, m/s or m²/s, m²
-    ("kind", "<f4"), ("d_mm", "<f4"), ("rand", "<f4"), ("glint", "<f4"),
+    ("kind", "<f4"), ("d_mm", "<f4"), ("rand", "<f4"), ("glint", "<f4"),  # glint: mist puffs hold σ_max (m)
 ])
 PARTICLE_FORMAT = "4f 4f 4f 4f 4f/i"
 PARTICLE_ATTRIBUTES = ("in_p0", "in_v0", "in_u", "in_life", "in_misc")
@@ -289,9 +292,13 @@ def extinction_area_m2(mass_kg, d_mm) -> np.ndarray:
 
 # --- flight -------------------------------------------------------------------------------------------------
 
+DRAG_TAIL_FIT = 1.4  # fitted: drops 0.2–5 mm launched at 5–30 m/s, 10–45° up (python -m rain_core.bench spray)
+
+
 def drag_time_constant(d_mm, launch_speed_m_s) -> np.ndarray:
     """Time constant τ (s) of the linear-drag flight model for drops of d_mm (mm) launched at launch_speed_m_s
-    (m/s) relative to their drift velocity: matches quadratic drag's distance from s0 down to v_t."""
+    (m/s) relative to their drift velocity: quadratic drag's distance from s0 down to v_t, v_t²·ln(s0/v_t) /
+    (g·(s0 − v_t)), divided by (s0 − v_t) — stretched for fast launches by up to DRAG_TAIL_FIT."""
     vt = np.maximum(np.asarray(physics.terminal_velocity(np.asarray(d_mm, dtype=np.float64)), dtype=np.float64),
                     1e-3)
     s0 = np.asarray(launch_speed_m_s, dtype=np.float64)
@@ -299,7 +306,10 @@ def drag_time_constant(d_mm, launch_speed_m_s) -> np.ndarray:
     fast = ratio > 1.0 + 1e-6
     safe = np.where(fast, ratio, 2.0)
     tau_fast = vt * np.log(safe) / (G * (safe - 1.0))
-    return np.where(fast, tau_fast, vt / G)
+    # Linear drag gives up the excess speed exponentially, quadratic drag like 1/t (a long tail): stretch τ
+    # by up to DRAG_TAIL_FIT for fast launches (1 at terminal speed, so τ stays continuous there).
+    stretch = 1.0 + (DRAG_TAIL_FIT - 1.0) * (1.0 - 1.0 / ratio**2)
+    return np.where(fast, tau_fast * stretch, vt / G)
 
 
 def _expm1_tau(t, tau):
@@ -491,9 +501,10 @@ def body_hit_time(p0, v0, u, tau, t_max, body_origin, body_velocity, right, forw
 # --- wheels -------------------------------------------------------------------------------------------------
 
 def road_film_depth_fn(frame):
-    """The film depth (mm) under points x, z (m) for this frame: the road's ``film_depth_mm`` (puddles and
-    cracks from the weather's flood levels, settings.road's puddle map) and the wet film of the weather's
-    wetness (WET_FILM_MM at 1) on the asphalt. Returns a callable (x, z) → mm."""
+    """The film depth (mm) under points x, z (m) for this frame: the road's ``film_depth_mm`` (standing water
+    in cracks and puddles from the weather's flood levels and settings.road's puddle map, and the wet film
+    of the weather's wetness, none under roofs). Without the road module: the wet film alone (WET_FILM_MM at
+    wetness 1) on the asphalt. Returns a callable (x, z) → mm."""
     weather = getattr(frame, "weather", None)
     wetness = float(getattr(weather, "wetness", 0.0) or 0.0)
     cracks = float(getattr(weather, "cracks", 0.0) or 0.0)
@@ -502,38 +513,33 @@ def road_film_depth_fn(frame):
     amount = float(getattr(road_settings, "puddle_amount", 0.5))
     seed = int(getattr(road_settings, "puddle_seed", 0))
     world = getattr(frame, "world", None)
-    standing_fn = _road_film_function()
+    road_fn = _road_film_function()
 
     def depth(x, z):
-        x = np.asarray(x, dtype=np.float64)
-        z = np.asarray(z, dtype=np.float64)
-        x, z = np.broadcast_arrays(x, z)
-        on_road = np.abs(x) <= layout.ROAD_HALF_WIDTH_M
-        film = np.where(on_road, WET_FILM_MM * wetness, 0.0)
-        if standing_fn is None or (cracks <= 0.0 and puddles <= 0.0):
-            return film
-        standing = np.asarray(standing_fn(x, z, cracks, puddles, puddle_amount=amount, seed=seed, world=world),
-                              dtype=np.float64)
-        return np.maximum(standing, film)
+        x, z = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64))
+        if road_fn is not None:
+            return np.asarray(road_fn(x, z, cracks, puddles, puddle_amount=amount, seed=seed, world=world,
+                                      wetness=wetness), dtype=np.float64)
+        return np.where(np.abs(x) <= layout.ROAD_HALF_WIDTH_M, WET_FILM_MM * wetness, 0.0)
 
     return depth
 
 
 def _road_film_function():
-    """rain_core.road.film_depth_mm (standing water only) if the road module is there, else None."""
+    """rain_core.road.film_depth_mm(x, z, cracks, puddles, puddle_amount, seed, world, wetness) → mm, if the
+    road module is there (it is the one model of the film the road draws), else None."""
     try:
         from rain_core.road import film_depth_mm
     except ImportError:
         return None
-    if "wetness" in inspect.signature(film_depth_mm).parameters:
-        return lambda x, z, c, p, **kw: film_depth_mm(x, z, c, p, wetness=0.0, **kw)
     return film_depth_mm
 
 
 @dataclass
 class WheelWater:
     """One vehicle's four wheels this frame (FL, FR, RL, RR). contacts (4, 3) m; speed_m_s (4,) signed;
-    width_m (4,); film_depth_mm (4,); budget: WaterBudget over the 4 wheels (kg/s); hydroplaning_risk (4,)."""
+    width_m (4,) m of tread meeting the water (a lorry's twin rear tyres count twice); film_depth_mm (4,);
+    budget: WaterBudget over the 4 wheels (kg/s); hydroplaning_risk (4,) in [0, 1]."""
 
     vehicle: object
     contacts: np.ndarray
@@ -548,7 +554,9 @@ def wheel_water(vehicle, depth_fn) -> WheelWater:
     """The water model at a vehicle's wheels; depth_fn(x, z) → film depth (mm) at world points (m)."""
     contacts = np.asarray(vehicle.wheel_contacts(), dtype=np.float64)
     speeds = np.asarray(vehicle.wheel_speeds(), dtype=np.float64)
-    widths = np.asarray(vehicle.wheel_widths(), dtype=np.float64)
+    widths = np.asarray(vehicle.wheel_widths(), dtype=np.float64).copy()
+    if getattr(vehicle.spec, "kind", "car") == "truck":
+        widths[2:] *= 2.0  # a lorry's rear axle runs twin tyres
     depth_mm = np.maximum(np.asarray(depth_fn(contacts[:, 0], contacts[:, 2]), dtype=np.float64), 0.0)
     budget = allocate_water(speeds, widths, depth_mm * 1e-3)
     pressure = TYRE_PRESSURE_KPA.get(getattr(vehicle.spec, "kind", "car"), TYRE_PRESSURE_KPA["car"])
@@ -773,10 +781,11 @@ class SprayEmitter:
         wind = np.asarray(getattr(getattr(getattr(frame, "weather", None), "wind", None), "velocity_m_s",
                                   (0.0, 0.0, 0.0)), dtype=np.float64)
         launch = _launch_mist if ring == 1 else _launch_droplets
-        p0, v0, d_mm, sigma0, growth_k = launch(rng, geo, w, bi, age_now)
+        p0, v0, d_mm, sigma0, growth_k, air, updraught = launch(rng, geo, w, bi, age_now)
+        sigma_max = MIST_SIGMA_MAX * geo.height[vi]
         vt = np.asarray(physics.terminal_velocity(d_mm), dtype=np.float64)
-        u = np.broadcast_to(wind, (n, 3)).copy()
-        u[:, 1] -= vt
+        u = wind + air
+        u[:, 1] -= vt * (1.0 - updraught)
         if ring == 1:
             tau = np.full(n, WAKE_TAU_S)
         else:
@@ -836,7 +845,7 @@ class SprayEmitter:
             rec["kind"], rec["d_mm"] = kind, d_mm[keep]
             rec["rand"] = rng.random(len(rec))
             splash = d_mm[keep] >= SPLASH_MIN_MM
-            rec["glint"] = np.where(splash, 1.0, 0.5)
+            rec["glint"] = sigma_max[keep] if ring == 1 else np.where(splash, 1.0, 0.5)
             ranges = self.rings[ring].push(rec, birth[keep], (birth + life)[keep])
             self.dirty[ring].extend(ranges)
         if ring == 0:
@@ -857,6 +866,51 @@ class SprayEmitter:
         """The slot ranges written since the last call, per ring (the GPU upload list)."""
         dirty, self.dirty = self.dirty, [[], []]
         return dirty
+
+
+def parcel_state(records: np.ndarray, clock_s: float, shift_periods: float = 0.0):
+    """Centres (n, 3) m (world z, or wrapped when ``shift_periods`` is the renderer's shift_z/PERIOD_M),
+    horizontal and vertical Gaussian sizes σ_h, σ_v (n,) m and an alive mask of ring records at the effect
+    clock ``clock_s`` (s), computed as spray.vert does (float64)."""
+    rec = records
+    age = clock_s - rec["birth"].astype(np.float64)
+    alive = (age >= 0.0) & (age < rec["life"])
+    age = np.where(alive, age, 0.0)
+    tau = np.where(alive, rec["tau"], 1.0).astype(np.float64)  # slots never written hold τ = 0
+    pos = flight_position(rec["p0"], rec["v0"], rec["u"], tau, age)
+    pos[:, 2] += (rec["period"] - shift_periods) * layout.PERIOD_M
+    mist = (np.mod(rec["kind"], 2.0) > 0.5)
+    sigma = np.where(mist, rec["sigma0"] + np.sqrt(rec["growth"] * age),
+                     rec["sigma0"] + rec["growth"] * _expm1_tau(age, tau) + 0.02 * age)
+    sigma_v = np.where(mist, np.minimum(sigma, rec["glint"]), sigma)
+    return pos, sigma, sigma_v, alive
+
+
+def line_of_sight_optical_depth(emitter: SprayEmitter, time_s: float, eye, target) -> float:
+    """Optical depth of the spray along the segment eye → target (world m) at frame time ``time_s``: the sum
+    over parcels between the two points of A/(2π·σ_h·σ_v)·exp(−d_h²/(2σ_h²) − d_v²/(2σ_v²)), d_h and d_v the
+    horizontal and vertical parts of the parcel's distance from the line: the line integral of a Gaussian puff
+    along a near-horizontal ray. exp(−τ) is the share of the target's light that gets through — the
+    visibility loss of whoever follows."""
+    eye, target = np.asarray(eye, dtype=np.float64), np.asarray(target, dtype=np.float64)
+    axis = target - eye
+    length = float(np.linalg.norm(axis))
+    axis /= max(length, 1e-9)
+    total = 0.0
+    for ring in emitter.rings:
+        if ring.capacity == 0:
+            continue
+        pos, sigma_h, sigma_v, alive = parcel_state(ring.data, emitter.clock(time_s))
+        rel = pos - eye
+        along = rel @ axis
+        keep = alive & (along > 0.0) & (along < length)
+        perp = rel[keep] - along[keep, None] * axis
+        dv2 = perp[:, 1] ** 2
+        dh2 = np.sum(perp**2, axis=1) - dv2
+        sh, sv = sigma_h[keep], sigma_v[keep]
+        total += float(np.sum(ring.data["area"][keep] / (2.0 * math.pi * sh * sv)
+                              * np.exp(-0.5 * (dh2 / sh**2 + dv2 / sv**2))))
+    return total
 
 
 class _WheelGeometry:
@@ -899,9 +953,9 @@ def _lognormal(rng, median: float, sigma: float, lo: float, hi: float, n: int) -
 _DROPLET_SIZES = {0: (0.25, 0.35, 0.1, SPRAY_MAX_MM), 1: (0.25, 0.35, 0.1, SPRAY_MAX_MM),
                   2: (1.5, 0.3, SPLASH_MIN_MM, 3.0), 3: (3.0, 0.35, 1.5, 5.0), 4: (3.0, 0.35, 1.5, 5.0)}
 # A spray parcel is a small cloud; a splash parcel a few large drops, drawn as a thin streak.
-_DROPLET_SIGMA0_M = {0: 0.02, 1: 0.02, 2: 0.012, 3: 0.012, 4: 0.012}
+_DROPLET_SIGMA0_M = {0: 0.03, 1: 0.03, 2: 0.02, 3: 0.025, 4: 0.025}
 # Growth of the parcel (m) per metre it travels relative to the air: the spread of its drops' speeds.
-_DROPLET_SPREAD = {0: 0.04, 1: 0.04, 2: 0.015, 3: 0.015, 4: 0.015}
+_DROPLET_SPREAD = {0: 0.05, 1: 0.05, 2: 0.04, 3: 0.04, 4: 0.04}
 
 
 def _launch_droplets(rng, geo: _WheelGeometry, w, bucket, age_now):
@@ -919,6 +973,8 @@ def _launch_droplets(rng, geo: _WheelGeometry, w, bucket, age_now):
     d_mm = np.zeros(n)
     sigma0 = np.zeros(n)
     across = (rng.random(n) - 0.5) * b  # where on the tread width
+    air = np.zeros((n, 3))  # m/s, air velocity the parcel drifts with (besides the wind)
+    updraught = np.zeros(n)  # share of the settling speed the wheel's wake holds up
     for k in range(5):
         sel = bucket == k
         m = int(sel.sum())
@@ -928,13 +984,25 @@ def _launch_droplets(rng, geo: _WheelGeometry, w, bucket, age_now):
         sigma0[sel] = _DROPLET_SIGMA0_M[k] * rng.uniform(0.8, 1.25, m)
         vs, rs = v[sel][:, None], r[sel][:, None]
         fs, os_, bs = f[sel], o[sel], back[sel]
-        if k in (0, 1, 2):
-            # Off the tyre: angle α from the bottom towards the rear; tangential speed v relative to the car.
-            lo, hi = ((50.0, 120.0) if k == 0 else (5.0, 50.0))
-            alpha = np.radians(lo + (hi - lo) * rng.random(m) ** (1.0 if k == 0 else 1.6))[:, None]
-            speed = vs * rng.uniform(0.6 if k else 0.85, 1.0, (m, 1))
+        if k in (0, 1):
+            # Spray: the film flung off the tyre (capillary water off its rear and top, the atomised share of
+            # the groove water lower down) breaks into drops too small to keep their launch speed (τ ~ 10 ms):
+            # they are caught by the air the wheel and body drag along, and leave the wheel well with it.
+            lo, hi = (0.8, 1.8) if k == 0 else (0.2, 1.0)
+            p0[sel] = (c[sel] + bs * (rs * rng.uniform(1.0, 1.3, (m, 1))) + _UP * (rs * rng.uniform(lo, hi, (m, 1)))
+                       + os_ * (b[sel, None] * rng.uniform(0.4, 1.0, (m, 1))))  # pumped out past the tread
+            share = rng.uniform(*SPRAY_AIR_SHARE, (m, 1))
+            v0[sel] = vel[sel] * share + vs * (_UP * rng.uniform(0.0, 0.05, (m, 1))
+                                               + os_ * rng.uniform(0.0, 0.08, (m, 1)))
+            air[sel] = vel[sel] * share  # the dragged air keeps carrying them until they settle
+            updraught[sel] = rng.uniform(0.0, SPRAY_UPDRAUGHT, m)
+        elif k == 2:
+            # Tread pickup: off the tyre at angle α from the bottom towards the rear, at up to the tread's speed
+            # relative to the car (v), i.e. up and back; with some sideways spread off the groove edges.
+            alpha = np.radians(5.0 + 45.0 * rng.random(m) ** 1.6)[:, None]
+            speed = vs * rng.uniform(0.6, 1.0, (m, 1))
             rel = speed * (np.cos(alpha) * bs + np.sin(alpha) * _UP)
-            lateral = vs * rng.normal(0.12 if k == 0 else 0.1, 0.12, (m, 1))
+            lateral = vs * rng.normal(0.1, 0.12, (m, 1))
             p0[sel] = centre[sel] + rs * (np.sin(alpha) * bs - np.cos(alpha) * _UP) + os_ * across[sel, None]
             v0[sel] = vel[sel] + rel + os_ * lateral
         elif k == 3:
@@ -949,7 +1017,7 @@ def _launch_droplets(rng, geo: _WheelGeometry, w, bucket, age_now):
             v0[sel] = vs * (fs * rng.uniform(0.8, 1.15, (m, 1)) + os_ * rng.uniform(-0.1, 0.5, (m, 1))
                             + _UP * (0.08 + 0.35 * rng.random((m, 1)) ** 2))
     growth = np.array([_DROPLET_SPREAD[k] for k in range(5)])[bucket]
-    return p0, v0, d_mm, sigma0, growth
+    return p0, v0, d_mm, sigma0, growth, air, updraught
 
 
 def _launch_mist(rng, geo: _WheelGeometry, w, bucket, age_now):
@@ -973,7 +1041,7 @@ def _launch_mist(rng, geo: _WheelGeometry, w, bucket, age_now):
     d_mm = np.full(n, MIST_D_MM)
     sigma0 = MIST_SIGMA0_M * rng.uniform(0.8, 1.3, n)
     diffusivity = MIST_DIFFUSIVITY * np.linalg.norm(geo.velocity[vi], axis=1) * geo.height[vi]
-    return p0, v0, d_mm, sigma0, 2.0 * diffusivity
+    return p0, v0, d_mm, sigma0, 2.0 * diffusivity, np.zeros((n, 3)), np.zeros(n)
 
 
 # --- the effect (GL) ----------------------------------------------------------------------------------------

@@ -16,6 +16,7 @@ uniform float u_far;
 in vec2 v_coord;
 in float v_view_depth;
 flat in vec4 v_shape;
+flat in float v_fade;
 flat in vec4 v_misc;
 flat in vec3 v_axis_a;
 flat in vec3 v_axis_b;
@@ -43,24 +44,26 @@ float hash12(vec2 p) {
 
 void main() {
     float half_len = v_shape.x;
-    float sigma = v_shape.y;
+    vec2 sigma2 = v_shape.yz;
+    float sigma = v_shape.z;  // across: the smaller size, for the depth fade
     bool mist = v_misc.x > 0.5;
     float along = max(abs(v_coord.x) - half_len, 0.0);
-    float r2 = (along * along + v_coord.y * v_coord.y) / (sigma * sigma);
+    vec2 r = vec2(along, v_coord.y) / sigma2;
+    float r2 = dot(r, r);
     float edge = mist ? 2.5 : 3.0;
     float cut = exp(-0.5 * edge * edge);
     float density = max(exp(-0.5 * r2) - cut, 0.0) / (1.0 - cut);
-    float tau = v_shape.z * density;
+    float tau = v_shape.w * density;
 
     // Depth: behind the scene → hidden; close in front of it → faded over about a sigma.
     float scene = linear_depth(texture(u_depth, gl_FragCoord.xy / u_viewport).r);
     float soft = clamp((scene - v_view_depth) / max(sigma * (mist ? 0.7 : 1.0), 0.02), 0.0, 1.0);
     float near = mist ? clamp((v_view_depth - 0.3) / 1.7, 0.0, 1.0) : clamp((v_view_depth - 0.05) / 0.25, 0.0, 1.0);
-    float alpha = (1.0 - exp(-tau)) * v_shape.w * soft * near;
+    float alpha = (1.0 - exp(-tau)) * v_fade * soft * near;
     if (alpha < 1.0 / 1024.0) discard;
 
     // Pseudo-normal of a fuzzy sphere (stretched along the streak).
-    vec2 q = vec2(along, v_coord.y) / (edge * sigma);
+    vec2 q = r / edge;
     q.x *= sign(v_coord.x);
     vec3 n = normalize(q.x * v_axis_a + q.y * v_axis_b + sqrt(max(1.0 - dot(q, q), 0.0)) * v_view);
     // Multiple-scattering weight: where the cloud is optically thick it shades like a white body.
@@ -77,6 +80,6 @@ void main() {
         sparkle = hash12(cell + v_misc.y * 517.0) < SPRAY_GLINT_CHANCE ? 1.0 / SPRAY_GLINT_CHANCE : 0.0;
     }
     vec3 radiance = sun + amb + lights + v_glint * sparkle;
-    radiance = apply_atmosphere(radiance, v_misc.z);
+    radiance = apply_atmosphere_dir(radiance, v_misc.z, -v_view);  // as the scene: u_airlight_sun etc. where set
     f_color = vec4(radiance * u_exposure * alpha, alpha);
 }

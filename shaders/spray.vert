@@ -13,7 +13,8 @@ in vec4 in_p0;    // xyz m (z relative to its period), w period index
 in vec4 in_v0;    // xyz m/s launch velocity, w tau s
 in vec4 in_u;     // xyz m/s drift velocity, w birth s (effect clock)
 in vec4 in_life;  // x lifetime s, y sigma0 m, z spread (droplet: per unit relaxed distance; mist: 2K m²/s), w m²
-in vec4 in_misc;  // x kind (0 droplet, 1 mist, +2 fades out at the end), y D mm, z random [0,1), w glint weight
+in vec4 in_misc;  // x kind (0 droplet, 1 mist, +2 fades out at the end), y D mm, z random [0,1),
+                  // w droplets: glint weight; mist: largest sigma m
 
 uniform float u_clock;          // s, effect clock
 uniform float u_shift_periods;  // renderer shift_z / PERIOD_M
@@ -24,7 +25,8 @@ uniform float u_pixel_angle;    // rad per pixel (vertical)
 
 out vec2 v_coord;            // m from the parcel centre: along the streak, across it
 out float v_view_depth;      // m, along the camera's forward axis
-flat out vec4 v_shape;       // half streak length m, sigma m, centre optical depth, fade
+flat out vec4 v_shape;       // half streak length m, sigma along the streak / across it m, centre optical depth
+flat out float v_fade;
 flat out vec4 v_misc;        // mist (0/1), random, distance to the eye m, glint weight
 flat out vec3 v_axis_a;      // world axis of v_coord.x
 flat out vec3 v_axis_b;      // world axis of v_coord.y
@@ -52,8 +54,10 @@ void main() {
     vec3 pos = spray_position(in_p0.xyz, in_v0.xyz, in_u.xyz, tau, age);
     pos.z += (in_p0.w - u_shift_periods) * SPRAY_PERIOD_M;
     vec3 vel = spray_velocity(in_v0.xyz, in_u.xyz, tau, age);
+    // A mist puff spreads sideways without bound but only as high as the wake that holds it (in_misc.w).
     float sigma = mist ? in_life.y + sqrt(in_life.z * age)
                        : in_life.y + in_life.z * spray_relax(age, tau) + 0.02 * age;
+    float sigma_b = mist ? min(sigma, in_misc.w) : sigma;
 
     vec3 to_eye = u_camera_pos - pos;
     float dist = max(length(to_eye), 1e-3);
@@ -65,7 +69,7 @@ void main() {
     vec3 axis_a = half_len > 1e-5 ? normalize(rel_perp) : normalize(cross(side, view));
     vec3 axis_b = normalize(cross(view, axis_a));
     float k = mist ? EDGE_SIGMAS_MIST : EDGE_SIGMAS_DROP;
-    vec2 ext = vec2(half_len + k * sigma, k * sigma);
+    vec2 ext = vec2(half_len + k * sigma, k * sigma_b);
     vec2 corner = vec2(float(gl_VertexID & 1), float((gl_VertexID >> 1) & 1)) * 2.0 - 1.0;
     vec3 world = pos + axis_a * corner.x * ext.x + axis_b * corner.y * ext.y;
     gl_Position = u_view_proj * vec4(world, 1.0);
@@ -73,12 +77,13 @@ void main() {
     v_view_depth = dot(world - u_camera_pos, u_cam_forward);
 
     // Optical depth at the centre: the extinction area spread over the Gaussian (and along the streak).
-    float spread = 2.0 * SPRAY_PI * sigma * sigma + 2.0 * half_len * sqrt(2.0 * SPRAY_PI) * sigma;
+    float spread = 2.0 * SPRAY_PI * sigma * sigma_b + 2.0 * half_len * sqrt(2.0 * SPRAY_PI) * sigma_b;
     float tau_c = in_life.w / spread;
     float fade = fades ? clamp((life - age) / (0.25 * life), 0.0, 1.0) : 1.0;
     if (mist) fade *= clamp(age / 0.15, 0.0, 1.0);
-    v_shape = vec4(half_len, sigma, tau_c, fade);
-    v_misc = vec4(mist ? 1.0 : 0.0, in_misc.z, dist, in_misc.w);
+    v_shape = vec4(half_len, sigma, sigma_b, tau_c);
+    v_fade = fade;
+    v_misc = vec4(mist ? 1.0 : 0.0, in_misc.z, dist, 0.0);
     v_axis_a = axis_a;
     v_axis_b = axis_b;
     v_view = view;
@@ -86,7 +91,7 @@ void main() {
 
     // Single scattering. mu = cos(scattering angle) between the light's travel and parcel → eye.
     float mu_sun = dot(-u_sun_dir, view);
-    v_sun_ss = u_sun_illum * spray_phase_smooth(mu_sun);
+    v_sun_ss = u_sun_illum * spray_phase_wide(mu_sun);
     vec3 glint = u_sun_illum * 0.5 * spray_reflection(mu_sun);
     vec3 lights = vec3(0.0);
     vec3 lights_diffuse = vec3(0.0);
@@ -99,12 +104,12 @@ void main() {
         float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
         vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);  // lux
         float mu = dot(-L, view);
-        lights += E * spray_phase_smooth(mu);
+        lights += E * spray_phase_wide(mu);
         glint += E * 0.5 * spray_reflection(mu);
         lights_diffuse += E * (0.9 / SPRAY_PI) * 0.5 * (1.0 + dot(L, view));
     }
     v_lights_ss = lights;
     v_lights_diffuse = lights_diffuse;
-    v_glint = glint * in_misc.w;
+    v_glint = glint * (mist ? 1.0 : in_misc.w);
     v_amb_iso = 0.5 * (sky_ambient(vec3(0.0, 1.0, 0.0)) + sky_ambient(vec3(0.0, -1.0, 0.0)));
 }

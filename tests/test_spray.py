@@ -132,13 +132,14 @@ def test_drag_time_constant_matches_quadratic_drag():
     vt = np.asarray(physics.terminal_velocity(d))
     assert np.allclose(drag_time_constant(d, vt), vt / spray.G)  # at terminal speed: plain v_t/g
     assert np.allclose(drag_time_constant(d, vt * (1 + 1e-9)), vt / spray.G, rtol=1e-6)  # continuous there
-    # The distance to slow from s0 to v_t equals quadratic drag's (v_t²/g)·ln(s0/v_t) (1-D, no gravity).
+    # The distance to slow from s0 to v_t is quadratic drag's (v_t²/g)·ln(s0/v_t) (1-D, no gravity), stretched
+    # by at most DRAG_TAIL_FIT for quadratic drag's long tail.
     s0 = 25.0
     tau = drag_time_constant(d, s0)
     linear = tau * (s0 - vt)
     quadratic = vt**2 / spray.G * np.log(s0 / vt)
-    assert np.allclose(linear, quadratic, rtol=1e-12)
-    # Where a splash drop lands: within 30 % of an RK4 quadratic-drag flight (the bench tabulates this).
+    assert np.all(linear >= quadratic) and np.all(linear <= spray.DRAG_TAIL_FIT * quadratic)
+    # Where a drop lands: within 25 % of an RK4 quadratic-drag flight (the bench tabulates this).
     for d_mm, launch in ((2.0, (0.0, 3.0, -6.0)), (0.3, (0.0, 4.0, -12.0)), (3.0, (2.0, 2.0, 8.0))):
         ref, t_ref = spray.quadratic_drag_reference((0, 0.3, 0), launch, d_mm)
         vt1 = physics.terminal_velocity(d_mm)
@@ -147,7 +148,7 @@ def test_drag_time_constant_matches_quadratic_drag():
         t = ground_time(np.array([[0, 0.3, 0]]), np.array([launch]), u[None], np.array([tau1]))[0]
         land = flight_position(np.array([0, 0.3, 0]), np.array(launch), u, tau1, t)
         reach = np.hypot(ref[0], ref[2])
-        assert abs(np.hypot(land[0], land[2]) - reach) < 0.3 * reach + 0.02
+        assert abs(np.hypot(land[0], land[2]) - reach) < 0.25 * reach + 0.02
 
 
 def test_ground_time_lands_on_the_road_and_on_the_kerb_top():
@@ -385,8 +386,32 @@ def test_effect_is_skipped_on_a_dry_road_and_reports_hydroplaning(gl_ctx):
     scene.release()
 
 
-def test_road_film_depth_is_the_wet_film_without_standing_water():
-    frame = SimpleNamespace(weather=WeatherState(wetness=0.5), settings=None, world=None)
-    fn = spray.road_film_depth_fn(frame)
-    d = fn(np.array([0.0, 3.0, 7.5]), np.array([10.0, 20.0, 30.0]))
-    assert np.allclose(d, [0.5 * spray.WET_FILM_MM, 0.5 * spray.WET_FILM_MM, 0.0])
+def test_road_film_depth_is_the_roads_film():
+    road = pytest.importorskip("rain_core.road")
+    assert spray.WET_FILM_MM == road.WET_FILM_MM
+    x, z = np.array([0.0, 3.0, 7.5, 1.75]), np.array([10.0, 20.0, 30.0, 500.0])
+    wet = spray.road_film_depth_fn(SimpleNamespace(weather=WeatherState(wetness=0.5), settings=None, world=None))
+    assert np.allclose(wet(x, z), [0.5 * spray.WET_FILM_MM, 0.5 * spray.WET_FILM_MM, 0.0, 0.5 * spray.WET_FILM_MM])
+    flooded = WeatherState(wetness=1.0, cracks=1.0, puddles=1.0)
+    fn = spray.road_film_depth_fn(SimpleNamespace(weather=flooded, settings=None, world=None))
+    zz = np.arange(100.0, 1100.0, 0.5)
+    assert np.allclose(fn(np.full_like(zz, 5.25), zz), road.film_depth_mm(5.25, zz, 1.0, 1.0, wetness=1.0))
+    assert fn(np.full_like(zz, 5.25), zz).max() > 3.0  # standing water where the wheels run
+
+
+def test_line_of_sight_optical_depth_of_one_puff():
+    em = SprayEmitter(seed=0, budget=100)
+    rec = np.zeros(1, spray.PARTICLE_DTYPE)
+    rec["p0"], rec["v0"], rec["u"], rec["tau"] = (0.0, 1.0, 50.0), (0, 0, 0), (0, 0, 0), 0.8
+    rec["life"], rec["sigma0"], rec["growth"], rec["area"] = 3.0, 0.5, 0.0, 0.2
+    rec["kind"], rec["glint"] = spray.KIND_MIST, 0.25  # σ_h 0.5 m, σ_v capped at 0.25 m
+    em.epoch = 0.0
+    em.rings[1].push(rec, np.zeros(1), np.full(1, 3.0))
+    through = spray.line_of_sight_optical_depth(em, 1.0, (0.0, 1.0, 60.0), (0.0, 1.0, 40.0))
+    assert through == pytest.approx(0.2 / (2 * np.pi * 0.5 * 0.25), rel=1e-6)
+    above = spray.line_of_sight_optical_depth(em, 1.0, (0.0, 1.25, 60.0), (0.0, 1.25, 40.0))
+    beside = spray.line_of_sight_optical_depth(em, 1.0, (0.25, 1.0, 60.0), (0.25, 1.0, 40.0))
+    assert above == pytest.approx(through * np.exp(-0.5), rel=1e-6)  # one σ_v up
+    assert beside == pytest.approx(through * np.exp(-0.125), rel=1e-6)  # half a σ_h aside
+    assert spray.line_of_sight_optical_depth(em, 1.0, (0.0, 1.0, 60.0), (0.0, 1.0, 55.0)) == 0.0  # not between
+    assert spray.line_of_sight_optical_depth(em, 3.5, (0.0, 1.0, 60.0), (0.0, 1.0, 40.0)) == 0.0  # dead

@@ -23,13 +23,14 @@ float spray_reflection(float mu) {
     return spray_fresnel(sqrt(clamp(0.5 * (1.0 - mu), 0.0, 1.0))) / (4.0 * SPRAY_PI);
 }
 
-// Diffraction + refraction: the smooth part of the phase function.
-float spray_phase_smooth(float mu) {
-    return 0.5 * spray_hg(mu, SPRAY_G_DIFFRACTION)
-         + 0.5 * (1.0 - SPRAY_REFLECTION_SHARE) * spray_hg(mu, SPRAY_G_REFRACTION);
+// Refraction: the smooth wide-angle part. The diffracted half of the extinction leaves within ~λ/D (< 1°) of
+// the beam, so it only matters looking straight at a light (the atmosphere effect's glow draws that); the
+// particles' lighting leaves it out rather than smear it over a whole parcel from the parcel's centre.
+float spray_phase_wide(float mu) {
+    return 0.5 * (1.0 - SPRAY_REFLECTION_SHARE) * spray_hg(mu, SPRAY_G_REFRACTION);
 }
 
-// The whole phase function; glint scales the reflection lobe (1 = its mean).
+// The whole phase function (normalised); glint scales the reflection lobe (1 = its mean).
 float spray_phase(float mu, float glint) {
-    return spray_phase_smooth(mu) + 0.5 * glint * spray_reflection(mu);
+    return 0.5 * spray_hg(mu, SPRAY_G_DIFFRACTION) + spray_phase_wide(mu) + 0.5 * glint * spray_reflection(mu);
 }
