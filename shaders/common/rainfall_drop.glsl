@@ -1,0 +1,75 @@
+// Rainfall (rain_core/rainfall.py): what a falling drop looks like, and where the drops of the container are.
+// A drop is a tiny fish-eye lens: it shows ~94 % of the radiance of a ~165° field of view behind it (Garg &
+// Nayar 2004), so it is usually brighter than what it covers. On top of that it scatters the sun, street lamps
+// and headlights towards the eye; for a drop of radius r lit with illuminance E the scattered intensity is
+// E·πr²·p(θ)/4π, i.e. luminance E·p(θ)/4π over its disc. p: two-term Henyey–Greenstein, the same as the
+// atmosphere effect's (forward lobe g = 0.7, back lobe g = −0.5 weighted so p(180°)/4π = 1/18.8 sr).
+#include "frame.glsl"
+#include "lighting.glsl"
+#include "atmosphere.glsl"
+
+const float RAIN_INV_4PI = 0.0795774715;
+const float RAIN_PHASE_G = 0.7;
+const float RAIN_PHASE_BACK_G = -0.5;
+const float RAIN_PHASE_BACK_WEIGHT = 0.0957;
+
+uniform float u_period_z;     // m, the world's period along z
+uniform float u_time_mod;     // s, frame time modulo u_time_period
+uniform float u_time_period;  // s
+uniform vec2 u_viewport;      // px
+uniform float u_focal_px;     // px per unit of tan(angle) vertically
+uniform float u_brightness;   // streak_brightness setting
+
+float rain_hg(float g, float c) {
+    float d = 1.0 + g * g - 2.0 * g * c;
+    return (1.0 - g * g) / (d * sqrt(d));
+}
+
+// Phase function normalised to 4π (∫ p dΩ = 4π); cos_theta between the light's travel and the view direction.
+float rain_phase(float cos_theta) {
+    return (1.0 - RAIN_PHASE_BACK_WEIGHT) * rain_hg(RAIN_PHASE_G, cos_theta)
+           + RAIN_PHASE_BACK_WEIGHT * rain_hg(RAIN_PHASE_BACK_G, cos_theta);
+}
+
+// Mean radiance (cd/m²) of the environment in a ~165° cone around d: the axis and six directions 50° off it.
+vec3 rain_environment(vec3 d) {
+    vec3 helper = abs(d.y) < 0.95 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+    vec3 a = normalize(cross(d, helper));
+    vec3 b = cross(a, d);
+    vec3 sum = sky_radiance(d, false);
+    for (int k = 0; k < 6; ++k) {
+        float phi = float(k) * 1.04719755;
+        vec3 dir = d * 0.64278761 + (a * cos(phi) + b * sin(phi)) * 0.76604444;
+        sum += sky_radiance(normalize(dir), false);
+    }
+    return sum / 7.0;
+}
+
+// Luminance (cd/m²) of a drop at p (wrapped frame) seen along to_eye (unit, from the drop to the camera).
+vec3 rain_drop_radiance(vec3 p, vec3 to_eye) {
+    vec3 L = 0.94 * rain_environment(-to_eye);
+    L += u_sun_illum * rain_phase(dot(-u_sun_dir, to_eye)) * RAIN_INV_4PI;
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 d = u_light_pos[i].xyz - p;
+        float dist2 = dot(d, d);
+        float range = u_light_pos[i].w;
+        if (dist2 > range * range) continue;
+        vec3 Ld = d * inversesqrt(max(dist2, 1e-8));
+        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
+        vec3 E = u_light_color[i].rgb * spot_factor(i, Ld) * window * window / max(dist2, 0.01);  // lux
+        L += E * rain_phase(dot(-Ld, to_eye)) * RAIN_INV_4PI;
+    }
+    return L;
+}
+
+// World z stored modulo the period → the wrapped frame, the image nearest the camera.
+float rain_wrap_z(float z_mod) {
+    return z_mod - u_period_z * floor((z_mod - u_camera_pos.z) / u_period_z + 0.5);
+}
+
+// Age (s) of something spawned at t0_mod (s, modulo u_time_period). Every lifetime is far below half the
+// period, so an age in the upper half is a spawn time rounded a hair past now: age 0.
+float rain_age(float t0_mod) {
+    float age = mod(u_time_mod - t0_mod, u_time_period);
+    return age > 0.5 * u_time_period ? 0.0 : age;
+}
