@@ -341,8 +341,9 @@ def _set(program, name: str, value) -> None:
 
 
 class RoadEffect(Effect):
-    """The wet road effect. ``RoadEffect(ctx, shaders, world, settings=None)``; world gives the road heightmap
-    and the roofs; settings (optional) are used when a frame carries none.
+    """The wet road effect. ``RoadEffect(ctx, shaders=None, world=None, settings=None)``: world gives the road
+    heightmap and the roofs (None: ``frame.world`` at the first update); settings are used when a frame
+    carries none; shaders (a ShaderLibrary) only for ``film_depth_gpu`` (made on demand if None).
 
     Per frame: levels from ``frame.weather`` (wetness, cracks, puddles in [0, 1], pins already applied), the
     rest from ``settings.road``. ``active`` is False when the road is dry (all three levels 0) or the effect is
@@ -359,16 +360,13 @@ class RoadEffect(Effect):
     name = "road"
     stages = ("prepare",)
 
-    def __init__(self, ctx: moderngl.Context, shaders, world, settings=None):
+    def __init__(self, ctx: moderngl.Context, shaders=None, world=None, settings=None):
         self.ctx = ctx
-        self.shaders = shaders
-        self.world = world
+        self.shaders = shaders  # only the film-depth evaluation needs its own program (made on demand)
         self.settings = settings
-        hmap = np.ascontiguousarray(np.stack([world.road_heightmap, _smooth_for(world)], axis=-1), dtype=np.float32)
-        self._height_tex = ctx.texture((hmap.shape[1], hmap.shape[0]), 2, hmap.tobytes(), dtype="f4")
-        self._height_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-        self._height_tex.repeat_x, self._height_tex.repeat_y = False, True
-        self._shelter = _shelter_for(world)
+        self.world = None
+        self._height_tex: moderngl.Texture | None = None
+        self._shelter: np.ndarray | None = None
         self._maps_tex: moderngl.Texture | None = None
         self._maps_seed: int | None = None
         self._black = ctx.texture((1, 1), 4, np.zeros(4, np.float32).tobytes(), dtype="f4")
@@ -382,7 +380,24 @@ class RoadEffect(Effect):
         self._levels = (0.0, 0.0, 0.0)
         self._road = None
         self._waves = (0.0, 0.0, 0.0)
-        self.reflection_ms: float | None = None
+        if world is not None:
+            self.set_world(world)
+
+    def set_world(self, world) -> None:
+        """Take the road heightmap and roofs of ``world`` (done on the first update from ``frame.world`` when
+        the constructor got none)."""
+        if world is self.world:
+            return
+        hmap = np.ascontiguousarray(np.stack([world.road_heightmap, _smooth_for(world)], axis=-1), dtype=np.float32)
+        for tex in (self._height_tex, self._maps_tex):
+            if tex is not None:
+                tex.release()
+        self._height_tex = self.ctx.texture((hmap.shape[1], hmap.shape[0]), 2, hmap.tobytes(), dtype="f4")
+        self._height_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self._height_tex.repeat_x, self._height_tex.repeat_y = False, True
+        self._shelter = _shelter_for(world)
+        self._maps_tex = self._maps_seed = None
+        self.world = world
 
     # --- settings and levels ---
     def _road_settings(self, frame: Frame):
@@ -432,10 +447,16 @@ class RoadEffect(Effect):
         self._ripple = None if texture is None else (texture, (float(origin_xz_m[0]), float(origin_xz_m[1])),
                                                      float(extent_m))
 
+    def _need_world(self) -> None:
+        if self.world is None:
+            raise RuntimeError("RoadEffect has no world yet: pass one to the constructor or set_world, or render "
+                               "a frame first")
+
     def bind_film_uniforms(self, program, wetness: float, cracks: float, puddles: float, puddle_amount: float,
                            seed: int, unit_height: int = UNIT_HEIGHT, unit_maps: int = UNIT_MAPS) -> None:
         """Bind the maps and levels of common/road_film.glsl on any program that includes it (spray, ripples):
         road_film_depth_mm(xz) then gives the film depth at wrapped-frame positions."""
+        self._need_world()
         self._height_tex.use(unit_height)
         self._maps(int(seed)).use(unit_maps)
         _set(program, "u_road_height", unit_height)
@@ -447,6 +468,7 @@ class RoadEffect(Effect):
     def water_texture_params(self, frame: Frame | None = None) -> dict:
         """What a shader including common/road_film.glsl needs for this frame's water: textures (height, maps),
         their units and the uniform values (see bind_film_uniforms). Without a frame: the last update's levels."""
+        self._need_world()
         road = self._road_settings(frame) if frame is not None else self._road
         w, c, p = self.levels(frame) if frame is not None else self._levels
         amount = road.puddle_amount if road is not None else 0.5
@@ -458,6 +480,8 @@ class RoadEffect(Effect):
 
     # --- per frame ---
     def update(self, frame: Frame, rc: RenderContext) -> None:
+        if self.world is None:
+            self.set_world(frame.world)
         road = self._road_settings(frame)
         self._road = road
         self._levels = w, c, p = self.levels(frame)
@@ -593,6 +617,10 @@ class RoadEffect(Effect):
         pts[:n, 0] = x.ravel()
         pts[:n, 1] = np.mod(z.ravel(), layout.PERIOD_M)  # the wrapped frame the shader works in
         if self._film_prog is None:
+            if self.shaders is None:
+                from rain_core.gl import ShaderLibrary
+
+                self.shaders = ShaderLibrary(self.ctx)
             self._film_prog = self.shaders.program("fullscreen.vert", "road_film.frag")
             self._film_vao = self.ctx.vertex_array(self._film_prog, [])
         prog = self._film_prog
@@ -622,3 +650,8 @@ class RoadEffect(Effect):
         for target in (self._reflection, self._film_target):
             _release_target(self.ctx, target)
         self._height_tex = self._maps_tex = self._black = self._reflection = self._film_target = None
+
+
+def make_road(ctx: moderngl.Context, settings=None, world=None) -> RoadEffect:
+    """The road effect for ``scene.default_effects`` (the world is taken from the first frame if not given)."""
+    return RoadEffect(ctx, None, world, settings)

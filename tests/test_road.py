@@ -209,7 +209,7 @@ def _settings(hour=12.0, camera="driver", wetness=1.0, cracks=0.0, puddles=0.0, 
 def wet_scene(gl_ctx, shaders, world):
     with gl_ctx:  # module fixtures run outside conftest's per-test _gl_current
         settings = _settings()
-        effect = road.RoadEffect(gl_ctx, shaders, world, settings)
+        effect = road.make_road(gl_ctx, settings)  # takes the scene's world from the first frame
         scene = Scene(gl_ctx, SIZE, settings, seed=1, effects=[effect], gpu_timing=False)
         for _ in range(20):
             scene.step(1 / 30)
