@@ -290,18 +290,20 @@ def _set(program, name: str, value) -> None:
         program[name].value = value
 
 
-def _write_medium(program, state: AtmosphereState | None) -> None:
-    """The atmosphere.glsl uniforms this effect owns; None writes the clear-air values (its terms vanish)."""
+def medium_uniforms(state: AtmosphereState | None) -> dict:
+    """The atmosphere.glsl uniforms this effect owns; None gives the clear-air values (its terms vanish).
+    The renderer writes them into every program that declares them (rain, spray, scene, sky)."""
     if state is None:
-        _set(program, "u_medium_extinction_per_m", 0.0)
-        _set(program, "u_airlight_sun", (0.0, 0.0, 0.0))
-        return
-    _set(program, "u_medium_extinction_per_m", state.medium_per_m)
-    _set(program, "u_airlight_sun", tuple(float(x) for x in state.airlight_sun))
-    _set(program, "u_airlight_sun_dir", tuple(float(x) for x in state.sun_direction))
-    _set(program, "u_phase_g", PHASE_G)
-    _set(program, "u_phase_back_g", PHASE_BACK_G)
-    _set(program, "u_phase_back_weight", PHASE_BACK_WEIGHT)
+        return {"u_medium_extinction_per_m": 0.0, "u_airlight_sun": (0.0, 0.0, 0.0)}
+    return {"u_medium_extinction_per_m": state.medium_per_m,
+            "u_airlight_sun": tuple(float(x) for x in state.airlight_sun),
+            "u_airlight_sun_dir": tuple(float(x) for x in state.sun_direction),
+            "u_phase_g": PHASE_G, "u_phase_back_g": PHASE_BACK_G, "u_phase_back_weight": PHASE_BACK_WEIGHT}
+
+
+def _write_medium(program, state: AtmosphereState | None) -> None:
+    for name, value in medium_uniforms(state).items():
+        _set(program, name, value)
 
 
 class Atmosphere(Effect):
@@ -355,7 +357,7 @@ class Atmosphere(Effect):
         if renderer is not None:
             renderer.extinction_per_m = CLEAR_AIR_EXTINCTION_PER_M
             renderer.airlight = None
-            _write_medium(renderer.sky_prog, None)
+            renderer.medium_uniforms = medium_uniforms(None)
 
     def update(self, frame, rc) -> None:
         sec = self._section(frame)
@@ -365,7 +367,7 @@ class Atmosphere(Effect):
         self._renderer = rc.renderer
         rc.renderer.extinction_per_m = state.extinction_per_m
         rc.renderer.airlight = state.airlight
-        _write_medium(rc.renderer.sky_prog, state)
+        rc.renderer.medium_uniforms = medium_uniforms(state)
         focal_px = 0.5 * rc.size[1] / math.tan(math.radians(frame.camera.fov_y_deg) / 2.0)
         self.glow_sigma_px = state.glow_sigma_rad * focal_px
         scatter = state.scatter_per_m > 0.0 and sec.scatter_lights > 0 and rc.lights[3] > 0

@@ -150,6 +150,7 @@ class RenderContext:
             "u_airlight": tuple(self.renderer.airlight if self.renderer.airlight is not None
                                 else lighting.sky_horizon),
             "u_light_count": self.lights[3],
+            **self.renderer.medium_uniforms,
         }
         for name, value in values.items():
             if name in program:
@@ -187,6 +188,9 @@ class Renderer:
         self.gpu_timing = gpu_timing
         self.extinction_per_m = CLEAR_AIR_EXTINCTION_PER_M
         self.airlight: np.ndarray | None = None  # None: the horizon sky
+        # Further atmosphere.glsl uniforms (the rain medium's sun airlight and phase), set by the atmosphere
+        # effect and written into every program that declares them.
+        self.medium_uniforms: dict = {}
         self.stats: list[PassStat] = []
         self.timing_source = "none"
 
