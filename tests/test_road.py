@@ -131,6 +131,16 @@ def test_puddle_coverage_grows_with_the_flood_level_and_has_soft_margins(world):
     assert (road.road_regions(x, z, 0.0, 0.0, 0.0, world=world) == 0).all()
 
 
+def test_wind_waves_follow_the_wind():
+    calm = road.wave_parameters((0.0, 0.0, 0.0), 1.0)
+    breeze = road.wave_parameters((3.0, 0.0, 0.0), 1.0)
+    gale = road.wave_parameters((0.0, 0.0, -30.0), 1.0)
+    assert 0.0 < calm[2] < breeze[2] < gale[2] == pytest.approx(road.WAVE_SLOPE_MAX)
+    assert breeze[0] > 0 and breeze[1] == 0.0  # ripples drift with the wind
+    assert gale[1] < 0 and math.hypot(gale[0], gale[1]) <= 0.35  # never faster than capillary waves
+    assert road.wave_parameters((5.0, 0.0, 5.0), 0.0)[2] == 0.0
+
+
 # --- GPU ------------------------------------------------------------------------------------------------------
 
 def test_film_depth_glsl_matches_numpy(gl_ctx, shaders, world):
@@ -364,6 +374,25 @@ def test_ripple_normals_move_the_reflection_and_none_restores_flat_water(gl_ctx,
     np.testing.assert_array_equal(scene.renderer.hdr_image(), flat)
     effect._ripple_explicit = False  # back to reading rc.resources for the next tests
     tex.release()
+
+
+def test_wind_waves_ruffle_only_standing_water(gl_ctx, wet_scene):
+    scene, _ = wet_scene
+    still = _settings(wetness=1.0, cracks=1.0, puddles=1.0, puddle_amount=1.0, wave_strength=0.0)
+    _apply(scene, still)
+    scene.render()
+    flat = scene.renderer.hdr_image()
+    _apply(scene, _settings(wetness=0.0, cracks=1.0, puddles=1.0, puddle_amount=1.0, debug_regions=True))
+    scene.render()
+    puddle = _region_masks(scene.image())[3]
+    windy = _settings(wetness=1.0, cracks=1.0, puddles=1.0, puddle_amount=1.0, wave_strength=1.0)
+    set_value(windy, "wind.speed_m_s", 10.0)
+    _apply(scene, windy)
+    scene.render()
+    waves = scene.renderer.hdr_image()
+    changed = np.abs(waves - flat).max(axis=-1) > 1e-3 * flat.max()
+    assert changed[puddle].mean() > 0.3  # the puddles ripple
+    assert changed[~puddle].mean() < changed[puddle].mean()  # the rest barely changes (puddle margins do)
 
 
 @pytest.mark.parametrize("hour,camera,scale", [(12.0, "chase", 0.125), (22.0, "driver", 1.0)])
