@@ -81,7 +81,10 @@ splash (droplets only); they live 100–300 ms, never under a roof or a vehicle.
 
 Cost and skipping
 -----------------
-R = 0 with no drops left in the air → ``active`` is False: no update, no pass. Texture units 8 (drop state).
+R = 0 with no drops left in the air → ``active`` is False: no update, no pass. Per frame the GPU draws the
+environment map (64×32 texels, each the mean of 64 sky directions), then one instanced quad per drop slot: a
+slot outside the view or its box is culled in the vertex shader before any lighting; only the lights that reach
+the container are looped over. Texture units 8 (drop state) and 9 (environment).
 """
 
 from __future__ import annotations
@@ -150,6 +153,8 @@ TYPE_PUDDLE_CROWN, TYPE_FILM_CROWN, TYPE_PROMPT = 0, 1, 2
 DROPS_PER_ROW = 1024
 TEXELS_PER_DROP = 3
 STATE_UNIT = 8  # texture unit of the drop state
+ENV_UNIT = 9  # texture unit of the drop's environment (rainfall_env.frag)
+ENV_SIZE = (64, 32)  # texels of that equirectangular map
 
 # Beard & Chuang (1987) equilibrium shapes r(θ) = a·(1 + Σ C_n cos nθ), C_n × 1e4, D = 2 … 6 mm (in 0.5 mm
 # steps; the table of /work/shared/reference/beard_chuang.csv).
@@ -1209,7 +1214,9 @@ _SCATTER_DTYPE = np.dtype([("texel", "<i4"), ("value", "<f4", (4,))])
 def _set(prog: moderngl.Program, name: str, value) -> None:
     if name not in prog:
         return
-    if isinstance(value, np.ndarray):
+    if isinstance(value, bytes):
+        prog[name].write(value)
+    elif isinstance(value, np.ndarray):
         prog[name].write(np.ascontiguousarray(value, dtype=np.float32).tobytes())
     else:
         prog[name].value = value
@@ -1238,7 +1245,13 @@ class RainfallEffect(Effect):
         self.streak_prog = self.shaders.program("rainfall_streak.vert", "rainfall_streak.frag")
         self.splash_prog = self.shaders.program("rainfall_splash.vert", "rainfall_splash.frag")
         self.scatter_prog = self.shaders.program("rainfall_scatter.vert", "rainfall_scatter.frag")
+        self.env_prog = self.shaders.program("fullscreen.vert", "rainfall_env.frag")
         self._streak_vao = ctx.vertex_array(self.streak_prog, [])
+        self._env_vao = ctx.vertex_array(self.env_prog, [])
+        self._env_tex = ctx.texture(ENV_SIZE, 4, dtype="f2")
+        self._env_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self._env_tex.repeat_x, self._env_tex.repeat_y = True, False
+        self._env_fbo = ctx.framebuffer(color_attachments=[self._env_tex])
         self.sim: RainfallSim | None = None
         self._world = None
         self._generation = None
@@ -1385,6 +1398,30 @@ class RainfallEffect(Effect):
         return StreakCamera(rc.view_proj, rc.camera_position, rc.shift_z, self.camera_velocity_m_s,
                             s.camera.exposure_s, rc.size, rc.frame.camera.near_m)
 
+    def _lights(self, rc, boxes: Boxes) -> tuple:
+        """rc.lights without the lights whose range cannot reach the outer box (wrapped frame)."""
+        pos_b, dir_b, col_b, count = rc.lights
+        pos = np.frombuffer(pos_b, np.float32).reshape(-1, 4)
+        lo = boxes.lo[-1] - [0.0, 0.0, rc.shift_z]
+        hi = boxes.hi[-1] - [0.0, 0.0, rc.shift_z]
+        gap = np.maximum(np.maximum(lo - pos[:count, :3], pos[:count, :3] - hi), 0.0)
+        keep = np.flatnonzero(np.linalg.norm(gap, axis=1) < np.abs(pos[:count, 3]))  # w < 0: a low beam
+        out = []
+        for buf in (pos_b, dir_b, col_b):
+            arr = np.frombuffer(buf, np.float32).reshape(-1, 4)
+            packed = np.zeros_like(arr)
+            packed[: keep.size] = arr[keep]
+            out.append(packed.tobytes())
+        return (*out, int(keep.size))
+
+    def _draw_environment(self, rc) -> None:
+        rc.set_frame_uniforms(self.env_prog)
+        self.ctx.disable(moderngl.BLEND)
+        self.ctx.disable(moderngl.DEPTH_TEST)
+        self._env_fbo.use()
+        self._env_vao.render(moderngl.TRIANGLES, vertices=3)
+        rc.hdr.fbo.use()
+
     def render(self, stage: str, rc) -> None:
         if stage != "transparent" or self.sim is None or self.sim.boxes is None:
             return
@@ -1392,12 +1429,17 @@ class RainfallEffect(Effect):
         ctx = rc.ctx
         boxes = self.sim.boxes
         shift = np.array([0.0, 0.0, rc.shift_z])
+        self._draw_environment(rc)
+        lights = self._lights(rc, boxes)
         common = {
             "u_period_z": PERIOD_M, "u_time_mod": float(np.mod(rc.frame.time_s, TIME_PERIOD_S)),
             "u_time_period": TIME_PERIOD_S, "u_viewport": tuple(float(v) for v in rc.size),
             "u_focal_px": float(rc.projection[1, 1]) * rc.size[1] / 2.0,
-            "u_brightness": float(s.rainfall.streak_brightness),
+            "u_brightness": float(s.rainfall.streak_brightness), "u_rain_env": ENV_UNIT,
+            "u_light_pos": lights[0], "u_light_dir": lights[1], "u_light_color": lights[2],
+            "u_light_count": lights[3],
         }
+        self._env_tex.use(ENV_UNIT)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE)
         ctx.enable(moderngl.DEPTH_TEST)
@@ -1437,7 +1479,8 @@ class RainfallEffect(Effect):
 
     def release(self) -> None:
         self._release_buffers()
-        self._streak_vao.release()
+        for obj in (self._streak_vao, self._env_vao, self._env_fbo, self._env_tex):
+            obj.release()
 
 
 def make_rainfall(ctx: moderngl.Context, settings=None, shaders=None, seed: int = 0) -> RainfallEffect:

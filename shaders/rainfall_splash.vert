@@ -42,6 +42,7 @@ void main() {
     v_m = m;
     v_shape = vec4(age, life, crown, d_m);
     v_kind = vec4(type, fract(in_b.z), m_per_px, 0.0);
-    vec3 radiance = apply_atmosphere(rain_drop_radiance(p + vec3(0.0, crown, 0.0), to_eye / max(dist, 1e-4)), dist);
+    vec3 radiance = apply_atmosphere_dir(rain_drop_radiance(p + vec3(0.0, crown, 0.0), to_eye / max(dist, 1e-4)), dist,
+                                          -to_eye / max(dist, 1e-4));
     v_color = vec4(radiance * u_exposure, in_b.w * u_brightness);
 }

@@ -74,6 +74,10 @@ void main() {
     if (ca.w < wmin && cb.w < wmin) { cull(); return; }
     if (ca.w < wmin) ca = mix(ca, cb, (wmin - ca.w) / (cb.w - ca.w));
     if (cb.w < wmin) cb = mix(cb, ca, (wmin - cb.w) / (ca.w - cb.w));
+    // Both ends beyond one side of the view (a margin for the width): nothing to draw, skip the lighting.
+    float m = 1.0 + (u_width_max_px + 2.0) / (0.5 * min(u_viewport.x, u_viewport.y));
+    if ((ca.x > m * ca.w && cb.x > m * cb.w) || (ca.x < -m * ca.w && cb.x < -m * cb.w) ||
+        (ca.y > m * ca.w && cb.y > m * cb.w) || (ca.y < -m * ca.w && cb.y < -m * cb.w)) { cull(); return; }
     vec2 sa = ca.xy / ca.w * 0.5 * u_viewport;
     vec2 sb = cb.xy / cb.w * 0.5 * u_viewport;
     vec2 dir = sb - sa;
@@ -104,6 +108,6 @@ void main() {
     v_half = half_ext;
     vec3 to_eye = u_camera_pos - head;
     float dist = length(to_eye);
-    vec3 radiance = apply_atmosphere(rain_drop_radiance(head, to_eye / max(dist, 1e-4)), dist);
+    vec3 radiance = apply_atmosphere_dir(rain_drop_radiance(head, to_eye / max(dist, 1e-4)), dist, -to_eye / max(dist, 1e-4));
     v_color = vec4(radiance * u_exposure, alpha);
 }

@@ -31,28 +31,24 @@ float rain_phase(float cos_theta) {
            + RAIN_PHASE_BACK_WEIGHT * rain_hg(RAIN_PHASE_BACK_G, cos_theta);
 }
 
-// Mean radiance (cd/m²) of the environment in a ~165° cone around d: the axis and six directions 50° off it.
+uniform sampler2D u_rain_env;  // rainfall_env.frag: mean radiance behind a drop, by view direction
+
+// Mean radiance (cd/m²) of the environment in the ~165° cone around the view direction d.
 vec3 rain_environment(vec3 d) {
-    vec3 helper = abs(d.y) < 0.95 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
-    vec3 a = normalize(cross(d, helper));
-    vec3 b = cross(a, d);
-    vec3 sum = sky_radiance(d, false);
-    for (int k = 0; k < 6; ++k) {
-        float phi = float(k) * 1.04719755;
-        vec3 dir = d * 0.64278761 + (a * cos(phi) + b * sin(phi)) * 0.76604444;
-        sum += sky_radiance(normalize(dir), false);
-    }
-    return sum / 7.0;
+    float u = fract(atan(d.z, d.x) * 0.15915494);  // φ / 2π in [0, 1)
+    float v = acos(clamp(d.y, -1.0, 1.0)) * 0.31830989;  // θ / π
+    return textureLod(u_rain_env, vec2(u, v), 0.0).rgb;
 }
 
-// Luminance (cd/m²) of a drop at p (wrapped frame) seen along to_eye (unit, from the drop to the camera).
+// Luminance (cd/m²) of a drop at p (wrapped frame) seen along to_eye (unit, from the drop to the camera). The
+// rainfall effect passes only the lights that can reach its container.
 vec3 rain_drop_radiance(vec3 p, vec3 to_eye) {
     vec3 L = 0.94 * rain_environment(-to_eye);
     L += u_sun_illum * rain_phase(dot(-u_sun_dir, to_eye)) * RAIN_INV_4PI;
     for (int i = 0; i < u_light_count; ++i) {
         vec3 d = u_light_pos[i].xyz - p;
         float dist2 = dot(d, d);
-        float range = u_light_pos[i].w;
+        float range = abs(u_light_pos[i].w);  // negative: a low-beam headlight (spot_factor shapes it)
         if (dist2 > range * range) continue;
         vec3 Ld = d * inversesqrt(max(dist2, 1e-8));
         float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
