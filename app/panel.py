@@ -22,7 +22,7 @@ SECTIONS = (
     ("time_of_day", "Time of day"), ("traffic", "Traffic"), ("quality", "Quality"), ("ripples", "Ripples"),
     ("rainfall", "Rainfall"), ("spray", "Spray"), ("windshield", "Windshield"), ("atmosphere", "Atmosphere"),
 )
-WIRED = {"rain", "wind", "camera", "time_of_day", "traffic", "ripples", "atmosphere"}
+WIRED = {"rain", "road", "wind", "camera", "time_of_day", "traffic", "ripples", "spray", "atmosphere"}
 # Fields the generic widgets should not show (edited by dedicated widgets).
 CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks", "rain.puddles"}
 LOG_FIELDS = {"rain.time_scale"}

@@ -1103,6 +1103,18 @@ class RippleField:
                                  -self.rain_gain * RAIN_DENT_M_PER_KG_M_S * weight * momentum)
         return drawn
 
+    def add_droplet_impacts(self, impacts, radius_m: float = 0.02) -> int:
+        """Droplets landing in the water (e.g. wheel spray): (x m, z m world, downward momentum kg·m/s) each,
+        pressing a dent by the raindrops' law (RAIN_DENT_M_PER_KG_M_S × wake_gain). Returns the dents laid."""
+        impacts = np.asarray(list(impacts), dtype=np.float64).reshape(-1, 3)
+        if len(impacts) == 0 or self.wake_gain == 0.0:
+            return 0
+        impacts = impacts[np.all(np.isfinite(impacts), axis=1)]
+        ox, oz = self.origin_xz
+        self.solver.add_impulses(impacts[:, 0] - ox, impacts[:, 1] - oz, radius_m,
+                                 -self.wake_gain * RAIN_DENT_M_PER_KG_M_S * np.abs(impacts[:, 2]))
+        return len(impacts)
+
     def _flux_weighted_diameters(self, physics, rate: float, count: int) -> np.ndarray:
         """Diameters (mm) of drops arriving on a surface: the law of ``physics.sample_drop_diameters`` (the
         airborne N(D), ``physics.drop_diameter_cdf``) weighted by the fall speed v(D), since faster drops of a
@@ -1318,9 +1330,10 @@ class RipplesEffect(Effect):
     around the ego car, plus the tiled rain-ring map for puddles beyond it.
 
     It only runs where there is standing water (flood levels above 0) — a dry or merely wet road costs nothing —
-    and the solver itself sleeps once the water has settled. It reads the road's ``film_depth_fn`` from
-    ``rc.resources`` and publishes ``water_normals`` (the field's slopes) and ``rain_ripples`` (the tiled map) there
-    for the road's water shading. Settings: ``settings.ripples`` and ``settings.quality.ripple_grid``."""
+    and the solver itself sleeps once the water has settled. It reads the road's ``film_depth_fn`` and the spray's
+    ``droplet_impacts`` from ``rc.resources`` and publishes ``water_normals`` (the field's slopes) and
+    ``rain_ripples`` (the tiled map) there for the road's water shading. Settings: ``settings.ripples`` and
+    ``settings.quality.ripple_grid``."""
 
     name = "ripples"
     stages = ()
@@ -1379,6 +1392,7 @@ class RipplesEffect(Effect):
         ego = frame.ego
         center = None if ego is None else (float(ego.position[0]), float(ego.position[2]))
         rate = frame.rain_rate_mm_h
+        field.add_droplet_impacts(rc.resources.get("droplet_impacts", ()))
         self.last_report = field.update(frame.dt_s, center_xz=center, rate_mm_h=rate,
                                         wheels=self.wheel_sweeps(frame, field), film_depth_fn=film_fn)
         if self.ctx is not None:

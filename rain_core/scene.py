@@ -15,7 +15,10 @@ from rain_core.camera import Camera, ChaseRig, driver_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.lighting import lighting_for_hour
 from rain_core.renderer import Frame, Renderer
+from rain_core.ripples import RipplesEffect
+from rain_core.road import make_road
 from rain_core.settings import Settings
+from rain_core.spray import make_spray
 from rain_core.vehicles import Autopilot, EgoCar, Traffic
 from rain_core.weather import Weather
 from rain_core.world import build_world
@@ -24,9 +27,11 @@ MAX_FRAME_DT_S = 0.25  # s; a longer stall (debugger, window drag) is simulated 
 
 
 def default_effects(ctx, settings, seed: int = 0) -> list:
-    """The rain effects in update/draw order. Each decides per frame whether it runs (``active``); the road
-    publishes the film depth that ripples read, so it comes first."""
-    return [make_atmosphere(ctx, settings)]
+    """The rain effects in update/draw order. Each decides per frame whether it runs (``active``). Order matters
+    for what they share through ``rc.resources``: the road publishes the film depth, the spray its droplets
+    landing in water, and ripples read both."""
+    return [make_road(ctx, settings), make_spray(ctx, settings), RipplesEffect(ctx, settings, seed=seed),
+            make_atmosphere(ctx, settings)]
 
 
 class Scene:

@@ -1161,6 +1161,8 @@ class Spray(Effect):
         self.emitter.emit(frame)
         self._upload()
         self._frame = frame
+        # Where the spray lands in standing water, the ripple effect (if running) presses dents.
+        rc.resources["droplet_impacts"] = self.landed_in_water()
 
     def _upload(self) -> None:
         dirty = self.emitter.take_dirty()
