@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections import deque
 
+import numpy as np
 from imgui_bundle import imgui
 
 from app.imgui_layer import ImGuiLayer
@@ -44,12 +45,15 @@ def field_label(info) -> str:
 class RainManagerPanel:
     """Draws the Rain Manager for a ``Scene`` over a framebuffer."""
 
-    def __init__(self, ctx, window_size, scene, framebuffer_size=None):
+    def __init__(self, ctx, window_size, scene, framebuffer_size=None, expand_all: bool = False):
         self.layer = ImGuiLayer(ctx, tuple(window_size), framebuffer_size)
+        self.expand_all = expand_all  # open every section (screenshots, tests)
         self.scene = scene
         self.cameras = None  # the app's CameraModes, when there is a window
         self.errors: dict[str, str] = {}
         self.frame_ms = deque(maxlen=120)
+        self._ctx = ctx
+        self._height_view = None  # RGBA8 texture of the ripple heights, made when first shown
         self.fields = {}
         for info in all_fields():
             self.fields.setdefault(info.path.split(".")[0], []).append(info)
@@ -126,6 +130,43 @@ class RainManagerPanel:
             imgui.same_line()
             self._field_widget(next(f for f in self.fields["rain"] if f.path == f"rain.{level}"))
 
+    def _effect(self, name: str):
+        return next((e for e in self.scene.effects if e.name == name), None)
+
+    def _spray_section(self) -> None:
+        spray = self._effect("spray")
+        risk = float(getattr(spray, "ego_hydroplaning_risk", 0.0) or 0.0)
+        imgui.text("hydroplaning risk (ego, worst wheel)")
+        color = imgui.ImVec4(0.9, 0.25, 0.2, 1.0) if risk > 0.3 else imgui.ImVec4(0.3, 0.7, 0.3, 1.0)
+        imgui.push_style_color(imgui.Col_.plot_histogram.value, color)
+        imgui.progress_bar(risk, imgui.ImVec2(-1, 0), f"{risk:.2f}" + ("  grip going!" if risk > 0.3 else ""))
+        imgui.pop_style_color()
+
+    def _ripple_heights(self) -> None:
+        """The simulated height field as a picture: red above rest, blue below, scaled to its largest swing."""
+        ripples = self._effect("ripples")
+        field = getattr(ripples, "field", None)
+        if field is None or not self.scene.settings.ripples.show_heights:
+            return
+        step = max(1, field.n // 128)
+        h = np.asarray(field.height)[::step, ::step]
+        scale = max(float(np.abs(h).max()), 1e-9)
+        v = np.clip(h / scale, -1.0, 1.0)
+        rgba = np.empty((*h.shape, 4), np.uint8)
+        rgba[..., 0] = (np.maximum(v, 0) * 255).astype(np.uint8)
+        rgba[..., 1] = 40
+        rgba[..., 2] = (np.maximum(-v, 0) * 255).astype(np.uint8)
+        rgba[..., 3] = 255
+        if self._height_view is None or self._height_view.size != (h.shape[1], h.shape[0]):
+            if self._height_view is not None:
+                self.layer.unregister_texture(self._height_view)
+                self._height_view.release()
+            self._height_view = self._ctx.texture((h.shape[1], h.shape[0]), 4)
+        self._height_view.write(np.ascontiguousarray(rgba[::-1]).tobytes())
+        ref = self.layer.register_texture(self._height_view)
+        imgui.text(f"height field, ±{scale * 1000:.3f} mm, {field.extent_m:.0f} m across")
+        imgui.image(ref, imgui.ImVec2(200, 200))
+
     def _performance_section(self) -> None:
         renderer = self.scene.renderer
         if self.frame_ms:
@@ -156,6 +197,8 @@ class RainManagerPanel:
         imgui.begin("Rain Manager")
         for section, title in SECTIONS:
             open_by_default = imgui.TreeNodeFlags_.default_open.value if section in ("rain", "camera") else 0
+            if self.expand_all:
+                imgui.set_next_item_open(True)
             if not imgui.collapsing_header(title, open_by_default):
                 continue
             if section not in WIRED:
@@ -169,6 +212,10 @@ class RainManagerPanel:
             for info in self.fields.get(section, []):
                 if info.path not in CUSTOM_FIELDS:
                     self._field_widget(info)
+            if section == "spray":
+                self._spray_section()
+            elif section == "ripples":
+                self._ripple_heights()
             if section == "camera" and self.cameras is not None:
                 self.cameras.mode = self.scene.settings.camera.mode
         if imgui.collapsing_header("Performance", imgui.TreeNodeFlags_.default_open.value):

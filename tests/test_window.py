@@ -71,3 +71,25 @@ def test_panel_edit_goes_through_validation(gl_ctx):
     assert scene.settings.rain.rate_mm_h == 12.0 and "rain.rate_mm_h" in panel.errors["rain.rate_mm_h"]
     panel.layer.shutdown()
     scene.release()
+
+
+def test_panel_shows_every_section_with_water_on_the_road(gl_ctx):
+    """All sections open (hydroplaning bar, ripple height view) draw without errors on a flooded road."""
+    from app.panel import RainManagerPanel
+    from rain_core.scene import Scene
+    from rain_core.settings import Settings, set_value
+
+    settings = Settings()
+    for path, value in (("rain.puddles", 1.0), ("rain.cracks", 1.0), ("quality.ripple_grid", 64),
+                        ("ripples.show_heights", True)):
+        set_value(settings, path, value)
+    scene = Scene(gl_ctx, (320, 240), settings=settings, seed=2)
+    panel = RainManagerPanel(gl_ctx, (320, 240), scene, expand_all=True)
+    for _ in range(3):
+        scene.step(1 / 30)
+        scene.render()
+        panel.draw(1 / 30, scene.renderer.ldr)
+    assert panel._height_view is not None and panel._height_view.size == (64, 64)
+    assert not panel.errors
+    panel.layer.shutdown()
+    scene.release()
