@@ -137,7 +137,8 @@ DROP_EVAP_KG_M_S = 1.7e-7
 # --- wipers ------------------------------------------------------------------------------------------------
 BEAD_BINS = 24  # radial bins of the water a blade pushes
 RESIDUE_M = 0.1e-6  # film left behind a new, wet blade (m); × (1 + 4·wear)
-BEAD_CAPACITY_KG_M = 8e-3  # water a blade can push per metre of blade before it leaks past the rubber
+# Water a blade can push per metre of its length before it leaks past the rubber: a bead ~2 mm across.
+BEAD_CAPACITY_KG_M = 3e-3
 END_LEAVE_FRACTION = (
     0.35  # of the bead, left on the glass as a row of drops where a stroke ends; the rest sheds
 )
@@ -535,9 +536,8 @@ class WindshieldSim:
     # --- arrivals -------------------------------------------------------------------------------------------
     def arrival_rate_per_s(self, inputs: GlassInputs) -> tuple[float, np.ndarray, np.ndarray]:
         """Arrivals on the glass: (drops per second, closing speed (m/s) and the flux-weighted size CDF for
-        each
-        diameter of _D_GRID_MM). The count is ``physics.flux_on_surface_per_s`` for the glass's world normal
-        and velocity, by the trapezoid rule on the diameter grid (within 1e-4), times ``drop_scale``."""
+        each diameter of _D_GRID_MM). The count is ``physics.flux_on_surface_per_s`` for the glass's world
+        normal and velocity, by the trapezoid rule on the diameter grid (within 1e-4), × ``drop_scale``."""
         zeros = np.zeros_like(_D_GRID_MM)
         if inputs.rate_mm_h <= 0.0 or inputs.sheltered or inputs.drop_scale <= 0.0:
             return 0.0, zeros, zeros
@@ -1354,7 +1354,6 @@ class WindshieldEffect(Effect):
         prog["u_refraction"].value = float(settings.windshield.refraction) if settings is not None else 1.0
         blur = math.log2(max(1.0, EYE_APERTURE_BLUR * rc.size[1]))
         prog["u_drop_lod"].value = blur + 0.5
-        prog["u_haze_lod"].value = blur + 3.0
         angles = self.sim.blade_angles()
         prog["u_blade"].write(
             np.array([(*b.pivot, b.r_inner_m, b.r_outer_m) for b in self.sim.blades], np.float32).tobytes()

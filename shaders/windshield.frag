@@ -5,8 +5,9 @@
 // is a small ball lens, so that is a tiny inverted fish-eye of what lies behind it; where the exit angle is past
 // the critical angle (drop rims at the grazing view of a raked glass) the ray is reflected back into the dark
 // cabin. Drops show the street slightly blurred and brighter or darker as they gather light from a wide field;
-// a thin film hazes and, at night, smears the lights along the wiper's streaks. Lights (lamps, headlights, the
-// sun) glint in the drops. The wiper blades are drawn on the glass. Output is premultiplied over the HDR frame.
+// a film blurs and ripples the view and, at night, smears the lights along the wiper's streaks. Lights (lamps,
+// headlights, the sun) glint in the drops. The wiper blades are drawn on the glass. Output is premultiplied
+// over the HDR frame.
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
 #include "common/windshield_glass.glsl"
@@ -19,10 +20,9 @@ uniform vec3 u_axis_s;        // world direction of +s (the car's right)
 uniform vec3 u_axis_t;        // world direction of +t (up the glass)
 uniform float u_refraction;   // × the physical bending
 uniform float u_drop_lod;     // mip level of u_frame for the slight blur through water
-uniform float u_haze_lod;     // mip level for the haze of a film
 uniform vec4 u_blade[2];      // pivot s, t (m), r inner, r outer (m)
 uniform float u_blade_angle[2];
-uniform float u_aperture_m;  // radius of the eye's pupil (m): the blur circle on the glass when focused far
+uniform float u_aperture_m;   // radius of the eye's pupil (m): the blur circle on the glass when focused far
 uniform vec3 u_cabin;         // luminance seen by total internal reflection (the dark cabin), pre-exposed
 in vec3 v_pos;
 in vec3 v_nrm;
@@ -98,24 +98,35 @@ void main() {
     vec3 Ts = normalize(u_axis_s - N * dot(N, u_axis_s));
     vec3 Tt = normalize(cross(N, Ts));
     if (dot(Tt, u_axis_t) < 0.0) Tt = -Tt;
-    vec4 water = texture(u_water, v_uv);
-    float film = water.y;
+    float film = texture(u_water, v_uv).y;
     vec2 here = gl_FragCoord.xy / vec2(textureSize(u_frame, 0));
 
-    // Drops: refraction through the water surface, averaged over the eye's pupil. The eye is focused on the
-    // road, so each point of the glass is seen through a disc the size of the pupil (u_aperture_m): drops of a
-    // millimetre or two are soft blobs of their inverted images and dark rims, not sharp dots.
+    // Drops and film: refraction through the water surface, averaged over the eye's pupil (u_aperture_m) or
+    // the pixel's footprint on the glass, whichever is larger. The eye is focused on the road, so each point of
+    // the glass is seen through a disc the size of the pupil: drops of a millimetre or two are soft blobs of
+    // their inverted images and dark rims, not sharp dots. A film is not flat either: below the texture's
+    // resolution it is a field of micro-droplets and ripples, drawn as a random tilt of the surface that
+    // grows with its thickness, and a blur.
     vec3 in_water = refract(V, -N, 1.0 / N_WATER);
+    float foot = max(length(dFdx(st)), length(dFdy(st)));
+    float radius = max(u_aperture_m, 0.5 * foot);
     float cover = 0.0;
-    vec3 drop_col = vec3(0.0);
-    vec3 glint = vec3(0.0);
-    const vec2 taps[4] = vec2[4](vec2(0.5, 0.17), vec2(-0.17, 0.5), vec2(-0.5, -0.17), vec2(0.17, -0.5));
-    for (int k = 0; k < 4; ++k) {
-        vec2 uv_k = glass_uv(st + taps[k] * u_aperture_m);
-        vec4 w = texture(u_water, uv_k);
-        float c = smoothstep(0.004, 0.03, w.x - 1e-3 * w.y);
-        if (c <= 0.0) continue;
-        vec3 Nw = normalize(N - u_refraction * (w.z * Ts + w.w * Tt));
+    float drop_cover = 0.0;
+    vec3 wet_col = vec3(0.0);
+    vec4 glint_dir = vec4(0.0);
+    const vec2 taps[5] = vec2[5](vec2(0.0), vec2(0.7, 0.25), vec2(-0.25, 0.7), vec2(-0.7, -0.25),
+                                 vec2(0.25, -0.7));
+    for (int k = 0; k < 5; ++k) {
+        vec2 st_k = st + taps[k] * radius;
+        vec4 w = texture(u_water, glass_uv(st_k));
+        float c_drop = smoothstep(0.004, 0.03, w.x - 1e-3 * w.y);
+        float c_film = 1.0 - exp(-w.y / 5.0);
+        float c = max(c_drop, c_film);
+        if (c <= 0.002) continue;
+        ivec2 cell = ivec2(floor(st_k / 0.002));
+        vec2 jitter = vec2(ws_rand(cell, 3u), ws_rand(cell, 7u)) - 0.5;
+        vec2 slope = w.zw + jitter * 0.5 * (1.0 - exp(-w.y / 10.0));
+        vec3 Nw = normalize(N - u_refraction * (slope.x * Ts + slope.y * Tt));
         vec3 out_dir = refract(in_water, -Nw, N_WATER);
         vec3 col;
         if (dot(out_dir, out_dir) < 0.5) {
@@ -123,18 +134,16 @@ void main() {
         } else {
             float cosx = abs(dot(out_dir, Nw));
             float transmit = 1.0 - (0.02 + 0.98 * pow(1.0 - cosx, 5.0));
-            col = behind_glass(out_dir, u_drop_lod) * transmit;
-            glint += glints(out_dir) * u_exposure * transmit * c;
+            col = behind_glass(out_dir, u_drop_lod + 2.0 * c_film * (1.0 - c_drop)) * transmit;
+            if (k == 0) glint_dir = vec4(out_dir, transmit);  // glints from the centre tap only: 32 lights
         }
-        drop_col += col * c;
+        drop_cover += c_drop;
+        wet_col += col * c;
         cover += c;
     }
-    drop_col /= max(cover, 1e-6);
-    cover *= 0.25;
-    glint *= 0.25;
-    // Film: haze towards a blurred view; along the wiper's arcs bright lights smear.
-    float haze = 1.0 - exp(-film / 6.0);
-    vec3 haze_col = textureLod(u_frame, here, u_haze_lod).rgb;
+    wet_col /= max(cover, 1e-6);
+    cover *= 0.2;
+    vec3 glint = glint_dir.w > 0.0 ? glints(glint_dir.xyz) * u_exposure * glint_dir.w * 0.2 * drop_cover : vec3(0.0);
     // Along the wiper's arcs a streaky film smears bright lights (only what is brighter than white).
     float smear = clamp(film / 0.3, 0.0, 1.0) * 0.35;
     vec3 glare = vec3(0.0);
@@ -143,12 +152,12 @@ void main() {
         vec2 tang_st = normalize(vec2(-rel.y, rel.x));
         vec2 along = screen_of(v_pos + 0.05 * (tang_st.x * u_axis_s + tang_st.y * u_axis_t), V) - here;
         along /= max(length(along), 1e-6);
-        for (int k = -3; k <= 3; ++k)
-            glare += max(textureLod(u_frame, here + along * float(k) * 0.012, 2.0).rgb - vec3(1.0), 0.0);
-        glare *= smear / 7.0;
+        for (int k = -2; k <= 2; ++k)
+            glare += max(textureLod(u_frame, here + along * float(k) * 0.016, 2.0).rgb - vec3(1.0), 0.0);
+        glare *= smear / 5.0;
     }
-    float alpha = 1.0 - (1.0 - haze) * (1.0 - cover);
-    vec3 color = haze_col * haze * (1.0 - cover) + drop_col * cover + glint + glare;
+    vec3 color = wet_col * cover + glint + glare;
+    float alpha = cover;
 
     vec3 blade_col = vec3(0.012) * sky_ambient(-V) * u_exposure + vec3(0.002) * u_exposure;
     f_color = vec4(mix(color, blade_col, blade), mix(alpha, 1.0, blade));

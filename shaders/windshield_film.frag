@@ -16,21 +16,25 @@ uniform int u_seed;
 in vec2 v_uv;
 out float f_film;
 
-float film_at(vec2 uv) {
-    float f = textureLod(u_film, uv, 0.0).r;
+// The film rescaled to the CPU's cell mean: f·ratio + even, with ratio = min(c/m, 4) and even the rest of the
+// mean (a capped ratio keeps the mean exact without blowing a lone speck up where the texture had almost
+// nothing). Both vary only on the coarse scale, so neighbouring texels share them.
+vec2 rescale(vec2 uv) {
     float m = textureLod(u_film, uv, u_coarse_lod).r;
     float c = texture(u_coarse, uv).r;
-    // Rescale the fine structure to the CPU's cell mean; a ratio capped at 4 plus an even remainder keeps the
-    // mean exact without blowing a lone speck up where the texture had almost nothing.
-    float ratio = m > 1e-6 ? min(c / m, 4.0) : 0.0;
-    return f * ratio + max(c - 4.0 * m, 0.0) * float(m > 1e-6) + c * float(m <= 1e-6);
+    if (m <= 1e-6) return vec2(0.0, c);
+    float ratio = min(c / m, 4.0);
+    return vec2(ratio, max(c - ratio * m, 0.0));
 }
 
 void main() {
-    float f = film_at(v_uv);
-    float lap = film_at(v_uv + vec2(u_texel.x, 0.0)) + film_at(v_uv - vec2(u_texel.x, 0.0))
-              + film_at(v_uv + vec2(0.0, u_texel.y)) + film_at(v_uv - vec2(0.0, u_texel.y)) - 4.0 * f;
-    f = max(f + u_diffusion * lap - u_dry_um, 0.0);
+    vec2 k = rescale(v_uv);
+    float raw = textureLod(u_film, v_uv, 0.0).r;
+    float lap = textureLod(u_film, v_uv + vec2(u_texel.x, 0.0), 0.0).r
+              + textureLod(u_film, v_uv - vec2(u_texel.x, 0.0), 0.0).r
+              + textureLod(u_film, v_uv + vec2(0.0, u_texel.y), 0.0).r
+              + textureLod(u_film, v_uv - vec2(0.0, u_texel.y), 0.0).r - 4.0 * raw;
+    float f = max(k.x * (raw + u_diffusion * lap) + k.y - u_dry_um, 0.0);
     vec2 st = glass_st(v_uv);
     f = mix(f, f * bead_pattern(st), u_bead_mix);
     for (int b = 0; b < 2; ++b) {

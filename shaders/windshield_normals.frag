@@ -10,25 +10,28 @@ uniform vec2 u_texel;
 in vec2 v_uv;
 out vec4 f_water;
 
-float film_at(vec2 uv) {
-    float f = textureLod(u_film, uv, 0.0).r;
+// The film rescaled to the CPU's cell mean (see windshield_film.frag): f·ratio + even.
+vec2 rescale(vec2 uv) {
     float m = textureLod(u_film, uv, u_coarse_lod).r;
     float c = texture(u_coarse, uv).r;
-    // Rescale the fine structure to the CPU's cell mean; a ratio capped at 4 plus an even remainder keeps the
-    // mean exact without blowing a lone speck up where the texture had almost nothing.
-    float ratio = m > 1e-6 ? min(c / m, 4.0) : 0.0;
-    return f * ratio + max(c - 4.0 * m, 0.0) * float(m > 1e-6) + c * float(m <= 1e-6);
+    if (m <= 1e-6) return vec2(0.0, c);
+    float ratio = min(c / m, 4.0);
+    return vec2(ratio, max(c - ratio * m, 0.0));
 }
-float water_mm(vec2 uv) { return textureLod(u_drops, uv, 0.0).r + 1e-3 * film_at(uv); }
+
+float water_mm(vec2 uv, vec2 k) {
+    return textureLod(u_drops, uv, 0.0).r + 1e-3 * (k.x * textureLod(u_film, uv, 0.0).r + k.y);
+}
 
 void main() {
-    float film = film_at(v_uv);
+    vec2 k = rescale(v_uv);  // coarse-scale: shared by the neighbours
+    float film = k.x * textureLod(u_film, v_uv, 0.0).r + k.y;
     float h = textureLod(u_drops, v_uv, 0.0).r + 1e-3 * film;
     vec2 du = vec2(u_texel.x, 0.0), dv = vec2(0.0, u_texel.y);
     float t = v_uv.y * u_glass.z;
     float ds = 2.0 * u_texel.x * glass_width(t) * 1000.0;  // mm between the samples
     float dt = 2.0 * u_texel.y * u_glass.z * 1000.0;
-    float gs = (water_mm(v_uv + du) - water_mm(v_uv - du)) / ds;
-    float gt = (water_mm(v_uv + dv) - water_mm(v_uv - dv)) / dt;
+    float gs = (water_mm(v_uv + du, k) - water_mm(v_uv - du, k)) / ds;
+    float gt = (water_mm(v_uv + dv, k) - water_mm(v_uv - dv, k)) / dt;
     f_water = vec4(h, film, gs, gt);
 }
