@@ -116,6 +116,7 @@ WET_MIN = 0.02  # wetness below this counts as dry in the region view
 
 # Texture units of this effect (DESIGN: effects use units ≥ 4).
 UNIT_HEIGHT, UNIT_MAPS, UNIT_REFLECTION, UNIT_RIPPLES = 4, 5, 6, 7
+UNIT_RAIN_RINGS = 3  # the renderer itself only uses unit 0
 
 
 # --- wet material (NumPy twin of road_wet_material in road_surface.glsl) ---------------------------------
@@ -583,6 +584,14 @@ class RoadEffect(Effect):
         else:
             self._black.use(UNIT_RIPPLES)
             _set(program, "u_road_ripple_window", (0.0, 0.0, 1.0, 0.0))
+        rings = None if self._mirror_pass else rc.resources.get("rain_ripples")
+        _set(program, "u_road_rain_rings", UNIT_RAIN_RINGS)
+        if rings is not None:
+            rings["texture"].use(UNIT_RAIN_RINGS)
+            _set(program, "u_road_rain_rings_tile", (float(rings["tile_m"]), 1.0))
+        else:
+            self._black.use(UNIT_RAIN_RINGS)
+            _set(program, "u_road_rain_rings_tile", (1.0, 0.0))
         _set(program, "u_road_waves", self._waves)
         ego = rc.frame.ego
         if rc.frame.camera.inside_car and ego is not None and not self._mirror_pass:

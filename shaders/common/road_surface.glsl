@@ -15,6 +15,8 @@ uniform sampler2D u_road_reflection;  // unit 6: the mirrored scene, pre-exposed
 uniform vec2 u_road_proj_scale;       // (0.5·P00, 0.5·P11): texture uv per radian near the view axis
 uniform sampler2D u_road_ripples;     // unit 7: ripple slopes RG = (dh/dx, dh/dz), world-anchored square
 uniform vec4 u_road_ripple_window;    // origin x, z (m, wrapped; centre of texel 0), extent (m), 1 if bound
+uniform sampler2D u_road_rain_rings;   // unit 3: tiled raindrop-ring slopes RG (ripples.RainRippleTexture)
+uniform vec2 u_road_rain_rings_tile;   // tile size (m), 1 while it rains
 uniform vec3 u_road_waves;            // drift velocity of the wind waves x, z (m/s); their slope amplitude
 uniform mat4 u_road_cabin;            // wrapped world → ego car local frame (the cabin stays dry)
 uniform vec4 u_road_cabin_box;        // local z of the cowl, floor y, half width (m); w = 1 when inside
@@ -82,6 +84,12 @@ vec2 road_ripple_slope(vec2 xz) {
     vec2 n = vec2(textureSize(u_road_ripples, 0));
     vec2 uv = (t * (n - 1.0) + 0.5) / n;
     return texture(u_road_ripples, uv).rg * smoothstep(0.0, 0.05, edge);
+}
+
+// Raindrop rings on all standing water: the tiled map (the simulated window's own drops are too small to see).
+vec2 road_rain_ring_slope(vec2 xz) {
+    if (u_road_rain_rings_tile.y < 0.5) return vec2(0.0);
+    return texture(u_road_rain_rings, xz / u_road_rain_rings_tile.x).rg;
 }
 
 // --- before lighting ---------------------------------------------------------------------------------------
@@ -208,7 +216,8 @@ vec3 road_water_layer(Surface s, vec3 V, vec3 radiance) {
     float a = g_road_standing;
     vec3 N = s.normal;
     if (a > 0.0) {
-        vec2 slope = (road_wave_slope(s.position.xz) + road_ripple_slope(s.position.xz)) * a;
+        vec2 slope = (road_wave_slope(s.position.xz) + road_ripple_slope(s.position.xz)
+                      + road_rain_ring_slope(s.position.xz)) * a;
         N = normalize(vec3(N.x - slope.x, N.y, N.z - slope.y));  // UDN blend onto the surface normal
     }
     float roughness = mix(FILM_ROUGHNESS, WATER_ROUGHNESS, a);
