@@ -5,18 +5,18 @@ Units: m, s, m/s; drop diameter D in mm, rain rate R in mm/h. World frame +Y up,
 
 Container (nested boxes, denser near the viewer)
 ------------------------------------------------
-Three axis-aligned boxes ("layers") with horizontal half-sizes ``container_m/2 × (¼, ½, 1)``, each centred 0.8
+Four axis-aligned boxes ("layers") with horizontal half-sizes ``container_m/2 × (⅛, ¼, ½, 1)``, each centred 0.8
 half-sizes ahead of the camera along its horizontal view direction (so the camera sits a tenth of the box from
 its back face, where the fade ends and the view begins), from just below the ground to ``TOP_SLOPE × half-size``
 above the eye (about the top of the view frustum at the far face). A box holds the view frustum's slab poorly
 (~40 % of the drops are in view, the rest are the reservoir that falls or drifts into it), but it can be
 refilled exactly when it moves (below). Each layer holds a Poisson process of drops with a uniform density
-n_k = κ·ν_k, ν = (2, 1, 1): the summed density is then ∝ 1/(half-size), i.e. ~1/distance — the drawn streaks
-have about the same opacity near and far (a streak's screen length and width both shrink like 1/distance, its
-area like 1/distance², its weight grows like distance). Membership fades linearly over the outer 20 % of each
-box; a drop's weight divides by the faded summed density, so the weighted density is exact everywhere inside
-the outer box — except in the outer box's own fade, where the streaks fade into the far rain (the atmosphere
-effect's extinction).
+n_k = κ·ν_k; ν is chosen so that the summed density falls as 1/distance² (``PROFILE_EXPONENT``): every layer
+gets about as many drops as the next smaller one twice, so the streaks near the eye — the ones a viewer reads as
+rain — are many and faint rather than few and saturated, while the far ones, sub-pixel and short, are sparser
+and carry more weight each. Membership fades linearly over the outer 20 % of each box; a drop's weight divides
+by the faded summed density, so the weighted density is exact everywhere inside the outer box — except in the
+outer box's own fade, where the streaks fade into the far rain (the atmosphere effect's extinction).
 
 Keeping the container filled (no per-frame work on every drop)
 -------------------------------------------------------------
@@ -105,8 +105,18 @@ PERIOD_M = layout.PERIOD_M  # m, the world repeats along z
 TIME_PERIOD_S = 1024.0  # s, spawn times are stored modulo this on the GPU (every lifetime is far shorter)
 GROUND_Y_M = 0.0  # m, drops end at the road plane (kerbs and sidewalks hide the last 15 cm by depth test)
 BOX_BOTTOM_Y_M = -0.5  # m, the boxes reach just below the ground
-LAYER_SCALES = (0.25, 0.5, 1.0)  # half-size of each layer relative to the outer one
-LAYER_PROFILE = (2.0, 1.0, 1.0)  # ν_k: the summed density ∝ 1 / half-size (see the module docstring)
+LAYER_SCALES = (0.125, 0.25, 0.5, 1.0)  # half-size of each layer relative to the outer one
+PROFILE_EXPONENT = 2.0  # the summed density ∝ half-size^−p (see the module docstring)
+
+
+def _profile(scales, p: float) -> tuple[float, ...]:
+    """ν_k such that Σ_{j ≥ k} ν_j ∝ scale_k^−p, with ν of the outer layer 1."""
+    total = np.asarray(scales, dtype=np.float64) ** -p
+    nu = total - np.append(total[1:], 0.0)
+    return tuple(float(v) for v in nu / nu[-1])
+
+
+LAYER_PROFILE = _profile(LAYER_SCALES, PROFILE_EXPONENT)  # ν_k
 FORWARD_OFFSET = 0.8  # box centre this many half-sizes ahead: the back face fades out just behind the eye
 TOP_SLOPE = 0.8  # box top = eye height + TOP_SLOPE × half-size + TOP_PAD_M
 TOP_PAD_M = 1.0
@@ -1008,21 +1018,26 @@ class RainfallSim:
         self.layer[slots] = lay[idx]
         self._schedule(slots, pos[idx], t, boxes, v_cam)
         upd.spawn_slots = slots
-        upd.spawn_texels = self.texels(slots)
+        upd.spawn_texels = self._pack(pos[idx], u[idx], t, life[idx], d[idx], n_eff / kappa, lay[idx])
 
     def texels(self, slots) -> np.ndarray:
         """The GPU record (n, 3, 4) float32 of slots: (x, y, z mod PERIOD_M, t0 mod TIME_PERIOD_S),
         (u_x, u_y, u_z, lifetime), (D mm, weight, layer, 0)."""
         slots = np.asarray(slots)
-        out = np.zeros((len(slots), 3, 4), dtype=np.float32)
-        out[:, 0, 0:2] = self.pos0[slots, 0:2]
-        out[:, 0, 2] = np.mod(self.pos0[slots, 2], PERIOD_M)
-        out[:, 0, 3] = np.mod(self.t0[slots], TIME_PERIOD_S)
-        out[:, 1, 0:3] = self.vel[slots]
-        out[:, 1, 3] = self.t_hit[slots] - self.t0[slots]
-        out[:, 2, 0] = self.diameter[slots]
-        out[:, 2, 1] = self.weight[slots]
-        out[:, 2, 2] = self.layer[slots]
+        return self._pack(self.pos0[slots], self.vel[slots], self.t0[slots], self.t_hit[slots] - self.t0[slots],
+                          self.diameter[slots], self.weight[slots], self.layer[slots])
+
+    @staticmethod
+    def _pack(pos, vel, t0, life, d, weight, layer) -> np.ndarray:
+        out = np.zeros((len(pos), 3, 4), dtype=np.float32)
+        out[:, 0, 0:2] = pos[:, 0:2]
+        out[:, 0, 2] = np.mod(pos[:, 2], PERIOD_M)
+        out[:, 0, 3] = np.mod(t0, TIME_PERIOD_S)
+        out[:, 1, 0:3] = vel
+        out[:, 1, 3] = life
+        out[:, 2, 0] = d
+        out[:, 2, 1] = weight
+        out[:, 2, 2] = layer
         return out
 
     # --- splashes ---
@@ -1242,7 +1257,8 @@ class RainfallEffect(Effect):
         self.shaders = shaders if shaders is not None else ShaderLibrary(ctx)
         self.settings = settings if settings is not None else Settings()
         self.seed = int(seed)
-        self.streak_prog = self.shaders.program("rainfall_streak.vert", "rainfall_streak.frag")
+        layers = {"LAYERS": len(LAYER_SCALES)}
+        self.streak_prog = self.shaders.program("rainfall_streak.vert", "rainfall_streak.frag", defines=layers)
         self.splash_prog = self.shaders.program("rainfall_splash.vert", "rainfall_splash.frag")
         self.scatter_prog = self.shaders.program("rainfall_scatter.vert", "rainfall_scatter.frag")
         self.env_prog = self.shaders.program("fullscreen.vert", "rainfall_env.frag")

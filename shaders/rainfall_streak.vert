@@ -3,7 +3,9 @@
 // relative to the camera during the exposure. Keep in step with the NumPy twin rainfall.streak_geometry.
 #include "common/rainfall_drop.glsl"
 
-#define LAYERS 3
+#ifndef LAYERS
+#define LAYERS 3  // rainfall.LAYER_SCALES (the effect passes the count)
+#endif
 uniform sampler2D u_state;          // RGBA32F, 3 texels per drop (see RainfallSim.texels)
 uniform int u_drops_per_row;
 uniform vec3 u_cam_vel;             // m/s, world
