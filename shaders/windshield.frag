@@ -10,6 +10,7 @@
 // over the HDR frame.
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
+#include "common/atmosphere.glsl"
 #include "common/windshield_glass.glsl"
 uniform sampler2D u_water;    // unit 12: thickness (mm), film (µm), slope along s, t
 uniform sampler2D u_frame;    // unit 13: the frame without the glass (pre-exposed HDR), mipmapped
@@ -44,9 +45,9 @@ float view_depth(vec2 uv) {
 }
 
 // What a ray leaving the glass at v_pos along dir sees: the frame where it shows the street, else (off screen,
-// or where the frame shows the cabin in front of the glass) the sky and the lit ground.
+// or where the frame shows the cabin in front of the glass) the sky and the lit ground through the rain.
 vec3 behind_glass(vec3 dir, float lod) {
-    vec3 sky = sky_radiance(dir, false) * u_exposure;
+    vec3 sky = apply_sky_atmosphere(sky_radiance(dir, false), dir) * u_exposure;
     vec2 uv = screen_of(v_pos, dir);
     vec2 edge = min(uv, 1.0 - uv);
     float on_screen = smoothstep(0.0, 0.02, min(edge.x, edge.y));

@@ -318,7 +318,7 @@ def test_heavy_rain_overwhelms_a_slow_wiper_more_than_a_fast_one():
         blade = sim.blades[0]
         cells = _in_sector(blade, sim.cell_centres.reshape(-1, 2), 0.0)
         area = sim.cell_areas.ravel()[cells].sum()
-        inputs = GlassInputs.for_speed(80.0, 16.0, wiper_mode=mode, drop_budget=1500)
+        inputs = GlassInputs.for_speed(60.0, 8.0, wiper_mode=mode, drop_budget=1500)
         samples = []
         for k in range(8 * 30):
             sim.step(1 / 30, inputs)
@@ -327,7 +327,7 @@ def test_heavy_rain_overwhelms_a_slow_wiper_more_than_a_fast_one():
                 samples.append((drops + sim.film.ravel()[cells].sum() + sim.beads[0].sum()) / area)
         return float(np.mean(samples))
 
-    assert water_in_view("low") > 1.2 * water_in_view("high")
+    assert water_in_view("low") > 1.5 * water_in_view("high")
 
 
 # --- settings -----------------------------------------------------------------------------------------------
