@@ -160,8 +160,8 @@ def _plot(path, cpu_rows, res_rows, drop_rows) -> None:
     d = ImageDraw.Draw(img)
     panels = [
         (20, "CPU ms/frame vs drops (log-log)"),
-        (340, "error vs GPU ms (resolutions)"),
-        (660, "GPU ms vs drops (512²)"),
+        (340, "frame RMS error vs GPU ms (log y)"),
+        (660, "GPU ms vs drops (512 px texture)"),
     ]
     for x0, title in panels:
         d.rectangle([x0 + 30, 40, x0 + 290, 320], outline=(0, 0, 0))
@@ -185,6 +185,8 @@ def _plot(path, cpu_rows, res_rows, drop_rows) -> None:
             d.text((60, 50 + 14 * j), label, fill=color)
         for c, x in zip(counts, xs, strict=True):
             d.text((x - 10, 322), str(c), fill=(0, 0, 0))
+        d.text((22, 42), f"{max(all_ms):.1f} ms", fill=(0, 0, 0))
+        d.text((22, 300), f"{min(all_ms):.1f} ms", fill=(0, 0, 0))
     if res_rows:
         ms = [r[1] for r in res_rows]
         err = [max(r[2], 1e-4) for r in res_rows]
@@ -192,7 +194,10 @@ def _plot(path, cpu_rows, res_rows, drop_rows) -> None:
         d.line(list(zip(xs.tolist(), ys.tolist(), strict=True)), fill=colors[1], width=2)
         for r, x, y in zip(res_rows, xs, ys, strict=True):
             d.ellipse([x - 3, y - 3, x + 3, y + 3], fill=colors[0])
-            d.text((x + 4, y - 12), f"{r[0]}²", fill=(0, 0, 0))
+            ref = " (reference)" if r[2] == 0 else f" {r[2]:.3f}"
+            d.text((x + 4, y - 12), f"{r[0]} px{ref}", fill=(0, 0, 0))
+        d.text((372, 322), f"{min(ms):.0f} ms", fill=(0, 0, 0))
+        d.text((580, 322), f"{max(ms):.0f} ms", fill=(0, 0, 0))
     if drop_rows:
         xs = scale([r[0] for r in drop_rows], 710, 940)
         ys = scale([r[1] for r in drop_rows], 310, 50)
