@@ -43,7 +43,7 @@ class RainroadApp:
         self.wnd = wnd
         self.ctx = wnd.ctx
         self.screenshot_dir = screenshot_dir
-        self.scene = Scene(self.ctx, wnd.buffer_size, settings=settings, seed=seed)
+        self.scene = Scene(self.ctx, self.render_size(settings), settings=settings, seed=seed)
         self.driver = KeyboardDriver()
         self.cameras = CameraModes(settings.camera.mode)
         self.panel = RainManagerPanel(self.ctx, wnd.size, self.scene, framebuffer_size=wnd.buffer_size)
@@ -61,6 +61,12 @@ class RainroadApp:
         wnd.mouse_release_event_func = layer.mouse_release_event
         wnd.mouse_scroll_event_func = layer.mouse_scroll_event
         wnd.unicode_char_entered_func = layer.unicode_char_entered
+
+    def render_size(self, settings=None) -> tuple[int, int]:
+        """The internal frame size: the window's pixels × quality.render_scale (presented scaled to the window)."""
+        scale = (settings or self.scene.settings).quality.render_scale
+        width, height = self.wnd.buffer_size
+        return max(16, round(width * scale)), max(16, round(height * scale))
 
     def key_event(self, key, action, modifiers):
         self.panel.layer.key_event(key, action, modifiers, keys=self.wnd.keys)
@@ -85,7 +91,7 @@ class RainroadApp:
 
     def resize(self, width, height):
         self.panel.layer.resize(self.wnd.size, self.wnd.buffer_size)
-        self.scene.renderer.resize(self.wnd.buffer_size)
+        self.scene.renderer.resize(self.render_size())
 
     def screenshot(self) -> Path:
         stamp = datetime.now().strftime("%Y%m%d-%H%M%S-%f")
@@ -103,6 +109,8 @@ class RainroadApp:
             drive = None  # the keys fly the camera; the car keeps its lane on autopilot
         else:
             drive = None if self.driver.autopilot else self.driver.update(dt, ego.speed_m_s)
+        if self.render_size() != self.scene.renderer.size:  # quality.render_scale changed in the panel
+            self.scene.renderer.resize(self.render_size())
         self.scene.step(dt, drive)
         self.scene.settings.camera.mode = self.cameras.mode
         camera = self.cameras.camera(ego, DRIVER_EYE_LOCAL, self.scene.last_dt_s, self.scene.settings.camera.fov_deg)

@@ -21,6 +21,7 @@ from rain_core.settings import Settings
 from rain_core.spray import make_spray
 from rain_core.vehicles import Autopilot, EgoCar, Traffic
 from rain_core.weather import Weather
+from rain_core.windshield import make_windshield
 from rain_core.world import build_world
 
 MAX_FRAME_DT_S = 0.25  # s; a longer stall (debugger, window drag) is simulated as this much time
@@ -31,7 +32,7 @@ def default_effects(ctx, settings, seed: int = 0) -> list:
     for what they share through ``rc.resources``: the road publishes the film depth, the spray its droplets
     landing in water, and ripples read both."""
     return [make_road(ctx, settings), make_spray(ctx, settings), RipplesEffect(ctx, settings, seed=seed),
-            make_atmosphere(ctx, settings)]
+            make_atmosphere(ctx, settings), make_windshield(ctx, settings, seed=seed)]
 
 
 class Scene:

@@ -1162,6 +1162,10 @@ class WindshieldEffect(Effect):
         elif stage == "overlay":
             self._draw_glass(rc)
 
+    def describe(self) -> str:
+        st = self.status()
+        return f"{st['drops']} drops, {st['water_g']:.1f} g on the glass, {st['wipe_cycles']} wipes"
+
     def status(self) -> dict:
         """Numbers for the Rain Manager: drops, water on the glass (g), wiper cycles, sensor (g/m²)."""
         sim = self.sim
