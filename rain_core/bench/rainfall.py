@@ -274,7 +274,8 @@ def main(argv: list[str] | None = None) -> int:
         f"## Frame cost against the particle budget (heavy rain 8 mm/h, driver view, {size[0]}×{size[1]})",
         "Wall time to `ctx.finish()` of the streak pass (instanced quads, positions from the drop state texture), "
         "the CPU update (spawning, retiring, uploads) and the whole frame. `R = 0`: the effect is inactive — no "
-        "update, no pass. On llvmpipe only the ratios mean something.",
+        "update, no pass (the car's headlights also stay off then, so the dry frame's scene pass is cheaper). "
+        "On llvmpipe only the ratios mean something.",
         markdown_table(["budget", "live drops", "pass", "update CPU ms", "streak pass ms", "frame ms",
                         "pass / dry frame"], gpu_rows),
         "## Drawn density against the physical density, in the view",
