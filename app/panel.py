@@ -23,8 +23,8 @@ SECTIONS = (
     ("time_of_day", "Time of day"), ("traffic", "Traffic"), ("quality", "Quality"), ("ripples", "Ripples"),
     ("rainfall", "Rainfall"), ("spray", "Spray"), ("windshield", "Windshield"), ("atmosphere", "Atmosphere"),
 )
-WIRED = {"rain", "road", "wind", "wipers", "camera", "time_of_day", "traffic", "quality", "ripples", "spray",
-         "windshield", "atmosphere"}
+WIRED = {"rain", "road", "wind", "wipers", "camera", "time_of_day", "traffic", "quality", "ripples", "rainfall",
+         "spray", "windshield", "atmosphere"}
 # Fields the generic widgets should not show (edited by dedicated widgets).
 CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks", "rain.puddles"}
 LOG_FIELDS = {"rain.time_scale"}

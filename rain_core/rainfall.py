@@ -1290,6 +1290,12 @@ class RainfallEffect(Effect):
 
     # --- settings and resources ---
 
+    def describe(self) -> str:
+        upd = self.last_update
+        if upd is None:
+            return ""
+        return f"{self.sim.live} drops alive, {len(upd.spawn_slots)} spawned, {upd.rejected} under roofs"
+
     def _settings(self, frame):
         return frame.settings if frame.settings is not None else self.settings
 

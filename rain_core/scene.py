@@ -14,6 +14,7 @@ from rain_core.atmosphere import make_atmosphere, sky_overcast
 from rain_core.camera import Camera, ChaseRig, driver_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.lighting import lighting_for_hour
+from rain_core.rainfall import make_rainfall
 from rain_core.renderer import Frame, Renderer
 from rain_core.ripples import RipplesEffect
 from rain_core.road import make_road
@@ -32,7 +33,8 @@ def default_effects(ctx, settings, seed: int = 0) -> list:
     for what they share through ``rc.resources``: the road publishes the film depth, the spray its droplets
     landing in water, and ripples read both."""
     return [make_road(ctx, settings), make_spray(ctx, settings), RipplesEffect(ctx, settings, seed=seed),
-            make_atmosphere(ctx, settings), make_windshield(ctx, settings, seed=seed)]
+            make_rainfall(ctx, settings, seed=seed), make_atmosphere(ctx, settings),
+            make_windshield(ctx, settings, seed=seed)]
 
 
 class Scene:
