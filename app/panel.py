@@ -14,7 +14,7 @@ from imgui_bundle import imgui
 
 from app.imgui_layer import ImGuiLayer
 from rain_core import physics
-from rain_core.settings import SettingsError, all_fields, apply_rain_preset, get_value, set_value
+from rain_core.settings import SettingsError, all_fields, apply_rain_preset, field_info, get_value, set_value
 
 # The sections in panel order: (settings section or None, title). A section is "wired" when an effect or the
 # scene reads it; the others show what will arrive instead of controls that would do nothing.
@@ -28,6 +28,11 @@ WIRED = {"rain", "road", "wind", "wipers", "camera", "time_of_day", "traffic", "
 # Fields the generic widgets should not show (edited by dedicated widgets).
 CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks", "rain.puddles"}
 LOG_FIELDS = {"rain.time_scale"}
+# Settings that live in one section but belong on another effect's controls too (issue wording: the Ripples
+# section has the grid resolution, Rainfall the budget and exposure, Windshield the texture resolution).
+EXTRA_FIELDS = {"ripples": ("quality.ripple_grid",),
+                "rainfall": ("quality.particle_budget", "camera.exposure_s"),
+                "windshield": ("quality.windshield_resolution",)}
 
 
 UNIT_SUFFIXES = ("_mm_h", "_m_s", "_per_km", "_deg", "_s", "_m")
@@ -67,13 +72,13 @@ class RainManagerPanel:
         except SettingsError as exc:
             self.errors[path] = str(exc)
 
-    def _field_widget(self, info) -> None:
+    def _field_widget(self, info, id_suffix: str = "") -> None:
         settings = self.scene.settings
         value = get_value(settings, info.path)
-        label = field_label(info)
+        label = field_label(info) + id_suffix  # "##…" keeps ImGui ids unique when a field shows twice
         if info.optional:
             auto = value is None
-            changed, auto = imgui.checkbox(f"auto##{info.path}", auto)
+            changed, auto = imgui.checkbox(f"auto##{info.path}{id_suffix}", auto)
             if changed:
                 self._set(info.path, None if auto else float(info.default if info.default is not None else 0.0))
             imgui.same_line()
@@ -213,6 +218,8 @@ class RainManagerPanel:
             for info in self.fields.get(section, []):
                 if info.path not in CUSTOM_FIELDS:
                     self._field_widget(info)
+            for path in EXTRA_FIELDS.get(section, ()):
+                self._field_widget(field_info(path), id_suffix=f"##{section}")
             if section == "spray":
                 self._spray_section()
             elif section == "ripples":
