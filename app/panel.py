@@ -86,6 +86,7 @@ class RainManagerPanel:
                 imgui.text_disabled(label)
                 return
             value = get_value(settings, info.path)
+            imgui.set_next_item_width(140)  # leave room for the label after the progress bar and checkbox
         if info.kind == "bool":
             changed, new = imgui.checkbox(label, bool(value))
         elif info.kind == "str" and info.choices:
