@@ -30,6 +30,12 @@ from rain_core.gl import PassTimer, RenderTarget, ShaderLibrary, float_target
 from rain_core.lighting import Lighting, lights_for_frame, pack_lights
 from rain_core.mesh import VERTEX_ATTRIBUTES, VERTEX_FORMAT
 
+# Sun shadows: one map around the camera, texel-snapped so edges do not crawl as the car moves.
+SHADOW_SIZE = 2048  # px
+SHADOW_HALF_M = 80.0  # m, half the side of the square the map covers
+SHADOW_DEPTH_M = 500.0  # m, depth range along the sun's rays
+SHADOW_UNIT = 2  # texture unit (the renderer's own: 0–3)
+
 # Share of direct sun/lamp light that reaches the cabin interior (the roof and pillars shade most of it).
 CABIN_DIRECT_LIGHT = 0.2
 
@@ -151,6 +157,7 @@ class RenderContext:
                                 else lighting.sky_horizon),
             "u_light_count": self.lights[3],
             **self.renderer.medium_uniforms,
+            **self.renderer.shadow_uniforms,
         }
         for name, value in values.items():
             if name in program:
@@ -161,6 +168,15 @@ class RenderContext:
         for name, data in zip(("u_light_pos", "u_light_dir", "u_light_color"), self.lights[:3], strict=True):
             if name in program:
                 program[name].write(data)
+
+
+@dataclass
+class GpuMesh:
+    """A VERTEX_DTYPE mesh on the GPU: one VAO for the lit scene shader, one for the shadow depth pass."""
+
+    vao: moderngl.VertexArray
+    depth_vao: moderngl.VertexArray
+    count: int
 
 
 def _mat(m: np.ndarray) -> bytes:
@@ -197,6 +213,13 @@ class Renderer:
         self._make_targets()
 
         self.scene_prog = self.shaders.program("scene.vert", "scene.frag")
+        self.shadow_prog = self.shaders.program("shadow.vert", "shadow.frag")
+        self.shadow_depth = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
+        self.shadow_depth.compare_func = "<="
+        self.shadow_depth.filter = (moderngl.LINEAR, moderngl.LINEAR)  # hardware 2×2 PCF per tap
+        self.shadow_depth.repeat_x = self.shadow_depth.repeat_y = False
+        self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_depth)
+        self.shadow_uniforms: dict = {"u_shadow_params": (0.0, 0.0, 0.0), "u_shadow_map": SHADOW_UNIT}
         self.sky_prog = self.shaders.program("fullscreen.vert", "sky.frag")
         self.tonemap_prog = self.shaders.program("fullscreen.vert", "tonemap.frag")
         self.blit_prog = self.shaders.program("fullscreen.vert", "blit.frag")
@@ -204,8 +227,8 @@ class Renderer:
         self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._world_vao = self._vao(world.vertices)
-        self._vehicle_vaos: dict[int, tuple[moderngl.VertexArray, int]] = {}
-        self._cabin: list[tuple[moderngl.VertexArray, int, float]] | None = None
+        self._vehicle_vaos: dict[int, GpuMesh] = {}
+        self._cabin: list[tuple[GpuMesh, float]] | None = None
         self._timers: dict[str, PassTimer] = {}
 
     def _make_targets(self):
@@ -227,10 +250,11 @@ class Renderer:
         self._make_targets()
 
     # --- geometry -------------------------------------------------------------------------------------------
-    def _vao(self, vertices: np.ndarray) -> tuple[moderngl.VertexArray, int]:
+    def _vao(self, vertices: np.ndarray) -> GpuMesh:
         vbo = self.ctx.buffer(np.ascontiguousarray(vertices).tobytes())
         vao = self.ctx.vertex_array(self.scene_prog, [(vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
-        return vao, len(vertices)
+        depth_vao = self.ctx.vertex_array(self.shadow_prog, [(vbo, "3f 36x", "in_position")])
+        return GpuMesh(vao, depth_vao, len(vertices))
 
     def _vehicle_vao(self, vehicle):
         key = id(vehicle)
@@ -242,15 +266,15 @@ class Renderer:
         return self._vehicle_vaos[key]
 
     def _cabin_vaos(self, ego):
-        """The cabin as (vao, count, direct-light share): painted outside parts (hood, mirrors) get full direct
-        light, the interior the share its roof lets in."""
+        """The cabin as (mesh, direct-light share): painted outside parts (hood, mirrors) get full direct light,
+        the interior the share its roof lets in."""
         if self._cabin is None:
             from rain_core.car_mesh import cabin_mesh
             from rain_core.mesh import MAT_CAR_PAINT
 
             vertices = cabin_mesh(ego.spec)
             outside = np.round(vertices["params"][:, 2]) == MAT_CAR_PAINT
-            self._cabin = [(*self._vao(part), share) for part, share in
+            self._cabin = [(self._vao(part), share) for part, share in
                            ((vertices[outside], 1.0), (vertices[~outside], CABIN_DIRECT_LIGHT)) if len(part)]
         return self._cabin
 
@@ -279,7 +303,6 @@ class Renderer:
 
         Effects reuse this for auxiliary views (e.g. a mirrored camera for reflections)."""
         ctx = self.ctx
-        frame = rc.frame
         ctx.disable(moderngl.BLEND)
         if include_sky:
             ctx.disable(moderngl.DEPTH_TEST)
@@ -288,6 +311,7 @@ class Renderer:
             self._sky_vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable(moderngl.DEPTH_TEST)
         prog = self.scene_prog
+        self.shadow_depth.use(SHADOW_UNIT)  # re-bound per draw: a GPU simulation may have used the unit
         rc.set_frame_uniforms(prog)
         # Clip plane (reflection passes): keep dot((x, y, z, 1), plane) >= 0, wrapped-frame world positions.
         prog["u_clip_plane"].value = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
@@ -298,35 +322,73 @@ class Renderer:
                 effect.bind_scene(prog, rc)
             else:
                 effect.unbind_scene(prog, rc)
+        for mesh, model, share in self._draw_list(rc, include_cabin=True):
+            prog["u_model"].write(_mat(model))
+            prog["u_direct_scale"].value = share
+            mesh.vao.render(moderngl.TRIANGLES, vertices=mesh.count)
+        prog["u_direct_scale"].value = 1.0
+        if clip_plane is not None:
+            ctx.disable_direct(GL_CLIP_DISTANCE0)
+
+    def _draw_list(self, rc: RenderContext, include_cabin: bool):
+        """(mesh, model matrix in the wrapped frame, direct-light share) of everything opaque in the frame."""
+        frame = rc.frame
         cam_z = rc.camera_position[2]
-        world_vao, world_n = self._world_vao
         for k in (-1, 0, 1):
             offset = k * layout.PERIOD_M
             if abs(cam_z - (offset + layout.PERIOD_M / 2)) > layout.PERIOD_M * 1.5:
                 continue
             model = np.eye(4)
             model[2, 3] = offset
-            prog["u_model"].write(_mat(model))
-            world_vao.render(moderngl.TRIANGLES, vertices=world_n)
+            yield self._world_vao, model, 1.0
         inside = frame.camera.inside_car
         for vehicle in frame.vehicles:
-            if inside and vehicle is frame.ego:
+            if inside and include_cabin and vehicle is frame.ego:
                 continue
             model = vehicle.model_matrix().copy()
             model[2, 3] -= rc.shift_z
-            prog["u_model"].write(_mat(model))
-            vao, n = self._vehicle_vao(vehicle)
-            vao.render(moderngl.TRIANGLES, vertices=n)
-        if inside and frame.ego is not None:
+            yield self._vehicle_vao(vehicle), model, 1.0
+        if inside and include_cabin and frame.ego is not None:
             model = frame.ego.model_matrix().copy()
             model[2, 3] -= rc.shift_z
-            prog["u_model"].write(_mat(model))
-            for vao, n, share in self._cabin_vaos(frame.ego):
-                prog["u_direct_scale"].value = share
-                vao.render(moderngl.TRIANGLES, vertices=n)
-            prog["u_direct_scale"].value = 1.0
-        if clip_plane is not None:
-            ctx.disable_direct(GL_CLIP_DISTANCE0)
+            for mesh, share in self._cabin_vaos(frame.ego):
+                yield mesh, model, share
+
+    def _shadow_pass(self, rc: RenderContext) -> None:
+        """Depth of the world and the vehicles seen from the sun, over a square around the camera."""
+        ctx = self.ctx
+        light = rc.frame.lighting
+        sun = np.asarray(light.sun_direction, dtype=np.float64)
+        r, u, f = rc.frame.camera.basis()
+        ahead = np.array([f[0], 0.0, f[2]])
+        ahead /= max(np.linalg.norm(ahead), 1e-9)
+        center = rc.camera_position + ahead * SHADOW_HALF_M * 0.6
+        up = np.array([0.0, 0.0, 1.0]) if abs(sun[1]) > 0.99 else np.array([0.0, 1.0, 0.0])
+        lx = np.cross(up, sun)
+        lx /= np.linalg.norm(lx)
+        ly = np.cross(sun, lx)
+        texel = 2.0 * SHADOW_HALF_M / SHADOW_SIZE
+        for axis in (lx, ly):  # snap the centre to whole texels across the light's view
+            c = float(center @ axis)
+            center = center + (round(c / texel) * texel - c) * axis
+        eye = center + sun * SHADOW_DEPTH_M * 0.5
+        view = np.eye(4)
+        view[0, :3], view[1, :3], view[2, :3] = lx, ly, sun
+        view[:3, 3] = -view[:3, :3] @ eye
+        proj = np.diag([1.0 / SHADOW_HALF_M, 1.0 / SHADOW_HALF_M, -2.0 / SHADOW_DEPTH_M, 1.0])
+        proj[2, 3] = -1.0  # z_view in [−depth, 0] → NDC [1, −1]... nearest to the sun at −1
+        light_view_proj = proj @ view
+        self.shadow_fbo.use()
+        self.shadow_fbo.clear(depth=1.0)
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.disable(moderngl.BLEND)
+        self.shadow_prog["u_light_view_proj"].write(_mat(light_view_proj))
+        for mesh, model, _share in self._draw_list(rc, include_cabin=False):
+            self.shadow_prog["u_model"].write(_mat(model))
+            mesh.depth_vao.render(moderngl.TRIANGLES, vertices=mesh.count)
+        to_texture = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
+        self.shadow_uniforms = {"u_shadow_matrix": _mat(to_texture @ light_view_proj), "u_shadow_map": SHADOW_UNIT,
+                                "u_shadow_params": (1.0, 1.0 / SHADOW_SIZE, 0.06 / SHADOW_DEPTH_M)}
 
     def render(self, frame: Frame) -> None:
         """Run every pass of one frame into the HDR target and tone-map it."""
@@ -342,6 +404,11 @@ class Renderer:
         for effect in active:
             self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
             self.stats[-1].note = effect.describe()
+        if frame.lighting.sun_direction[1] > 0.0 and float(np.max(frame.lighting.sun_illuminance)) > 0.0:
+            self._timed("shadow", lambda: self._shadow_pass(rc))
+        else:  # the sun is down: nothing casts a sun shadow
+            self.shadow_uniforms = {"u_shadow_params": (0.0, 0.0, 0.0), "u_shadow_map": SHADOW_UNIT}
+            self.stats.append(PassStat("shadow", False))
         for effect in active:
             if "prepare" in effect.stages:
                 self._timed(f"{effect.name}.prepare", lambda e=effect: e.render("prepare", rc))
@@ -404,6 +471,8 @@ class Renderer:
         self.ctx.detect_framebuffer(0).use()  # never leave a released framebuffer bound
         self.ldr.release()
         self.ldr_color.release()
+        self.shadow_fbo.release()
+        self.shadow_depth.release()
 
 
 def frame_time_ms(stats: list[PassStat]) -> float:

@@ -91,3 +91,26 @@ def test_bad_dt_is_rejected_and_huge_dt_is_clamped(gl_ctx):
     scene.render()
     assert np.isfinite(scene.renderer.hdr_image()).all()
     scene.release()
+
+
+def test_sun_shadows_darken_the_road_under_the_bridge_and_skip_at_night(gl_ctx):
+    from rain_core import layout
+    from rain_core.camera import look_at
+
+    scene = make_scene(gl_ctx, hour=12.0)
+    scene.step(1 / 30)
+
+    def road_luminance(z):
+        scene.render(look_at((3.0, 2.5, z), (3.0, 0.0, z - 0.5), fov_y_deg=30))
+        return float(scene.renderer.hdr_image()[30:42, 58:70].mean())
+
+    under = road_luminance(layout.BRIDGE_Z_M)
+    open_road = road_luminance(layout.BRIDGE_Z_M + 120.0)
+    assert under < 0.5 * open_road
+    assert {n: r for n, r, *_ in scene.renderer.pass_table()}["shadow"] is True
+    scene.release()
+    night = make_scene(gl_ctx, hour=23.0)
+    night.step(1 / 30)
+    night.render()
+    assert {n: r for n, r, *_ in night.renderer.pass_table()}["shadow"] is False
+    night.release()

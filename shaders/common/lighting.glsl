@@ -11,6 +11,23 @@ uniform int u_light_count;
 // (the scene has no shadow maps).
 uniform float u_direct_scale = 1.0;
 
+// Sun shadow map (renderer.py): depth seen from the sun around the camera, compared in hardware.
+uniform sampler2DShadow u_shadow_map;
+uniform mat4 u_shadow_matrix;   // wrapped world → shadow map [0, 1]³
+uniform vec3 u_shadow_params;   // on (1/0), texel size (1/px), depth bias
+
+// Share of the sun's disc visible from p (3×3 PCF); 1 outside the map or with shadows off.
+float sun_visibility(vec3 p, vec3 N) {
+    if (u_shadow_params.x < 0.5) return 1.0;
+    vec3 q = (u_shadow_matrix * vec4(p + N * 0.05, 1.0)).xyz;  // normal offset against acne
+    if (any(lessThan(q, vec3(0.0))) || any(greaterThan(q, vec3(1.0)))) return 1.0;
+    float lit = 0.0;
+    for (int i = -1; i <= 1; ++i)
+        for (int j = -1; j <= 1; ++j)
+            lit += texture(u_shadow_map, vec3(q.xy + vec2(i, j) * u_shadow_params.y, q.z - u_shadow_params.z));
+    return lit / 9.0;
+}
+
 struct Surface {
     vec3 position;   // m, world (wrapped frame)
     vec3 normal;
@@ -40,7 +57,8 @@ vec3 shade_surface(Surface s, vec3 V) {
     vec3 N = s.normal;
     vec3 f0 = mix(vec3(s.f0), s.albedo, s.metallic);
     vec3 diffuse_color = s.albedo * (1.0 - s.metallic);
-    vec3 color = brdf_direct(N, V, u_sun_dir, diffuse_color, f0, s.roughness) * u_sun_illum;
+    vec3 color = brdf_direct(N, V, u_sun_dir, diffuse_color, f0, s.roughness) * u_sun_illum
+                 * sun_visibility(s.position, N);
     for (int i = 0; i < u_light_count; ++i) {
         vec3 d = u_light_pos[i].xyz - s.position;
         float dist2 = dot(d, d);
