@@ -45,13 +45,25 @@ def from_trimesh(mesh, albedo, roughness: float = 0.8, metallic: float = 0.0, ma
     out = np.zeros(len(faces) * 3, dtype=VERTEX_DTYPE)
     out["position"] = verts[faces].reshape(-1, 3)
     if smooth:
-        out["normal"] = np.asarray(mesh.vertex_normals)[faces].reshape(-1, 3)
+        out["normal"] = vertex_normals(verts, faces)[faces].reshape(-1, 3)
     else:
         out["normal"] = np.repeat(np.asarray(mesh.face_normals), 3, axis=0)
     albedo = np.asarray(albedo, dtype=np.float32)
     out["albedo"] = np.repeat(albedo, 3, axis=0) if albedo.ndim == 2 else albedo
     out["params"] = (roughness, metallic, float(material))
     return out
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals (unit). NumPy only: trimesh's own needs scipy, which we do not depend on
+    (without it trimesh logs a traceback per mesh and falls back to a slow loop)."""
+    tri = vertices[faces]
+    face_n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])  # length = 2 × area
+    acc = np.zeros_like(vertices, dtype=np.float64)
+    for k in range(3):
+        np.add.at(acc, faces[:, k], face_n)
+    length = np.linalg.norm(acc, axis=1, keepdims=True)
+    return np.where(length > 0, acc / np.maximum(length, 1e-300), np.array([0.0, 1.0, 0.0]))
 
 
 def concat(parts) -> np.ndarray:
