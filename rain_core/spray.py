@@ -952,8 +952,11 @@ def _lognormal(rng, median: float, sigma: float, lo: float, hi: float, n: int) -
 # Side and bow waves leave as sheets that break into large drops, so they carry the largest sizes.
 _DROPLET_SIZES = {0: (0.25, 0.35, 0.1, SPRAY_MAX_MM), 1: (0.25, 0.35, 0.1, SPRAY_MAX_MM),
                   2: (1.5, 0.3, SPLASH_MIN_MM, 3.0), 3: (3.0, 0.35, 1.5, 5.0), 4: (3.0, 0.35, 1.5, 5.0)}
-# A spray parcel is a small cloud; a splash parcel a few large drops, drawn as a thin streak.
-_DROPLET_SIGMA0_M = {0: 0.03, 1: 0.03, 2: 0.02, 3: 0.025, 4: 0.025}
+# A spray parcel is a small cloud; a splash parcel a few large drops. Each parcel stands for many drops that
+# leave the tyre spread over several centimetres; at 2–3 cm the parcels drew as separate white "bricks" smeared
+# over the exposure, at 5–8 cm they merge into a cloud. The optical depth is the parcel's extinction area over
+# its footprint, so the size does not change how much the spray hides.
+_DROPLET_SIGMA0_M = {0: 0.075, 1: 0.075, 2: 0.05, 3: 0.06, 4: 0.06}
 # Growth of the parcel (m) per metre it travels relative to the air: the spread of its drops' speeds.
 _DROPLET_SPREAD = {0: 0.05, 1: 0.05, 2: 0.04, 3: 0.04, 4: 0.04}
 
