@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from app.cli import parse_args
-from rain_core.settings import Settings, load_scenario, preset_settings, set_value
+from rain_core.settings import Settings, apply_rain_preset, load_scenario, preset_settings, set_value
 
 # Flag → settings field it sets; every value passes the settings validation.
 FLAG_FIELDS = {"--rain-rate": ("rain_rate", "rain.rate_mm_h"), "--hour": ("hour", "time_of_day.hour"),
@@ -22,7 +22,9 @@ def settings_from_args(args) -> Settings:
     except (OSError, ValueError) as exc:
         fail(f"argument --scenario: {exc}")
     try:
-        if args.preset is not None:
+        if args.preset is not None and args.scenario is not None:
+            apply_rain_preset(settings, args.preset)  # the scenario keeps everything but the rain
+        elif args.preset is not None:
             settings = preset_settings(args.preset)
     except (OSError, ValueError) as exc:
         fail(f"argument --preset: {exc}")

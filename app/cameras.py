@@ -51,8 +51,16 @@ class CameraModes:
         self.free = FreeFly()
 
     def cycle(self, car=None):
-        self.mode = MODES[(MODES.index(self.mode) + 1) % len(MODES)]
-        if self.mode == "free" and car is not None:  # start free-fly where the chase camera was
+        self.set_mode(MODES[(MODES.index(self.mode) + 1) % len(MODES)], car)
+
+    def set_mode(self, mode: str, car=None):
+        """Switch camera (from the C key or the panel); free-fly starts behind the car, not where it was left."""
+        if mode not in MODES:
+            raise ValueError(f"camera mode must be one of {MODES}, got {mode!r}")
+        if mode == self.mode:
+            return
+        self.mode = mode
+        if mode == "free" and car is not None:
             self.free.position = car.position - car.forward() * 8.0 + np.array([0.0, 3.0, 0.0])
             self.free.yaw = getattr(car, "yaw", 0.0)
         self.chase.reset()

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 CAMERA_MODES = ("driver", "chase", "free")
+WINDOW_BACKENDS = ("pyglet", "glfw", "sdl2", "pygame2", "pyqt5", "pyside2", "tk", "headless")
 MAX_SIZE = 8192
 
 
@@ -67,8 +68,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rain-rate", type=_finite(0.0, 500.0, "mm/h"), help="rain rate in mm/h")
     p.add_argument("--panel", action="store_true", help="headless: draw the Rain Manager panel into the frames")
     p.add_argument("--frames", type=_int_in(1, 10**9), help="window: close after this many frames (smoke tests)")
-    p.add_argument("--window", default="pyglet", help="moderngl-window backend for the window (pyglet, glfw, ...)")
+    p.add_argument("--window", default="pyglet", choices=WINDOW_BACKENDS,
+                   help="moderngl-window backend for the window")
     return p
+
+
+def _check_folder(parser, flag: str, folder: Path) -> None:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        parser.error(f"argument {flag}: cannot create folder {folder}: {exc.strerror or exc}")
 
 
 def parse_args(argv=None) -> argparse.Namespace:
@@ -79,5 +88,14 @@ def parse_args(argv=None) -> argparse.Namespace:
         parser.error("argument --screenshot/--record: only with --headless (press F12 in the window instead)")
     if args.scenario is not None and not args.scenario.is_file():
         parser.error(f"argument --scenario: no such file: {args.scenario}")
+    # Output paths are checked before minutes of rendering, not after.
+    if args.screenshot is not None:
+        if args.screenshot.suffix.lower() != ".png":
+            parser.error(f"argument --screenshot: must end in .png, got {args.screenshot}")
+        _check_folder(parser, "--screenshot", args.screenshot.parent)
+    if args.record is not None:
+        if args.record.exists() and not args.record.is_dir():
+            parser.error(f"argument --record: {args.record} exists and is not a folder")
+        _check_folder(parser, "--record", args.record)
     args.parser = parser
     return args

@@ -21,16 +21,20 @@ class KeyboardDriver:
     RETURN_RATE_PER_S = 4.0
 
     def __init__(self):
-        self.held: set[str] = set()
+        self._keys: dict[object, str] = {}  # physical key → action ("up", …): W and ↑ both mean "up"
         self.state = DriveInput()
         self.autopilot = True  # until the user touches a driving key
 
-    def press(self, name: str):
-        self.held.add(name)
+    @property
+    def held(self) -> set[str]:
+        return set(self._keys.values())
+
+    def press(self, name: str, key: object = None):
+        self._keys[name if key is None else key] = name
         self.autopilot = False
 
-    def release(self, name: str):
-        self.held.discard(name)
+    def release(self, name: str, key: object = None):
+        self._keys.pop(name if key is None else key, None)
 
     def update(self, dt_s: float, speed_m_s: float) -> DriveInput:
         dt_s = min(max(dt_s, 0.0), 0.1) if math.isfinite(dt_s) else 0.0

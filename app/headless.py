@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import math
 import sys
 
 from app.recording import Recorder, save_png
 from rain_core.gl import GLUnavailableError, create_headless_context
-from rain_core.scene import Scene
+from rain_core.scene import MAX_FRAME_DT_S, Scene
 
 
 def run_headless(args, settings) -> int:
@@ -24,8 +25,10 @@ def run_headless(args, settings) -> int:
     recorder = Recorder(args.record) if args.record else None
     dt = 1.0 / args.fps
     frames = max(1, round(args.seconds * args.fps))
+    substeps = max(1, math.ceil(dt / MAX_FRAME_DT_S))  # Scene.step clamps a frame to MAX_FRAME_DT_S
     for index in range(frames):
-        scene.step(dt)
+        for _ in range(substeps):
+            scene.step(dt / substeps)
         # Effects keep GPU state (ripples, glass water), so every simulated frame is rendered.
         scene.render()
         if panel is not None:
@@ -37,5 +40,7 @@ def run_headless(args, settings) -> int:
             print(f"rainroad: wrote {path}")
     if recorder is not None:
         print(f"rainroad: wrote {recorder.count} frames to {recorder.folder}")
+    if panel is not None:
+        panel.layer.shutdown()
     scene.release()
     return 0

@@ -226,7 +226,7 @@ class RainManagerPanel:
             elif section == "ripples":
                 self._ripple_heights()
             if section == "camera" and self.cameras is not None:
-                self.cameras.mode = self.scene.settings.camera.mode
+                self.cameras.set_mode(self.scene.settings.camera.mode, self.scene.ego)
         if imgui.collapsing_header("Performance", imgui.TreeNodeFlags_.default_open.value):
             self._performance_section()
         imgui.end()

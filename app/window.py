@@ -71,11 +71,16 @@ class RainroadApp:
     def key_event(self, key, action, modifiers):
         self.panel.layer.key_event(key, action, modifiers, keys=self.wnd.keys)
         name = self._keys.get(key)
-        if name is None or (self.panel.layer.want_capture_keyboard and name not in ("F12",)):
-            return
         pressed = action == self.wnd.keys.ACTION_PRESS
+        if name is None:
+            return
+        if name in KEY_NAMES and not pressed:  # a release always counts, or a key pressed earlier would stick
+            self.driver.release(KEY_NAMES[name], key)
+            return
+        if self.panel.layer.want_capture_keyboard and name != "F12":
+            return
         if name in KEY_NAMES:
-            (self.driver.press if pressed else self.driver.release)(KEY_NAMES[name])
+            self.driver.press(KEY_NAMES[name], key)
         elif pressed and name == "C":
             self.cameras.cycle(self.scene.ego)
             self.scene.settings.camera.mode = self.cameras.mode
@@ -89,7 +94,12 @@ class RainroadApp:
         if not self.panel.layer.want_capture_mouse and self.cameras.mode == "free":
             self.cameras.free.turn(dx, dy)
 
+    def minimised(self) -> bool:
+        return 0 in self.wnd.buffer_size or 0 in self.wnd.size
+
     def resize(self, width, height):
+        if self.minimised():  # keep the old targets until the window comes back
+            return
         self.panel.layer.resize(self.wnd.size, self.wnd.buffer_size)
         self.scene.renderer.resize(self.render_size())
 
@@ -109,6 +119,8 @@ class RainroadApp:
             drive = None  # the keys fly the camera; the car keeps its lane on autopilot
         else:
             drive = None if self.driver.autopilot else self.driver.update(dt, ego.speed_m_s)
+        if self.minimised():
+            return
         if self.render_size() != self.scene.renderer.size:  # quality.render_scale changed in the panel
             self.scene.renderer.resize(self.render_size())
         self.scene.step(dt, drive)
@@ -135,5 +147,6 @@ def run_window(args, settings, max_frames: int | None = None) -> int:
         wnd.swap_buffers()
         frames += 1
     app.panel.layer.shutdown()
+    app.scene.release()
     wnd.destroy()
     return 0

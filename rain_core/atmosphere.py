@@ -56,7 +56,7 @@ import moderngl
 import numpy as np
 
 from rain_core import physics
-from rain_core.gl import ShaderLibrary, float_target
+from rain_core.gl import ColorView, ShaderLibrary, float_target
 from rain_core.renderer import CLEAR_AIR_EXTINCTION_PER_M, Effect
 
 LAYER_M = 1000.0  # m, thickness of the rain/haze layer the sky is seen through (keep = ATMOSPHERE_LAYER_M)
@@ -325,7 +325,7 @@ class Atmosphere(Effect):
         self._programs: dict[str, moderngl.Program] = {}
         self._vaos: dict[str, moderngl.VertexArray] = {}
         self._targets = None  # (factor, size, [RenderTarget, RenderTarget])
-        self._hdr_fbo = None  # (color texture glo, framebuffer with only the HDR colour attached)
+        self._hdr_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
                                           repeat_x=False, repeat_y=False)
         self.glow_sigma_px = 0.0  # of the last frame, full-resolution pixels
@@ -404,12 +404,7 @@ class Atmosphere(Effect):
 
     def _hdr_color_fbo(self, rc) -> moderngl.Framebuffer:
         # The composite reads the scene's depth, so it writes through a framebuffer without that depth attached.
-        key = rc.hdr.color.glo
-        if self._hdr_fbo is None or self._hdr_fbo[0] != key:
-            if self._hdr_fbo is not None:
-                self._hdr_fbo[1].release()
-            self._hdr_fbo = (key, self.ctx.framebuffer(color_attachments=[rc.hdr.color]))
-        return self._hdr_fbo[1]
+        return self._hdr_fbo.fbo(rc.hdr.color)
 
     def _frame_uniforms(self, prog, rc) -> None:
         rc.set_frame_uniforms(prog)
@@ -484,9 +479,7 @@ class Atmosphere(Effect):
             for t in self._targets[2]:
                 t.release()
             self._targets = None
-        if self._hdr_fbo is not None:
-            self._hdr_fbo[1].release()
-            self._hdr_fbo = None
+        self._hdr_fbo.release()
         self._depth_sampler.release()
 
 

@@ -237,6 +237,30 @@ class PingPong:
             target.release()
 
 
+class ColorView:
+    """A framebuffer onto another target's colour texture without its depth, so a pass can sample that depth
+    while it draws. Rebuilt when the texture *object* changes (after a resize): GL names are reused by drivers,
+    so comparing ``.glo`` could keep drawing into a deleted texture."""
+
+    def __init__(self, ctx: moderngl.Context):
+        self.ctx = ctx
+        self._texture = None
+        self._fbo: moderngl.Framebuffer | None = None
+
+    def fbo(self, texture: moderngl.Texture) -> moderngl.Framebuffer:
+        if texture is not self._texture or self._fbo is None:
+            self.release()
+            self._texture = texture
+            self._fbo = self.ctx.framebuffer(color_attachments=[texture])
+        return self._fbo
+
+    def release(self) -> None:
+        if self._fbo is not None:
+            self.ctx.detect_framebuffer(0).use()
+            self._fbo.release()
+        self._fbo = self._texture = None
+
+
 def fullscreen_triangle(ctx: moderngl.Context, program: moderngl.Program) -> moderngl.VertexArray:
     """A VAO that draws one triangle covering the viewport (vertex shader uses gl_VertexID)."""
     return ctx.vertex_array(program, [])

@@ -177,6 +177,11 @@ class GpuMesh:
     vao: moderngl.VertexArray
     depth_vao: moderngl.VertexArray
     count: int
+    vbo: moderngl.Buffer
+
+    def release(self) -> None:
+        for obj in (self.vao, self.depth_vao, self.vbo):
+            obj.release()
 
 
 def _mat(m: np.ndarray) -> bytes:
@@ -227,7 +232,8 @@ class Renderer:
         self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._world_vao = self._vao(world.vertices)
-        self._vehicle_vaos: dict[int, GpuMesh] = {}
+        # id(vehicle) → (vehicle, mesh): holding the vehicle keeps its id from being reused by a new one.
+        self._vehicle_vaos: dict[int, tuple[object, GpuMesh]] = {}
         self._cabin: list[tuple[GpuMesh, float]] | None = None
         self._timers: dict[str, PassTimer] = {}
 
@@ -254,16 +260,23 @@ class Renderer:
         vbo = self.ctx.buffer(np.ascontiguousarray(vertices).tobytes())
         vao = self.ctx.vertex_array(self.scene_prog, [(vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
         depth_vao = self.ctx.vertex_array(self.shadow_prog, [(vbo, "3f 36x", "in_position")])
-        return GpuMesh(vao, depth_vao, len(vertices))
+        return GpuMesh(vao, depth_vao, len(vertices), vbo)
 
-    def _vehicle_vao(self, vehicle):
+    def _vehicle_vao(self, vehicle) -> GpuMesh:
         key = id(vehicle)
         if key not in self._vehicle_vaos:
             from rain_core.car_mesh import vehicle_mesh
 
             color = getattr(vehicle, "color", (0.5, 0.05, 0.04))
-            self._vehicle_vaos[key] = self._vao(vehicle_mesh(vehicle.spec, np.asarray(color, np.float32)))
-        return self._vehicle_vaos[key]
+            mesh = self._vao(vehicle_mesh(vehicle.spec, np.asarray(color, np.float32)))
+            self._vehicle_vaos[key] = (vehicle, mesh)
+        return self._vehicle_vaos[key][1]
+
+    def _forget_vehicles(self, vehicles) -> None:
+        """Release the meshes of vehicles that left the scene (e.g. the traffic count changed)."""
+        present = {id(v) for v in vehicles}
+        for key in [k for k in self._vehicle_vaos if k not in present]:
+            self._vehicle_vaos.pop(key)[1].release()
 
     def _cabin_vaos(self, ego):
         """The cabin as (mesh, direct-light share): painted outside parts (hood, mirrors) get full direct light,
@@ -394,6 +407,7 @@ class Renderer:
         """Run every pass of one frame into the HDR target and tone-map it."""
         ctx = self.ctx
         self.stats = []
+        self._forget_vehicles(frame.vehicles)
         rc = self.render_context(frame)
         active = []
         for effect in self.effects:
@@ -473,6 +487,14 @@ class Renderer:
         self.ldr_color.release()
         self.shadow_fbo.release()
         self.shadow_depth.release()
+        meshes = [self._world_vao, *(m for _, m in self._vehicle_vaos.values()),
+                  *(m for m, _ in (self._cabin or []))]
+        for mesh in meshes:
+            mesh.release()
+        self._vehicle_vaos.clear()
+        self._cabin = None
+        for obj in (self._sky_vao, self._tonemap_vao, self._blit_vao):
+            obj.release()
 
 
 def frame_time_ms(stats: list[PassStat]) -> float:

@@ -66,6 +66,7 @@ import moderngl
 import numpy as np
 
 from rain_core import layout, physics
+from rain_core.gl import ColorView
 from rain_core.renderer import Effect
 
 # --- constants ----------------------------------------------------------------------------------------------
@@ -1111,7 +1112,7 @@ class Spray(Effect):
         self._vaos: list[moderngl.VertexArray | None] = [None, None]
         self._capacity = [-1, -1]
         self._program = None
-        self._color_fbo = None
+        self._color_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
                                           repeat_x=False, repeat_y=False)
         self._frame = None
@@ -1199,12 +1200,7 @@ class Spray(Effect):
 
     def _hdr_color_fbo(self, rc) -> moderngl.Framebuffer:
         # The pass reads the scene's depth, so it writes through a framebuffer without that depth attached.
-        key = rc.hdr.color.glo
-        if self._color_fbo is None or self._color_fbo[0] != key:
-            if self._color_fbo is not None:
-                self._color_fbo[1].release()
-            self._color_fbo = (key, self.ctx.framebuffer(color_attachments=[rc.hdr.color]))
-        return self._color_fbo[1]
+        return self._color_fbo.fbo(rc.hdr.color)
 
     def render(self, stage: str, rc) -> None:
         if stage != "transparent":
@@ -1253,9 +1249,7 @@ class Spray(Effect):
         self._vaos = [None, None]
         self._buffers = [None, None]
         self._capacity = [-1, -1]
-        if self._color_fbo is not None:
-            self._color_fbo[1].release()
-            self._color_fbo = None
+        self._color_fbo.release()
         self._depth_sampler.release()
 
 

@@ -51,3 +51,38 @@ def test_headless_screenshot_and_record(tmp_path):
     assert img.shape == (64, 96, 3)
     assert img.std() > 5.0  # a picture, not a flat colour
     np.testing.assert_array_equal(img, np.asarray(Image.open(frames[-1])))
+
+
+@pytest.mark.parametrize("args, flag", [
+    (["--headless", "--screenshot", "out.jpg"], "--screenshot"),
+    (["--headless", "--screenshot", "/proc/nope/x.png"], "--screenshot"),
+    (["--headless", "--record", "/etc/hostname"], "--record"),
+    (["--window", "nope"], "--window"),
+])
+def test_bad_output_paths_and_backends_exit_2_before_rendering(args, flag):
+    result = run_app(*args)
+    assert result.returncode == 2, result.stderr
+    assert flag in result.stderr and "Traceback" not in result.stderr
+
+
+def test_preset_on_top_of_a_scenario_keeps_the_scenario(tmp_path):
+    from app.__main__ import settings_from_args
+    from app.cli import parse_args
+    from rain_core.physics import RAIN_PRESETS
+
+    scenario = tmp_path / "night.toml"
+    scenario.write_text("[time_of_day]\nhour = 22.0\n")
+    settings = settings_from_args(parse_args(["--headless", "--scenario", str(scenario), "--preset", "heavy"]))
+    assert settings.time_of_day.hour == 22.0 and settings.rain.rate_mm_h == RAIN_PRESETS["heavy"]
+
+
+def test_held_keys_release_independently_and_a_release_is_never_lost():
+    from app.controls import KeyboardDriver
+
+    driver = KeyboardDriver()
+    driver.press("up", "W")
+    driver.press("up", "UP")
+    driver.release("up", "W")
+    assert driver.held == {"up"}  # ↑ still down
+    driver.release("up", "UP")
+    assert driver.held == set()

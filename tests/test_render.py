@@ -114,3 +114,16 @@ def test_sun_shadows_darken_the_road_under_the_bridge_and_skip_at_night(gl_ctx):
     night.render()
     assert {n: r for n, r, *_ in night.renderer.pass_table()}["shadow"] is False
     night.release()
+
+
+def test_changing_the_traffic_releases_old_meshes_and_draws_new_ones(gl_ctx):
+    scene = make_scene(gl_ctx, camera="chase")
+    for count in (5, 2, 7):
+        scene.settings.traffic.count = count
+        scene.step(1 / 30)
+        scene.render()
+        cached = scene.renderer._vehicle_vaos
+        assert set(cached) == {id(v) for v in scene.vehicles}
+        for key, (vehicle, _mesh) in cached.items():
+            assert id(vehicle) == key  # the cache holds the very vehicle it drew
+    scene.release()

@@ -7,8 +7,8 @@ uniform vec4 u_light_pos[MAX_LIGHTS];    // xyz m, w range m (negative: a low-be
 uniform vec4 u_light_dir[MAX_LIGHTS];    // xyz unit, w cos(outer cone) (-1 = point light)
 uniform vec4 u_light_color[MAX_LIGHTS];  // rgb = colour × intensity (cd), w cos(inner cone)
 uniform int u_light_count;
-// Direct light (sun, lamps) reaching this draw: 1 outdoors; < 1 inside the cabin, whose roof shades it
-// (the scene has no shadow maps).
+// Direct light (sun, lamps) reaching this draw: 1 outdoors; < 1 inside the cabin, whose roof and pillars shade
+// it from the lamps (which cast no shadow maps; the sun's shadow map adds the roof's shadow on top).
 uniform float u_direct_scale = 1.0;
 
 // Sun shadow map (renderer.py): depth seen from the sun around the camera, compared in hardware.
