@@ -1267,6 +1267,19 @@ class WindshieldEffect(Effect):
             )
         return np.concatenate(rows) if rows else np.zeros((0, 8))
 
+
+    def _draw_splats(self, splats, equation) -> None:
+        """Blend splats into the bound target: FUNC_ADD accumulates water, MAX keeps the tallest drop."""
+        count = self._splats(splats)
+        if not count:
+            return
+        ctx = self.ctx
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = (moderngl.ONE, moderngl.ONE)
+        ctx.blend_equation = equation
+        self._splat_vao.render(moderngl.TRIANGLES, vertices=6, instances=count)
+        ctx.blend_equation = moderngl.FUNC_ADD
+        ctx.disable(moderngl.BLEND)
     def _draw_water(self, rc) -> None:
         ctx = self.ctx
         settings = self._settings(rc.frame)
@@ -1305,25 +1318,12 @@ class WindshieldEffect(Effect):
         ctx.disable(moderngl.BLEND)
         self._film_vao.render(moderngl.TRIANGLES, vertices=3)
         # 2. deposits: wet trails and splash speckle, added.
-        count = self._splats(self.film_splats())
-        if count:
-            ctx.enable(moderngl.BLEND)
-            ctx.blend_func = (moderngl.ONE, moderngl.ONE)
-            ctx.blend_equation = moderngl.FUNC_ADD
-            self._splat_vao.render(moderngl.TRIANGLES, vertices=6, instances=count)
-            ctx.disable(moderngl.BLEND)
+        self._draw_splats(self.film_splats(), moderngl.FUNC_ADD)
         dst.color.build_mipmaps()
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()
         self._drops.fbo.clear(0.0, 0.0, 0.0, 0.0)
-        count = self._splats(self.drop_splats())
-        if count:
-            ctx.enable(moderngl.BLEND)
-            ctx.blend_func = (moderngl.ONE, moderngl.ONE)
-            ctx.blend_equation = moderngl.MAX
-            self._splat_vao.render(moderngl.TRIANGLES, vertices=6, instances=count)
-            ctx.blend_equation = moderngl.FUNC_ADD
-            ctx.disable(moderngl.BLEND)
+        self._draw_splats(self.drop_splats(), moderngl.MAX)
         # 4. the water texture: thickness, film, slopes.
         prog = self.normals_prog
         self._drops.color.use(TEXTURE_UNITS[0])
