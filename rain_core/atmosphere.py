@@ -389,7 +389,7 @@ class Atmosphere(Effect):
     def _program(self, rc, frag: str) -> tuple[moderngl.Program, moderngl.VertexArray]:
         if frag not in self._programs:
             lib = self._shaders or rc.shaders
-            self._programs[frag] = prog = lib.program("fullscreen.vert", frag)
+            self._programs[frag] = prog = lib.program("common/fullscreen.vert", frag)
             self._vaos[frag] = self.ctx.vertex_array(prog, [])
         return self._programs[frag], self._vaos[frag]
 
@@ -434,7 +434,7 @@ class Atmosphere(Effect):
         a, b = self._glow_targets(rc.size, self._glow_factor)
         if self.state.glow_strength > 0.0:
             self._glow(rc, a, b)
-        prog, vao = self._program(rc, "atmosphere_composite.frag")
+        prog, vao = self._program(rc, "atmosphere/composite.frag")
         self._frame_uniforms(prog, rc)
         a.color.use(GLOW_UNIT)
         values = {"u_glow": GLOW_UNIT, "u_depth": DEPTH_UNIT, "u_glow_factor": self._glow_factor,
@@ -455,7 +455,7 @@ class Atmosphere(Effect):
 
     def _glow(self, rc, a, b) -> None:
         """c·w box-averaged into ``a``, then blurred a → b → a."""
-        down, down_vao = self._program(rc, "atmosphere_glow_down.frag")
+        down, down_vao = self._program(rc, "atmosphere/glow_down.frag")
         self._frame_uniforms(down, rc)
         rc.hdr.color.use(GLOW_UNIT)
         _set(down, "u_color", GLOW_UNIT)
@@ -464,7 +464,7 @@ class Atmosphere(Effect):
         a.fbo.use()
         down_vao.render(moderngl.TRIANGLES, vertices=3)
         sigma = min(self.glow_sigma_px / self._glow_factor, MAX_BLUR_RADIUS / 3.0)
-        blur, blur_vao = self._program(rc, "atmosphere_blur.frag")
+        blur, blur_vao = self._program(rc, "atmosphere/blur.frag")
         _set(blur, "u_src", GLOW_UNIT)
         _set(blur, "u_sigma_px", sigma)
         _set(blur, "u_radius", blur_radius(sigma))

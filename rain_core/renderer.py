@@ -217,17 +217,17 @@ class Renderer:
 
         self._make_targets()
 
-        self.scene_prog = self.shaders.program("scene.vert", "scene.frag")
-        self.shadow_prog = self.shaders.program("shadow.vert", "shadow.frag")
+        self.scene_prog = self.shaders.program("core/scene.vert", "core/scene.frag")
+        self.shadow_prog = self.shaders.program("core/shadow.vert", "core/shadow.frag")
         self.shadow_depth = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
         self.shadow_depth.compare_func = "<="
         self.shadow_depth.filter = (moderngl.LINEAR, moderngl.LINEAR)  # hardware 2×2 PCF per tap
         self.shadow_depth.repeat_x = self.shadow_depth.repeat_y = False
         self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_depth)
         self.shadow_uniforms: dict = {"u_shadow_params": (0.0, 0.0, 0.0), "u_shadow_map": SHADOW_UNIT}
-        self.sky_prog = self.shaders.program("fullscreen.vert", "sky.frag")
-        self.tonemap_prog = self.shaders.program("fullscreen.vert", "tonemap.frag")
-        self.blit_prog = self.shaders.program("fullscreen.vert", "blit.frag")
+        self.sky_prog = self.shaders.program("common/fullscreen.vert", "core/sky.frag")
+        self.tonemap_prog = self.shaders.program("common/fullscreen.vert", "core/tonemap.frag")
+        self.blit_prog = self.shaders.program("common/fullscreen.vert", "core/blit.frag")
         self._sky_vao = ctx.vertex_array(self.sky_prog, [])
         self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])

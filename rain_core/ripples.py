@@ -594,12 +594,12 @@ class WaveSolverGPU(WaveSolver):
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         prog = self.shaders.program
         self._progs = {
-            "step": prog("fullscreen.vert", "ripples_step.frag"),
-            "retime": prog("fullscreen.vert", "ripples_step.frag", defines={"RIPPLES_RETIME": 1}),
-            "reduce": prog("fullscreen.vert", "ripples_step.frag",
+            "step": prog("common/fullscreen.vert", "ripples/step.frag"),
+            "retime": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_RETIME": 1}),
+            "reduce": prog("common/fullscreen.vert", "ripples/step.frag",
                            defines={"RIPPLES_REDUCE": 1, "RIPPLES_BLOCK": REDUCE_BLOCK}),
-            "shift": prog("fullscreen.vert", "ripples_step.frag", defines={"RIPPLES_SHIFT": 1}),
-            "impulse": prog("fullscreen.vert", "ripples_impulse.frag"),
+            "shift": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_SHIFT": 1}),
+            "impulse": prog("common/fullscreen.vert", "ripples/impulse.frag"),
         }
         self._vaos = {name: fullscreen_triangle(ctx, p) for name, p in self._progs.items()}
         for p in self._progs.values():
@@ -886,7 +886,7 @@ class RippleField:
             from rain_core.gl import float_target, fullscreen_triangle
 
             self._normals = float_target(ctx, (self.n, self.n), 2, "f2", filter_linear=True)
-            self._normals_prog = shaders.program("fullscreen.vert", "ripples_normals.frag")
+            self._normals_prog = shaders.program("common/fullscreen.vert", "ripples/normals.frag")
             self._normals_prog["u_height"].value = 0
             self._normals_prog["u_inv_2h"].value = 0.5 / self.cell_m
             self._normals_vao = fullscreen_triangle(ctx, self._normals_prog)
@@ -1266,7 +1266,7 @@ class RainRippleTexture:
         self.target.fbo.clear(0.0, 0.0, 0.0, 0.0)
         tex.build_mipmaps()
         tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
-        self._prog = shaders.program("fullscreen.vert", "ripples_rain_tile.frag")
+        self._prog = shaders.program("common/fullscreen.vert", "ripples/rain_tile.frag")
         self._vao = fullscreen_triangle(ctx, self._prog)
         self._prog["u_size"].value = (float(self.size), float(self.size))
         self._prog["u_cycle_s"].value = RAIN_TILE_CYCLE_S

@@ -630,7 +630,7 @@ class RoadEffect(Effect):
                 from rain_core.gl import ShaderLibrary
 
                 self.shaders = ShaderLibrary(self.ctx)
-            self._film_prog = self.shaders.program("fullscreen.vert", "road_film.frag")
+            self._film_prog = self.shaders.program("common/fullscreen.vert", "road/film.frag")
             self._film_vao = self.ctx.vertex_array(self._film_prog, [])
         prog = self._film_prog
         target = self._film_target

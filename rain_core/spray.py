@@ -1060,7 +1060,7 @@ def shader_defines() -> dict[str, str]:
 def probe_program(shaders):
     """The transform-feedback probe of the GLSL twin (shaders/spray_probe.vert): inputs in_p0 (xyz m),
     in_v0 (xyz m/s, w τ s), in_u (xyz m/s, w age s), in_mu; outputs out_pos, out_vel, out_phase."""
-    return shaders.program("spray_probe.vert", varyings=("out_pos", "out_vel", "out_phase"),
+    return shaders.program("spray/probe.vert", varyings=("out_pos", "out_vel", "out_phase"),
                            defines=shader_defines())
 
 
@@ -1189,7 +1189,7 @@ class Spray(Effect):
     def _prog(self, rc) -> moderngl.Program:
         if self._program is None:
             lib = self._shaders or rc.shaders
-            self._program = lib.program("spray.vert", "spray.frag", defines=shader_defines())
+            self._program = lib.program("spray/spray.vert", "spray/spray.frag", defines=shader_defines())
         return self._program
 
     def _vao(self, ring: int, prog) -> moderngl.VertexArray | None:

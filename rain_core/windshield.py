@@ -1023,10 +1023,10 @@ class WindshieldEffect(Effect):
         self.seed = int(seed)
         self.sim = WindshieldSim(spec, seed)
         self.glass = self.sim.glass
-        self.film_prog = self.shaders.program("fullscreen.vert", "windshield_film.frag")
-        self.normals_prog = self.shaders.program("fullscreen.vert", "windshield_normals.frag")
-        self.splat_prog = self.shaders.program("windshield_splat.vert", "windshield_splat.frag")
-        self.glass_prog = self.shaders.program("windshield.vert", "windshield.frag")
+        self.film_prog = self.shaders.program("common/fullscreen.vert", "windshield/film.frag")
+        self.normals_prog = self.shaders.program("common/fullscreen.vert", "windshield/normals.frag")
+        self.splat_prog = self.shaders.program("windshield/splat.vert", "windshield/splat.frag")
+        self.glass_prog = self.shaders.program("windshield/glass.vert", "windshield/glass.frag")
         for prog in (self.film_prog, self.normals_prog, self.splat_prog, self.glass_prog):
             if "u_glass" in prog:
                 prog["u_glass"].value = (self.glass.width_bottom, self.glass.width_top, self.glass.height)

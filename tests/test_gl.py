@@ -16,7 +16,7 @@ VERT = "#version 330 core\nvoid main() { gl_Position = vec4(0.0); }\n"
 
 
 def test_paths_exist():
-    assert (SHADERS_DIR / "scene.frag").is_file()
+    assert (SHADERS_DIR / "core/scene.frag").is_file()
     assert ASSETS_DIR.is_dir()
 
 
@@ -72,10 +72,10 @@ def test_shared_include_is_expanded_once_and_defines_follow_version(gl_ctx, tmp_
 
 
 def test_every_project_shader_pair_compiles(shaders):
-    for frag in ("scene.frag",):
-        shaders.program("scene.vert", frag)
-    for frag in ("sky.frag", "tonemap.frag", "blit.frag"):
-        shaders.program("fullscreen.vert", frag)
+    for frag in ("core/scene.frag",):
+        shaders.program("core/scene.vert", frag)
+    for frag in ("core/sky.frag", "core/tonemap.frag", "core/blit.frag"):
+        shaders.program("common/fullscreen.vert", frag)
 
 
 def test_float_target_and_ping_pong_hold_float_values(gl_ctx):

@@ -43,7 +43,7 @@ def _numbers(expr: str) -> list[float]:
 
 
 def test_glsl_constants_match_numpy():
-    consts = _glsl_consts("road_film.glsl", "road_surface.glsl")
+    consts = _glsl_consts("road/film.glsl", "road/surface.glsl")
     for name in ("WET_FILM_MM", "CRACK_MAX_MM", "CRACK_DEPTH_SPAN", "PUDDLE_MAX_MM", "PUDDLE_NOISE_WEIGHT",
                  "PUDDLE_DEPTH_SPAN", "MACROTEXTURE_MM", "WET_ALBEDO_FACTOR", "WET_SMOOTHNESS_GAIN", "WATER_F0",
                  "UNDERWATER_F0", "FILM_ROUGHNESS", "WATER_ROUGHNESS", "LIGHT_MIN_ROUGHNESS",

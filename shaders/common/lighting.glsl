@@ -1,6 +1,6 @@
 // Surface shading: sun, sky ambient, street lamps and headlights (point / spot lights in candela).
-#include "brdf.glsl"
-#include "sky.glsl"
+#include "common/brdf.glsl"
+#include "common/sky.glsl"
 
 #define MAX_LIGHTS 32
 uniform vec4 u_light_pos[MAX_LIGHTS];    // xyz m, w range m (negative: a low-beam headlight, see below)

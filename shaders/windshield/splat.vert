@@ -2,7 +2,7 @@
 // Instanced splats into the glass's UV textures: a capsule from p0 to p1 (s, t in m) of radius r (m). kind 0: a
 // drop (spherical cap head at p0, tapering tail to p1); 1: a line of water (cylindrical profile: trails, the
 // wiper bead); 2: a splash of satellite droplets (speckled disc).
-#include "common/windshield_glass.glsl"
+#include "windshield/glass_common.glsl"
 in vec4 in_seg;    // s0, t0, s1, t1 (m)
 in vec4 in_info;   // radius (m), value (mm height or µm film), kind, spare
 out vec2 v_local;  // metres: x along p0→p1 from p0, y across

@@ -5,7 +5,7 @@
 //   RIPPLES_RETIME  change the sub-step dt, keeping the synchronous velocity (scaled by the energy guard)
 //   RIPPLES_REDUCE  per-block sums (u^2, z*Az, (Az)^2) for the discrete energy and the retime guard
 //   RIPPLES_SHIFT   scroll the window by whole cells (cells that enter are at rest), or apply a new mask
-#include "common/ripples_stencil.glsl"
+#include "ripples/stencil.glsl"
 
 #if defined(RIPPLES_RETIME) || defined(RIPPLES_REDUCE)
 uniform float u_dt_old;   // s, sub-step of the stored state; 0 when the state is synchronous and at rest

@@ -6,8 +6,8 @@
 // phase function, the reflection lobe kept apart for the fragment's sparkle.
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
-#include "common/spray_flight.glsl"
-#include "common/spray_optics.glsl"
+#include "spray/flight.glsl"
+#include "spray/optics.glsl"
 
 in vec4 in_p0;    // xyz m (z relative to its period), w period index
 in vec4 in_v0;    // xyz m/s launch velocity, w tau s

@@ -2,7 +2,7 @@
 // Adds the pending source displacement (metres) to both the current and the previous height, so a source
 // displaces the water without giving it velocity. Drawn with additive blending (ONE, ONE) straight into the
 // state target, scissored to the sources' bounding box; held cells receive nothing.
-#include "common/ripples_stencil.glsl"
+#include "ripples/stencil.glsl"
 
 uniform sampler2D u_source;  // R32F: displacement to add, metres
 out vec2 f_out;

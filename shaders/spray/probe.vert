@@ -1,7 +1,7 @@
 #version 330 core
 // Transform-feedback probe of the spray's GLSL model (tests and the bench compare it with the NumPy twin).
-#include "common/spray_flight.glsl"
-#include "common/spray_optics.glsl"
+#include "spray/flight.glsl"
+#include "spray/optics.glsl"
 in vec4 in_p0;   // xyz m
 in vec4 in_v0;   // xyz m/s, w tau s
 in vec4 in_u;    // xyz m/s, w age s

@@ -1,7 +1,7 @@
 #version 330 core
 // Rain streaks (rain_core/rainfall.py): one instance per drop slot, a screen-aligned quad around the drop's path
 // relative to the camera during the exposure. Keep in step with the NumPy twin rainfall.streak_geometry.
-#include "common/rainfall_drop.glsl"
+#include "rainfall/drop.glsl"
 
 #ifndef LAYERS
 #define LAYERS 3  // rainfall.LAYER_SCALES (the effect passes the count)

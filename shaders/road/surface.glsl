@@ -5,7 +5,7 @@
 // their first line: the dry path costs one uniform branch.
 // Needs: Surface, sky_radiance/sky_ambient, env_brdf_approx, D_GGX, V_SmithGGXCorrelated, the light arrays
 // (common/lighting.glsl), u_view_proj/u_exposure/u_time (common/frame.glsl) and the MAT_* ids.
-#include "road_film.glsl"
+#include "road/film.glsl"
 
 uniform float u_road_wet;             // 1 while the road effect is active, else 0 (the dry path)
 uniform float u_road_mirror;          // 1 while the reflection pass draws (lamp lenses dimmed, no reflection)

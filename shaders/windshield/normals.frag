@@ -1,7 +1,7 @@
 #version 330 core
 // The water texture the glass shader reads: total thickness (mm), film (µm, rescaled to the CPU truth) and the
 // slope of the water surface along s and t (dimensionless), by central differences in metres.
-#include "common/windshield_glass.glsl"
+#include "windshield/glass_common.glsl"
 uniform sampler2D u_drops;    // unit 12: drop and bead heights (mm)
 uniform sampler2D u_film;     // unit 13: film (µm), mipmapped
 uniform sampler2D u_coarse;   // unit 14: the CPU film now (µm cell means)

@@ -3,7 +3,7 @@
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
 #include "common/atmosphere.glsl"
-#include "common/materials.glsl"
+#include "core/materials.glsl"
 in vec3 v_world;
 in vec3 v_normal;
 in vec3 v_albedo;

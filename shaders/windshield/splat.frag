@@ -1,5 +1,5 @@
 #version 330 core
-#include "common/windshield_glass.glsl"
+#include "windshield/glass_common.glsl"
 in vec2 v_local;
 flat in vec4 v_info;
 flat in float v_len;

@@ -1,7 +1,7 @@
 #version 330 core
 // Evaluates road_water_depths_mm at arbitrary points: the GPU side of the film-depth parity test, and a way for
 // CPU code to ask the shader's model. One texel of u_points (x, z in m, wrapped frame) per output texel.
-#include "common/road_film.glsl"
+#include "road/film.glsl"
 uniform sampler2D u_points;
 out vec4 f_depth;  // standing water (mm), wet film (mm), film depth (mm), 0
 void main() {

@@ -12,7 +12,7 @@
 // Emissive albedo is radiance in W/(sr·m²) at 555 nm; × 683 lm/W gives luminance in cd/m² (rain_core/mesh.py).
 const float EMISSIVE_NITS_PER_UNIT = 683.0;
 
-#include "road_surface.glsl"
+#include "road/surface.glsl"
 
 // Hook where surface effects change a material before lighting (the wet road). Dry: unchanged.
 void apply_surface_effects(inout Surface s, int material) {

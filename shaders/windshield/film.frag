@@ -2,7 +2,7 @@
 // The film texture's relaxation step (one frame): rescale last frame's film to the CPU truth it was drawn for,
 // then spread (diffusion), dry (subtract: thin parts dry first, so residue dries in streaks), bead up, and clear
 // what the wiper blades swept this frame down to their streaky residue. Thickness in µm.
-#include "common/windshield_glass.glsl"
+#include "windshield/glass_common.glsl"
 uniform sampler2D u_film;     // unit 12: last frame's film (µm), mipmapped
 uniform sampler2D u_coarse;   // unit 13: the CPU film last frame (µm cell means), FILM_CELLS²
 uniform float u_coarse_lod;   // the mip level of u_film whose texels are the CPU cells

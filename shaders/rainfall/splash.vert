@@ -1,7 +1,7 @@
 #version 330 core
 // Impact splashes (rain_core/rainfall.py): one instance per ring slot, a billboard standing on the impact
 // point and turned to the camera about the vertical; the fragment shader draws the crown and its droplets.
-#include "common/rainfall_drop.glsl"
+#include "rainfall/drop.glsl"
 
 in vec4 in_a;  // x, y, z mod period (m), impact time mod time period (s)
 in vec4 in_b;  // D (mm), lifetime (s), type + seed, weight (impacts per drawn splash)

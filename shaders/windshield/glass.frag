@@ -11,7 +11,7 @@
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
 #include "common/atmosphere.glsl"
-#include "common/windshield_glass.glsl"
+#include "windshield/glass_common.glsl"
 uniform sampler2D u_water;    // unit 12: thickness (mm), film (µm), slope along s, t
 uniform sampler2D u_frame;    // unit 13: the frame without the glass (pre-exposed HDR), mipmapped
 uniform sampler2D u_depth;    // unit 14: its depth
