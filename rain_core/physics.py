@@ -39,6 +39,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from rain_core import checks
+
 # --- constants -------------------------------------------------------------------------------------------
 
 N0_MP = 8000.0  # m⁻³ mm⁻¹, Marshall & Palmer's intercept
@@ -46,6 +48,8 @@ D_MIN_MM = 0.1  # mm, smallest drop the effects consider (sub-visual below)
 D_MAX_MM = 6.0  # mm, largest stable drop (break-up above)
 R_MAX_MM_H = 500.0  # mm/h, largest accepted rain rate
 RHO_WATER = 1000.0  # kg/m³
+RHO_AIR = 1.2  # kg/m³, near sea level at 20 °C
+G_M_S2 = 9.81  # m/s², standard gravity
 
 # Gunn & Kinzer (1949) Table 2, stagnant air at sea level (copy in /work/shared/reference/gunn_kinzer.csv).
 GUNN_KINZER_D_MM = np.array([
@@ -83,41 +87,8 @@ RAIN_PRESETS = {
 # --- validation ------------------------------------------------------------------------------------------
 
 
-def _fmt_bound(x: float) -> str:
-    return "inf" if math.isinf(x) else f"{x:g}"
-
-
-def _check(name: str, value, lo: float = 0.0, hi: float = math.inf, unit: str = "", lo_open: bool = False):
-    """``value`` as a float64 array; a ValueError naming ``name`` and the range if any entry is bad."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number{' in ' + unit if unit else ''}, got {value!r}") from None
-    with np.errstate(invalid="ignore"):
-        bad = ~np.isfinite(arr) | (arr > hi) | ((arr <= lo) if lo_open else (arr < lo))
-    if bad.any():
-        first = arr[bad].flat[0] if arr.ndim else float(arr)
-        where = f" (at index {tuple(int(i) for i in np.argwhere(bad)[0])})" if arr.ndim else ""
-        rng = f"{'(' if lo_open else '['}{_fmt_bound(lo)}, {_fmt_bound(hi)}{')' if math.isinf(hi) else ']'}"
-        unit_s = f" {unit}" if unit else ""
-        raise ValueError(f"{name} must be finite and in {rng}{unit_s}, got {first!r}{where}")
-    return arr
-
-
-def _check_vec3(name: str, value, unit: str = "m/s"):
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a 3-vector in {unit}, got {value!r}") from None
-    if arr.ndim == 0 or arr.shape[-1] != 3:
-        raise ValueError(f"{name} must have shape (..., 3) ({unit}), got shape {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise ValueError(f"{name} must be finite ({unit}), got {value!r}")
-    return arr
-
-
 def _check_rate(rate_mm_h, name: str = "rate_mm_h", positive: bool = False):
-    return _check(name, rate_mm_h, 0.0, R_MAX_MM_H, "mm/h", lo_open=positive)
+    return checks.array(name, rate_mm_h, 0.0, R_MAX_MM_H, "mm/h", lo_open=positive)
 
 
 def _out(x, *inputs):
@@ -148,7 +119,7 @@ def marshall_palmer(d_mm, rate_mm_h):
     This is the published formula with N0 = 8000 m⁻³ mm⁻¹ (the effects use ``effective_n0``; see the module
     docstring).
     """
-    d = _check("d_mm", d_mm, 0.0, math.inf, "mm")
+    d = checks.array("d_mm", d_mm, 0.0, math.inf, "mm")
     r = _check_rate(rate_mm_h)
     d, r = np.broadcast_arrays(d, r)
     out = np.zeros(d.shape)
@@ -230,7 +201,7 @@ def terminal_velocity(d_mm):
     Monotone cubic through Gunn & Kinzer's measurements (exact at every tabulated point), Stokes' v ∝ D² below
     0.078 mm, constant 9.17 m/s above 5.8 mm (break-up). C¹, non-decreasing, 0 at D = 0.
     """
-    d = _check("d_mm", d_mm, 0.0, math.inf, "mm")
+    d = checks.array("d_mm", d_mm, 0.0, math.inf, "mm")
     return _out(_terminal_velocity_from(GUNN_KINZER_D_MM, GUNN_KINZER_V_M_S, _GK_SLOPES, d), d_mm)
 
 
@@ -252,7 +223,7 @@ def terminal_velocity_leave_one_out() -> np.ndarray:
 
 def atlas_terminal_velocity(d_mm):
     """Atlas et al. (1973) fit v = 9.65 − 10.3·e^(−0.6·D) m/s (D in mm), clipped at 0; for comparison only."""
-    d = _check("d_mm", d_mm, 0.0, math.inf, "mm")
+    d = checks.array("d_mm", d_mm, 0.0, math.inf, "mm")
     return _out(np.maximum(9.65 - 10.3 * np.exp(-0.6 * d), 0.0), d_mm)
 
 
@@ -301,12 +272,12 @@ def implied_rate_mm_h(rate_mm_h, n0=N0_MP, d_min_mm=D_MIN_MM, d_max_mm=D_MAX_MM)
     default range it returns R itself; with the default n0 it measures Marshall–Palmer's self-consistency.
     """
     r = _check_rate(rate_mm_h)
-    n0a = _check("n0", n0, 0.0, math.inf, "m⁻³ mm⁻¹")
-    lo = float(_check("d_min_mm", d_min_mm, 0.0, math.inf, "mm"))
+    n0a = checks.array("n0", n0, 0.0, math.inf, "m⁻³ mm⁻¹")
+    lo = float(checks.array("d_min_mm", d_min_mm, 0.0, math.inf, "mm"))
     if isinstance(d_max_mm, float | int) and d_max_mm == math.inf:
         hi = math.inf
     else:
-        hi = float(_check("d_max_mm", d_max_mm, lo, math.inf, "mm"))
+        hi = float(checks.array("d_max_mm", d_max_mm, lo, math.inf, "mm"))
     nodes, weights, speeds = _quadrature(lo, hi)
     integral = (_mp_shape(r, nodes) * (speeds * nodes**3 * weights)).sum(axis=-1)
     return _out(n0a * integral * _VOLUME_FLUX_TO_MM_H, rate_mm_h, n0)
@@ -361,10 +332,10 @@ def flux_on_surface_per_s(rate_mm_h, area_m2, normal, surface_velocity_m_s=(0.0,
     Inputs broadcast; the result has their common batch shape.
     """
     r = _check_rate(rate_mm_h)
-    area = _check("area_m2", area_m2, 0.0, math.inf, "m²")
-    n = _check_vec3("normal", normal, "any length")
-    vs = _check_vec3("surface_velocity_m_s", surface_velocity_m_s)
-    w = _check_vec3("wind_m_s", (0.0, 0.0, 0.0) if wind_m_s is None else wind_m_s)
+    area = checks.array("area_m2", area_m2, 0.0, math.inf, "m²")
+    n = checks.vec3("normal", normal, "any length")
+    vs = checks.vec3("surface_velocity_m_s", surface_velocity_m_s)
+    w = checks.vec3("wind_m_s", (0.0, 0.0, 0.0) if wind_m_s is None else wind_m_s)
     length = np.linalg.norm(n, axis=-1, keepdims=True)
     if (length == 0).any():
         raise ValueError("normal must be a non-zero 3-vector")
@@ -403,8 +374,8 @@ def mean_streak_length_m(rate_mm_h, exposure_s, camera_velocity_m_s=(0.0, 0.0, 0
     R → 0, where every drop has D_MIN_MM (a streak length is a property of a drop, not of how many there are).
     """
     r = _check_rate(rate_mm_h)
-    t = _check("exposure_s", exposure_s, 0.0, math.inf, "s")
-    c = _check_vec3("wind_m_s", wind_m_s) - _check_vec3("camera_velocity_m_s", camera_velocity_m_s)
+    t = checks.array("exposure_s", exposure_s, 0.0, math.inf, "s")
+    c = checks.vec3("wind_m_s", wind_m_s) - checks.vec3("camera_velocity_m_s", camera_velocity_m_s)
     r, t, cx, cy, cz = np.broadcast_arrays(r, t, c[..., 0], c[..., 1], c[..., 2])
     nodes, weights, speeds = _quadrature(D_MIN_MM, D_MAX_MM)
     speed = np.sqrt(cx[..., None] ** 2 + cz[..., None] ** 2 + (cy[..., None] - speeds) ** 2)
@@ -432,9 +403,9 @@ def splash_water_flux(speed_m_s, tire_width_m, film_depth_m):
     speed_m_s: vehicle speed in m/s; tire_width_m: tyre width b in m; film_depth_m: water film depth under the
     tyre in m (puddles are ≤ 0.01 m). All ≥ 0 and finite; ρ_w = 1000 kg/m³.
     """
-    v = _check("speed_m_s", speed_m_s, 0.0, math.inf, "m/s")
-    b = _check("tire_width_m", tire_width_m, 0.0, math.inf, "m")
-    h = _check("film_depth_m", film_depth_m, 0.0, math.inf, "m")
+    v = checks.array("speed_m_s", speed_m_s, 0.0, math.inf, "m/s")
+    b = checks.array("tire_width_m", tire_width_m, 0.0, math.inf, "m")
+    h = checks.array("film_depth_m", film_depth_m, 0.0, math.inf, "m")
     return _out(v * b * h * RHO_WATER, speed_m_s, tire_width_m, film_depth_m)
 
 
@@ -447,7 +418,7 @@ def drop_diameter_cdf(d_mm, rate_mm_h):
     rate_mm_h in (0, 500] mm/h. 0 below D_MIN_MM, 1 above D_MAX_MM. This is the law that
     ``sample_drop_diameters`` draws from.
     """
-    d = _check("d_mm", d_mm, 0.0, math.inf, "mm")
+    d = checks.array("d_mm", d_mm, 0.0, math.inf, "mm")
     r = _check_rate(rate_mm_h, positive=True)
     lam = 4.1 * r**-0.21
     x = np.clip(d, D_MIN_MM, D_MAX_MM) - D_MIN_MM
@@ -483,7 +454,7 @@ def ks_distance(samples_mm, rate_mm_h) -> float:
 
     For n exact samples its mean is ≈ 0.87/√n; above 1.95/√n happens with probability < 0.1 %.
     """
-    x = np.sort(_check("samples_mm", samples_mm, 0.0, math.inf, "mm").ravel())
+    x = np.sort(checks.array("samples_mm", samples_mm, 0.0, math.inf, "mm").ravel())
     if x.size == 0:
         raise ValueError("samples_mm must not be empty")
     f = np.asarray(drop_diameter_cdf(x, rate_mm_h))

@@ -5,36 +5,21 @@ The app, the headless runs and the benchmarks all drive the same ``Scene``, so w
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from rain_core import layout
-from rain_core.atmosphere import make_atmosphere, sky_overcast
+from rain_core import checks, layout
+from rain_core.atmosphere import sky_overcast
 from rain_core.camera import Camera, ChaseRig, driver_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
+from rain_core.checks import MAX_FRAME_DT_S  # noqa: F401  (re-exported: app.headless sub-steps by it)
+from rain_core.effects import default_effects
+from rain_core.gfx.frame import Frame
+from rain_core.gfx.renderer import Renderer
 from rain_core.lighting import lighting_for_hour
-from rain_core.rainfall import make_rainfall
-from rain_core.renderer import Frame, Renderer
-from rain_core.ripples import RipplesEffect
-from rain_core.road import make_road
 from rain_core.settings import Settings
-from rain_core.spray import make_spray
 from rain_core.vehicles import Autopilot, EgoCar, Traffic
 from rain_core.weather import Weather
-from rain_core.windshield import make_windshield
 from rain_core.world import build_world
-
-MAX_FRAME_DT_S = 0.25  # s; a longer stall (debugger, window drag) is simulated as this much time
-
-
-def default_effects(ctx, settings, seed: int = 0) -> list:
-    """The rain effects in update/draw order. Each decides per frame whether it runs (``active``). Order matters
-    for what they share through ``rc.resources``: the road publishes the film depth, the spray its droplets
-    landing in water, and ripples read both."""
-    return [make_road(ctx, settings), make_spray(ctx, settings), RipplesEffect(ctx, settings, seed=seed),
-            make_rainfall(ctx, settings, seed=seed), make_atmosphere(ctx, settings),
-            make_windshield(ctx, settings, seed=seed)]
 
 
 class Scene:
@@ -72,9 +57,7 @@ class Scene:
 
     def step(self, dt_s: float, drive=None) -> None:
         """Advance the scene by dt_s seconds (clamped to [0, MAX_FRAME_DT_S]; non-finite → ValueError)."""
-        if not math.isfinite(dt_s) or dt_s < 0:
-            raise ValueError(f"dt_s must be a finite number ≥ 0 s, got {dt_s!r}")
-        dt_s = min(dt_s, MAX_FRAME_DT_S)
+        dt_s = checks.time_step(dt_s)
         self.weather.apply_settings(self.settings)
         self.weather_state = self.weather.step(dt_s, self.settings.rain.rate_mm_h)
         if drive is None:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rain_core import layout
+from rain_core import checks, layout
 
 PERIOD_M = layout.PERIOD_M
 KINDS = ("car", "van", "truck")
@@ -246,16 +246,10 @@ class Vehicle:
 
 
 def _check_dt(dt_s: float) -> float:
-    if not math.isfinite(dt_s) or dt_s < 0:
-        raise ValueError(f"dt_s must be a finite number ≥ 0 s, got {dt_s!r}")
-    return min(float(dt_s), MAX_STEP_DT_S)
+    return checks.time_step(dt_s, MAX_STEP_DT_S)
 
 
-def _check_input(name: str, value: float, lo: float, hi: float) -> float:
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite (range [{lo}, {hi}]), got {value!r}")
-    return min(max(value, lo), hi)
+_check_input = checks.clamped
 
 
 class EgoCar(Vehicle):

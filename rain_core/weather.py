@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rain_core import physics
+from rain_core import checks, physics
 
 LEVELS = ("wetness", "cracks", "puddles")
 R_WET_MIN_MM_H = 0.05  # mm/h, below this no level rises and the road dries
@@ -98,9 +98,7 @@ class WeatherState:
 
 
 def _check_nonneg(name: str, value, unit: str, hi: float = math.inf) -> float:
-    if isinstance(value, bool) or np.ndim(value) != 0:
-        raise ValueError(f"{name} must be a finite number in [0, {hi:g}] {unit}, got {value!r}")
-    return float(physics._check(name, value, 0.0, hi, unit))
+    return checks.number(name, value, 0.0, hi, unit)
 
 
 class _GustSignal:

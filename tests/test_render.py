@@ -122,7 +122,7 @@ def test_changing_the_traffic_releases_old_meshes_and_draws_new_ones(gl_ctx):
         scene.settings.traffic.count = count
         scene.step(1 / 30)
         scene.render()
-        cached = scene.renderer._vehicle_vaos
+        cached = scene.renderer.scene._vehicles
         assert set(cached) == {id(v) for v in scene.vehicles}
         for key, (vehicle, _mesh) in cached.items():
             assert id(vehicle) == key  # the cache holds the very vehicle it drew

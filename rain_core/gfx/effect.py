@@ -1,0 +1,59 @@
+"""The contract every effect follows (DESIGN §1). The renderer, once per frame, for every effect in order:
+
+1. ``observe(frame)``: always, active or not — keep the little state that must follow the frame while the
+   effect is idle (e.g. the last time seen, so waking up does not replay the idle interval). No GL work.
+2. ``active(frame)``: a pure predicate — does the effect update and draw at all this frame? It changes nothing.
+3. For active effects: ``frame_uniforms(frame)`` (uniforms every program of the frame receives, e.g. the rain
+   medium; a function of the frame alone), then in order ``update(frame, rc)`` (simulation, reading and writing
+   ``rc.shared``), then ``render(stage, rc)`` for each stage in ``stages``; ``bind_scene`` before the scene
+   pass draws.
+   Inactive effects get ``unbind_scene`` so the scene shader sees their neutral values.
+
+Effects never assign renderer attributes; they share data only through ``rc.shared`` (``SharedResources``).
+Every effect is built the same way: ``EffectClass(ctx, settings=None, *, seed=0, shaders=None)``.
+"""
+
+from __future__ import annotations
+
+import moderngl
+
+from rain_core.gfx.frame import Frame, RenderContext
+
+STAGES = ("prepare", "transparent", "post", "overlay")
+
+
+class Effect:
+    """Base class of an effect. Override what you need; the defaults do nothing and cost nothing."""
+
+    name = "effect"
+    stages: tuple[str, ...] = ()
+
+    def observe(self, frame: Frame) -> None:
+        """Follow the frame while idle (called for every effect, every frame, before ``active``)."""
+
+    def active(self, frame: Frame) -> bool:
+        """Whether this effect runs this frame. Pure: no state changes."""
+        return False
+
+    def update(self, frame: Frame, rc: RenderContext) -> None:
+        """Advance the effect's simulation for this frame (CPU and/or GPU)."""
+
+    def frame_uniforms(self, frame: Frame) -> dict:
+        """Uniforms this effect sets in every program of the frame (before ``update``; active effects only)."""
+        return {}
+
+    def render(self, stage: str, rc: RenderContext) -> None:
+        """Draw for ``stage`` into ``rc.hdr`` (or offscreen targets for ``prepare``)."""
+
+    def bind_scene(self, program: moderngl.Program, rc: RenderContext) -> None:
+        """Set the scene shader's inputs this effect owns (called every frame while active)."""
+
+    def unbind_scene(self, program: moderngl.Program, rc: RenderContext) -> None:
+        """Reset those inputs to their neutral values (called when the effect is inactive)."""
+
+    def describe(self) -> str:
+        """A short state for the performance table (e.g. the backend a simulation chose)."""
+        return ""
+
+    def release(self) -> None:
+        """Free every GL object the effect created."""

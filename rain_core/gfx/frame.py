@@ -1,0 +1,156 @@
+"""What one frame hands to every effect: the ``Frame`` (simulation inputs), the ``RenderContext`` (GL objects and
+camera matrices), the typed ``SharedResources`` effects exchange, and the ``PassStat`` the renderer records.
+
+The world is periodic along Z (``layout.PERIOD_M``). Everything sent to the GPU is in a *wrapped* frame: world z
+minus ``shift_z``, a multiple of the period chosen so the camera sits in [0, PERIOD_M). That keeps float32
+positions precise however far the car has driven.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import moderngl
+import numpy as np
+
+from rain_core.camera import Camera
+from rain_core.gfx.shaders import ShaderLibrary
+from rain_core.gfx.targets import RenderTarget
+from rain_core.gfx.uniforms import mat4_bytes, set_uniform
+from rain_core.lighting import Lighting
+
+
+@dataclass
+class Frame:
+    """Everything the effects see for one frame. Units: s, m, m/s; rain in mm/h inside ``weather``."""
+
+    time_s: float
+    dt_s: float
+    camera: Camera
+    lighting: Lighting
+    world: object  # rain_core.world.World
+    ego: object | None = None  # rain_core.vehicles.Vehicle
+    vehicles: list = field(default_factory=list)  # every vehicle, the ego included
+    weather: object | None = None  # rain_core.weather.WeatherState
+    settings: object | None = None  # rain_core.settings.Settings
+    headlights_on: bool = False
+
+    @property
+    def rain_rate_mm_h(self) -> float:
+        return float(getattr(self.weather, "rate_mm_h", 0.0)) if self.weather is not None else 0.0
+
+
+@dataclass
+class PassStat:
+    name: str
+    ran: bool
+    cpu_ms: float = 0.0
+    gpu_ms: float | None = None
+    note: str = ""  # e.g. which backend an effect chose
+
+
+# --- what effects share -------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class WaterNormals:
+    """The ripple field's slopes: ``texture`` RG = (dh/dx, dh/dz); ``origin_xz_m`` the world (x, z) in m of the
+    centre of texel 0; ``extent_m`` from the first texel centre to the last."""
+
+    texture: moderngl.Texture
+    origin_xz_m: tuple[float, float]
+    extent_m: float
+
+
+@dataclass(frozen=True)
+class RainRings:
+    """A tiling normal map of raindrop rings on standing water, ``tile_m`` metres per repeat."""
+
+    texture: moderngl.Texture
+    tile_m: float
+
+
+FilmDepthFn = Callable[[np.ndarray, np.ndarray], np.ndarray]  # (x m, z m world) → standing water depth, mm
+
+
+@dataclass
+class SharedResources:
+    """The only channel between effects, filled anew every frame in update order (road → spray → ripples → …).
+
+    | field            | producer (stage)   | consumers                  |
+    |------------------|--------------------|----------------------------|
+    | film_depth_fn    | road (update)      | spray (update), ripples (update) |
+    | droplet_impacts  | spray (update)     | ripples (update)           |
+    | water_normals    | ripples (update)   | road (scene binding)       |
+    | rain_rings       | ripples (update)   | road (scene binding)       |
+
+    A field left None means its producer did not run this frame; consumers then fall back (documented there).
+    """
+
+    film_depth_fn: FilmDepthFn | None = None
+    # (N, 3): x m, z m world, downward momentum kg·m/s of spray parcels that landed in standing water.
+    droplet_impacts: np.ndarray | None = None
+    water_normals: WaterNormals | None = None
+    rain_rings: RainRings | None = None
+
+
+@dataclass
+class RenderContext:
+    """What a pass needs to draw: GL objects, the frame, camera matrices in the wrapped frame, the shared value,
+    and the per-frame uniforms every program receives (``set_frame_uniforms``).
+
+    Effects may call the renderer's public methods (``rc.renderer.draw_mirror_view``) and never assign to it."""
+
+    ctx: moderngl.Context
+    shaders: ShaderLibrary
+    frame: Frame
+    hdr: RenderTarget
+    size: tuple[int, int]
+    shift_z: float
+    view: np.ndarray
+    projection: np.ndarray
+    lights: tuple  # packed (pos, dir, color, count) for common/lighting.glsl
+    renderer: object  # rain_core.gfx.renderer.Renderer (public methods only)
+    shared: SharedResources = field(default_factory=SharedResources)
+    # Uniforms beyond the camera and lighting that every program gets: the medium the active effects report
+    # (Effect.frame_uniforms) over the clear-air defaults, and the sun shadow map's.
+    uniforms: dict = field(default_factory=dict)
+    active: tuple = ()  # the effects that run this frame
+    resources: dict = field(default_factory=dict)  # TRANSITION: removed once every effect uses ``shared``
+
+    @property
+    def view_proj(self) -> np.ndarray:
+        return self.projection @ self.view
+
+    @property
+    def camera_position(self) -> np.ndarray:
+        """Camera position (m) in the wrapped frame."""
+        return np.asarray(self.frame.camera.position, dtype=np.float64) - np.array([0.0, 0.0, self.shift_z])
+
+    def wrap(self, world_points) -> np.ndarray:
+        """World positions (…, 3) m → the wrapped frame the GPU uses."""
+        out = np.array(world_points, dtype=np.float64, copy=True)
+        out[..., 2] -= self.shift_z
+        return out
+
+    def set_frame_uniforms(self, program: moderngl.Program) -> None:
+        """Camera, exposure, sun/sky, lights, atmosphere and shadow uniforms, where the program has them."""
+        lighting = self.frame.lighting
+        values = {
+            "u_view_proj": mat4_bytes(self.view_proj),
+            "u_camera_pos": tuple(self.camera_position),
+            "u_exposure": lighting.exposure,
+            "u_time": self.frame.time_s,
+            "u_night": lighting.night_factor,
+            "u_sun_dir": tuple(lighting.sun_direction),
+            "u_sun_illum": tuple(lighting.sun_illuminance),
+            "u_sky_zenith": tuple(lighting.sky_zenith),
+            "u_sky_horizon": tuple(lighting.sky_horizon),
+            "u_ground_albedo": lighting.ground_albedo,
+            "u_light_count": self.lights[3],
+            **self.uniforms,
+        }
+        for name, value in values.items():
+            set_uniform(program, name, value)
+        for name, data in zip(("u_light_pos", "u_light_dir", "u_light_color"), self.lights[:3], strict=True):
+            set_uniform(program, name, data)

@@ -1,0 +1,228 @@
+"""The frame renderer: pass order and timing. Ordered passes into an offscreen HDR target, tone-mapped to sRGB.
+
+Stages, in order (an effect lists the ones it draws in; see ``rain_core.gfx.effect`` for the contract):
+  ``prepare``      offscreen work before the scene (simulation steps on the GPU, reflection maps)
+  ``scene``        built in: sky, world tiles, vehicles, cabin — effects may only bind inputs (``bind_scene``)
+  ``transparent``  blended into the HDR target with the scene's depth (rain streaks, spray)
+  ``post``         full-screen HDR work (glow, fog shafts)
+  ``overlay``      what sits in front of the eye (the windshield), reads a copy of the HDR frame
+then ``tonemap`` to the display image.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import moderngl
+import numpy as np
+
+from rain_core import layout
+from rain_core.gfx import units
+from rain_core.gfx.effect import STAGES
+from rain_core.gfx.frame import Frame, PassStat, RenderContext, SharedResources
+from rain_core.gfx.scene_draw import SceneDrawer
+from rain_core.gfx.shaders import ShaderLibrary
+from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
+from rain_core.gfx.targets import RenderTarget, float_target
+from rain_core.gfx.timing import PassTimer
+from rain_core.lighting import lights_for_frame, pack_lights
+
+# A clear day's aerial perspective: β ≈ 3.912 / 40 km (meteorological visibility 40 km).
+CLEAR_AIR_EXTINCTION_PER_M = 3.912 / 40000.0
+
+
+def clear_air_uniforms(lighting) -> dict:
+    """common/atmosphere.glsl's inputs in clear air; an active medium effect overrides them (frame_uniforms)."""
+    return {"u_extinction_per_m": CLEAR_AIR_EXTINCTION_PER_M,
+            "u_airlight": tuple(float(x) for x in lighting.sky_horizon),
+            "u_medium_extinction_per_m": 0.0, "u_airlight_sun": (0.0, 0.0, 0.0)}
+
+
+class Renderer:
+    """Draws frames of the street into an HDR target and tone-maps them.
+
+    ``render(frame)`` runs the passes; ``image()`` returns the last frame as uint8 (H, W, 3) sRGB, top row first;
+    ``present(fbo, size)`` draws it into a window's framebuffer. ``stats`` lists the passes of the last frame.
+    """
+
+    def __init__(self, ctx: moderngl.Context, size: tuple[int, int], world, effects=(),
+                 shaders: ShaderLibrary | None = None, gpu_timing: bool = True):
+        width, height = (int(v) for v in size)
+        if width <= 0 or height <= 0:
+            raise ValueError(f"render size must be positive, got {size!r}")
+        self.ctx = ctx
+        self.size = (width, height)
+        self.world = world
+        self.shaders = shaders or ShaderLibrary(ctx)
+        self.effects = list(effects)
+        self.gpu_timing = gpu_timing
+        self.stats: list[PassStat] = []
+        self.timing_source = "none"
+
+        self._make_targets()
+        self.shadow = ShadowMap(ctx, self.shaders)
+        self.scene = SceneDrawer(ctx, self.shaders, world, self.shadow.program)
+        self.tonemap_prog = self.shaders.program("common/fullscreen.vert", "core/tonemap.frag")
+        self.blit_prog = self.shaders.program("common/fullscreen.vert", "core/blit.frag")
+        self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
+        self._blit_vao = ctx.vertex_array(self.blit_prog, [])
+        self._timers: dict[str, PassTimer] = {}
+
+    @property
+    def scene_prog(self) -> moderngl.Program:
+        return self.scene.scene_prog
+
+    def _make_targets(self):
+        self.hdr = float_target(self.ctx, self.size, 4, "f2", depth=True)
+        self.ldr_color = self.ctx.texture(self.size, 4)
+        self.ldr_color.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self.ldr = self.ctx.framebuffer(color_attachments=[self.ldr_color])
+
+    def resize(self, size: tuple[int, int]) -> None:
+        """New frame size in pixels (a minimised window reports 0: keep the old targets then)."""
+        width, height = (int(v) for v in size)
+        if width <= 0 or height <= 0 or (width, height) == self.size:
+            return
+        self.hdr.release()
+        self.ctx.detect_framebuffer(0).use()
+        self.ldr.release()
+        self.ldr_color.release()
+        self.size = (width, height)
+        self._make_targets()
+
+    # --- views ----------------------------------------------------------------------------------------------
+    def render_context(self, frame: Frame, fbo_target: RenderTarget | None = None) -> RenderContext:
+        camera = frame.camera
+        shift_z = math.floor(float(camera.position[2]) / layout.PERIOD_M) * layout.PERIOD_M
+        view = camera.view_matrix(shift=(0.0, 0.0, shift_z))
+        proj = camera.projection_matrix(self.size[0] / self.size[1])
+        lights = lights_for_frame(getattr(self.world, "lamps", []), frame.vehicles, camera.position,
+                                  frame.lighting, shift_z, layout.PERIOD_M, frame.headlights_on)
+        return RenderContext(self.ctx, self.shaders, frame, fbo_target or self.hdr, self.size, shift_z, view, proj,
+                             pack_lights(lights), self, uniforms={**clear_air_uniforms(frame.lighting), **NO_SHADOW})
+
+    def _draw_scene(self, rc: RenderContext, include_sky: bool = True, clip_plane=None) -> None:
+        self.shadow.bind()  # re-bound per draw: a GPU simulation may have used the unit
+        self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane)
+
+    def draw_mirror_view(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray,
+                         clip_plane: tuple[float, float, float, float]) -> None:
+        """Draw the scene reflected by ``mirror`` (a 4×4 reflection in the wrapped frame) into ``target``, as seen
+        through the main view's projection: a texel of ``target`` lies where the main camera sees the surface
+        point that reflects it. ``camera``: the mirrored camera (its position lights the speculars);
+        ``clip_plane`` (a, b, c, d) keeps what is on its positive side. Same effects, same shared value."""
+        mrc = dataclasses.replace(self.render_context(dataclasses.replace(rc.frame, camera=camera), target),
+                                  view=rc.view @ mirror, projection=rc.projection, shared=rc.shared,
+                                  uniforms=rc.uniforms, active=rc.active)
+        target.fbo.use()
+        target.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+        self.ctx.disable(moderngl.CULL_FACE)
+        self.ctx.front_face = "cw"  # mirroring flips the winding
+        try:
+            self._draw_scene(mrc, include_sky=True, clip_plane=clip_plane)
+        finally:
+            self.ctx.front_face = "ccw"
+
+    def draw_scene(self, rc, active_effects, include_sky=True, clip_plane=None):  # TRANSITION: road's old mirror
+        rc.active = tuple(active_effects)
+        self._draw_scene(rc, include_sky, clip_plane)
+
+    # --- passes ---------------------------------------------------------------------------------------------
+    def _timed(self, name: str, fn) -> None:
+        timer = self._timers.get(name)
+        if timer is None:
+            timer = self._timers[name] = PassTimer(self.ctx, gpu=self.gpu_timing)
+            self.timing_source = timer.gpu_source
+        cpu_ms, gpu_ms = timer.measure(fn)
+        self.stats.append(PassStat(name, True, cpu_ms, gpu_ms))
+
+    def render(self, frame: Frame) -> None:
+        """Run every pass of one frame into the HDR target and tone-map it."""
+        ctx = self.ctx
+        self.stats = []
+        self.scene.forget_vehicles(frame.vehicles)
+        for effect in self.effects:
+            effect.observe(frame)
+        active = tuple(e for e in self.effects if e.active(frame))
+        self.stats.extend(PassStat(e.name, False) for e in self.effects if e not in active)
+        rc = self.render_context(frame)
+        rc.active = active
+        rc.shared = SharedResources()
+        for effect in active:  # e.g. the rain medium, which every program of the frame sees
+            rc.uniforms.update(effect.frame_uniforms(frame))
+        for effect in active:
+            self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
+            self.stats[-1].note = effect.describe()
+        if sun_is_up(frame.lighting):
+            self._timed("shadow", lambda: rc.uniforms.update(self.shadow.render(rc, self.scene.draw_list(rc, False))))
+        else:  # the sun is down: nothing casts a sun shadow
+            self.stats.append(PassStat("shadow", False))
+        for effect in active:
+            if "prepare" in effect.stages:
+                self._timed(f"{effect.name}.prepare", lambda e=effect: e.render("prepare", rc))
+
+        def scene():
+            self.hdr.fbo.use()
+            self.hdr.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+            ctx.disable(moderngl.CULL_FACE)  # meshes are not all consistently wound; shading flips back faces
+            self._draw_scene(rc)
+
+        self._timed("scene", scene)
+        for stage in STAGES[1:]:
+            for effect in active:
+                if stage in effect.stages:
+                    def draw(e=effect, s=stage):
+                        self.hdr.fbo.use()
+                        e.render(s, rc)
+                    self._timed(f"{effect.name}.{stage}", draw)
+
+        def tonemap():
+            ctx.disable(moderngl.DEPTH_TEST)
+            ctx.disable(moderngl.BLEND)
+            self.ldr.use()
+            self.hdr.color.use(units.IMAGE)
+            self.tonemap_prog["u_hdr"].value = units.IMAGE
+            self._tonemap_vao.render(moderngl.TRIANGLES, vertices=3)
+
+        self._timed("tonemap", tonemap)
+
+    # --- output ---------------------------------------------------------------------------------------------
+    def image(self) -> np.ndarray:
+        """The last tone-mapped frame, uint8 (H, W, 3) sRGB, top row first."""
+        data = self.ldr.read(components=3, alignment=1)
+        img = np.frombuffer(data, dtype=np.uint8).reshape(self.size[1], self.size[0], 3)
+        return np.ascontiguousarray(img[::-1])
+
+    def hdr_image(self) -> np.ndarray:
+        """The last pre-exposed HDR frame, float32 (H, W, 3), top row first (for tests: NaN checks, ratios)."""
+        data = self.hdr.fbo.read(components=3, dtype="f4", alignment=1)
+        return np.frombuffer(data, dtype=np.float32).reshape(self.size[1], self.size[0], 3)[::-1].copy()
+
+    def present(self, fbo: moderngl.Framebuffer, viewport: tuple[int, int, int, int] | None = None) -> None:
+        """Draw the last display image into ``fbo`` (a window's framebuffer), scaled to its viewport."""
+        self.ctx.disable(moderngl.DEPTH_TEST)
+        self.ctx.disable(moderngl.BLEND)
+        fbo.use()
+        if viewport is not None:
+            fbo.viewport = viewport
+        self.ldr_color.use(units.IMAGE)
+        self.blit_prog["u_image"].value = units.IMAGE
+        self._blit_vao.render(moderngl.TRIANGLES, vertices=3)
+
+    def pass_table(self) -> list[tuple[str, bool, float, float | None, str]]:
+        """(pass, ran, CPU ms, GPU ms or None, note) for each pass of the last frame."""
+        return [(s.name, s.ran, s.cpu_ms, s.gpu_ms, s.note) for s in self.stats]
+
+    def release(self) -> None:
+        for effect in self.effects:
+            effect.release()
+        self.hdr.release()
+        self.ctx.detect_framebuffer(0).use()  # never leave a released framebuffer bound
+        self.ldr.release()
+        self.ldr_color.release()
+        self.shadow.release()
+        self.scene.release()
+        for obj in (self._tonemap_vao, self._blit_vao):
+            obj.release()
+        self._timers.clear()  # moderngl queries have no release(); they go with their context

@@ -1,0 +1,150 @@
+"""Drawing the opaque scene: sky, world tiles (periodic along Z), vehicles and, inside the car, the cabin.
+
+The renderer draws it for the main view and, through ``Renderer.draw_mirror_view``, for auxiliary views such
+as the road's planar reflection.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from rain_core import layout
+from rain_core.gfx.frame import RenderContext
+from rain_core.gfx.shaders import ShaderLibrary
+from rain_core.gfx.uniforms import mat4_bytes
+from rain_core.mesh import VERTEX_ATTRIBUTES, VERTEX_FORMAT
+
+# Share of direct sun/lamp light that reaches the cabin interior (the roof and pillars shade most of it).
+CABIN_DIRECT_LIGHT = 0.2
+
+GL_CLIP_DISTANCE0 = 0x3000  # not in moderngl's enable flags: toggled with ctx.enable_direct
+
+
+@dataclass
+class GpuMesh:
+    """A VERTEX_DTYPE mesh on the GPU: one VAO for the lit scene shader, one for the shadow depth pass."""
+
+    vao: moderngl.VertexArray
+    depth_vao: moderngl.VertexArray
+    count: int
+    vbo: moderngl.Buffer
+
+    def release(self) -> None:
+        for obj in (self.vao, self.depth_vao, self.vbo):
+            obj.release()
+
+
+class SceneDrawer:
+    """Owns the scene and sky programs and the meshes of the world, the vehicles and the cabin."""
+
+    def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary, world, shadow_program: moderngl.Program):
+        self.ctx = ctx
+        self.scene_prog = shaders.program("core/scene.vert", "core/scene.frag")
+        self.sky_prog = shaders.program("common/fullscreen.vert", "core/sky.frag")
+        self._shadow_prog = shadow_program
+        self._sky_vao = ctx.vertex_array(self.sky_prog, [])
+        self._world = self._mesh(world.vertices)
+        # id(vehicle) → (vehicle, mesh): holding the vehicle keeps its id from being reused by a new one.
+        self._vehicles: dict[int, tuple[object, GpuMesh]] = {}
+        self._cabin: list[tuple[GpuMesh, float]] | None = None
+
+    # --- geometry -------------------------------------------------------------------------------------------
+    def _mesh(self, vertices: np.ndarray) -> GpuMesh:
+        vbo = self.ctx.buffer(np.ascontiguousarray(vertices).tobytes())
+        vao = self.ctx.vertex_array(self.scene_prog, [(vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
+        depth_vao = self.ctx.vertex_array(self._shadow_prog, [(vbo, "3f 36x", "in_position")])
+        return GpuMesh(vao, depth_vao, len(vertices), vbo)
+
+    def _vehicle_mesh(self, vehicle) -> GpuMesh:
+        key = id(vehicle)
+        if key not in self._vehicles:
+            from rain_core.car_mesh import vehicle_mesh
+
+            color = getattr(vehicle, "color", (0.5, 0.05, 0.04))
+            self._vehicles[key] = (vehicle, self._mesh(vehicle_mesh(vehicle.spec, np.asarray(color, np.float32))))
+        return self._vehicles[key][1]
+
+    def forget_vehicles(self, vehicles) -> None:
+        """Release the meshes of vehicles that left the scene (e.g. the traffic count changed)."""
+        present = {id(v) for v in vehicles}
+        for key in [k for k in self._vehicles if k not in present]:
+            self._vehicles.pop(key)[1].release()
+
+    def _cabin_meshes(self, ego):
+        """The cabin as (mesh, direct-light share): painted outside parts (hood, mirrors) get full direct light,
+        the interior the share its roof lets in."""
+        if self._cabin is None:
+            from rain_core.car_mesh import cabin_mesh
+            from rain_core.mesh import MAT_CAR_PAINT
+
+            vertices = cabin_mesh(ego.spec)
+            outside = np.round(vertices["params"][:, 2]) == MAT_CAR_PAINT
+            self._cabin = [(self._mesh(part), share) for part, share in
+                           ((vertices[outside], 1.0), (vertices[~outside], CABIN_DIRECT_LIGHT)) if len(part)]
+        return self._cabin
+
+    def draw_list(self, rc: RenderContext, include_cabin: bool):
+        """(mesh, model matrix in the wrapped frame, direct-light share) of everything opaque in the frame."""
+        frame = rc.frame
+        cam_z = rc.camera_position[2]
+        for k in (-1, 0, 1):
+            offset = k * layout.PERIOD_M
+            if abs(cam_z - (offset + layout.PERIOD_M / 2)) > layout.PERIOD_M * 1.5:
+                continue
+            model = np.eye(4)
+            model[2, 3] = offset
+            yield self._world, model, 1.0
+        inside = frame.camera.inside_car
+        for vehicle in frame.vehicles:
+            if inside and include_cabin and vehicle is frame.ego:
+                continue
+            model = vehicle.model_matrix().copy()
+            model[2, 3] -= rc.shift_z
+            yield self._vehicle_mesh(vehicle), model, 1.0
+        if inside and include_cabin and frame.ego is not None:
+            model = frame.ego.model_matrix().copy()
+            model[2, 3] -= rc.shift_z
+            for mesh, share in self._cabin_meshes(frame.ego):
+                yield mesh, model, share
+
+    # --- drawing --------------------------------------------------------------------------------------------
+    def draw(self, rc: RenderContext, effects, include_sky: bool = True,
+             clip_plane: tuple[float, float, float, float] | None = None) -> None:
+        """Sky, world tiles, vehicles and (inside the car) the cabin, into the bound framebuffer. ``effects``: all
+        of the renderer's; the active ones (``rc.active``) bind their scene inputs, the rest their neutral ones."""
+        ctx = self.ctx
+        ctx.disable(moderngl.BLEND)
+        if include_sky:
+            ctx.disable(moderngl.DEPTH_TEST)
+            rc.set_frame_uniforms(self.sky_prog)
+            self.sky_prog["u_inv_view_proj"].write(mat4_bytes(np.linalg.inv(rc.view_proj)))
+            self._sky_vao.render(moderngl.TRIANGLES, vertices=3)
+        ctx.enable(moderngl.DEPTH_TEST)
+        prog = self.scene_prog
+        rc.set_frame_uniforms(prog)
+        # Clip plane (reflection passes): keep dot((x, y, z, 1), plane) >= 0, wrapped-frame world positions.
+        prog["u_clip_plane"].value = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
+        if clip_plane is not None:
+            ctx.enable_direct(GL_CLIP_DISTANCE0)
+        for effect in effects:
+            if effect in rc.active:
+                effect.bind_scene(prog, rc)
+            else:
+                effect.unbind_scene(prog, rc)
+        for mesh, model, share in self.draw_list(rc, include_cabin=True):
+            prog["u_model"].write(mat4_bytes(model))
+            prog["u_direct_scale"].value = share
+            mesh.vao.render(moderngl.TRIANGLES, vertices=mesh.count)
+        prog["u_direct_scale"].value = 1.0
+        if clip_plane is not None:
+            ctx.disable_direct(GL_CLIP_DISTANCE0)
+
+    def release(self) -> None:
+        for mesh in [self._world, *(m for _, m in self._vehicles.values()), *(m for m, _ in (self._cabin or []))]:
+            mesh.release()
+        self._vehicles.clear()
+        self._cabin = None
+        self._sky_vao.release()

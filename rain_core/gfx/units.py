@@ -1,0 +1,36 @@
+"""The one table of texture units. A pass binds its textures to its own units, so nothing one effect binds can
+be read by mistake by another's shader. Units the scene shader samples must differ from each other; offscreen
+passes (simulation steps, tone map, blit) bind their inputs to the scratch units just before they draw and the
+scene pass re-binds what it samples every frame.
+"""
+
+# Scratch units for offscreen passes (inputs bound right before a draw, never read by the scene shader).
+SCRATCH = (0, 1, 2)
+IMAGE = 0  # the renderer's tone map and blit: the image being read
+
+# The renderer's own.
+SHADOW_MAP = 2  # sun shadow depth, sampled by the scene shader (re-bound every scene draw)
+
+# Road (sampled by the scene shader).
+ROAD_RAIN_RINGS = 3
+ROAD_HEIGHT = 4
+ROAD_MAPS = 5
+ROAD_REFLECTION = 6
+ROAD_RIPPLES = 7
+
+# Rainfall.
+RAINFALL_STATE = 8
+RAINFALL_ENV = 9
+
+# Atmosphere.
+ATMOSPHERE_GLOW = 10
+ATMOSPHERE_DEPTH = 11
+
+# Windshield: film, coarse film, normals, the frame behind the glass.
+WINDSHIELD = (12, 13, 14, 15)
+
+# Spray.
+SPRAY_DEPTH = 16
+
+# What the scene shader samples in one draw: these must all differ (tests/gfx/test_units.py).
+SCENE_SHADER = (SHADOW_MAP, ROAD_RAIN_RINGS, ROAD_HEIGHT, ROAD_MAPS, ROAD_REFLECTION, ROAD_RIPPLES)
