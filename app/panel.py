@@ -23,8 +23,6 @@ SECTIONS = (
     ("time_of_day", "Time of day"), ("traffic", "Traffic"), ("quality", "Quality"), ("ripples", "Ripples"),
     ("rainfall", "Rainfall"), ("spray", "Spray"), ("windshield", "Windshield"), ("atmosphere", "Atmosphere"),
 )
-WIRED = {"rain", "road", "wind", "wipers", "camera", "time_of_day", "traffic", "quality", "ripples", "rainfall",
-         "spray", "windshield", "atmosphere"}
 # Fields the generic widgets should not show (edited by dedicated widgets).
 CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks", "rain.puddles"}
 LOG_FIELDS = {"rain.time_scale"}
@@ -207,9 +205,6 @@ class RainManagerPanel:
             if self.expand_all:
                 imgui.set_next_item_open(True)
             if not imgui.collapsing_header(title, open_by_default):
-                continue
-            if section not in WIRED:
-                imgui.text_disabled("arrives with its effect")
                 continue
             effect = next((e for e in self.scene.effects if e.name == section), None)
             if effect is not None and effect.describe():

@@ -124,11 +124,6 @@ def _profile(spec: VehicleSpec) -> _Profile:
 
 
 # --- primitive builders ---------------------------------------------------------------------------------------
-def _finish(finish, color) -> tuple:
-    albedo, rough, metal, mat = finish
-    return (color if albedo is None else albedo), rough, metal, mat
-
-
 def _paint(color) -> tuple:
     return (tuple(float(c) for c in color), _PAINT_ROUGHNESS, _PAINT_METALLIC, MAT_CAR_PAINT)
 

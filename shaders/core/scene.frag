@@ -24,7 +24,7 @@ void main() {
         s.albedo = v_albedo;
         s.roughness = clamp(v_params.x, 0.02, 1.0);
         s.metallic = v_params.y;
-        s.f0 = material == MAT_GLASS ? 0.04 : 0.04;
+        s.f0 = 0.04;  // dielectrics (paint, glass, asphalt): IOR ≈ 1.5
         s.ambient_occlusion = 1.0;
         apply_surface_effects(s, material);
         radiance = shade_surface(s, V);
