@@ -20,3 +20,6 @@ def test_wheel_contains_shaders_and_assets(tmp_path):
     assert "rain_core/assets/scenarios/heavy.toml" in names
     assert "app/__main__.py" in names
     assert any(n.endswith("entry_points.txt") for n in names)
+    for source in [*(ROOT / "rain_core").rglob("*.py"), *(ROOT / "app").rglob("*.py")]:
+        name = source.relative_to(ROOT).as_posix()
+        assert name in names, f"{name} is missing from the wheel: list its package in pyproject.toml"
