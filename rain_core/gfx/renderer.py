@@ -54,6 +54,7 @@ class Renderer:
         self.ctx = ctx
         self.size = (width, height)
         self.world = world
+        self._owns_shaders = shaders is None
         self.shaders = shaders or ShaderLibrary(ctx)
         self.effects = list(effects)
         self.gpu_timing = gpu_timing
@@ -226,3 +227,5 @@ class Renderer:
         for obj in (self._tonemap_vao, self._blit_vao):
             obj.release()
         self._timers.clear()  # moderngl queries have no release(); they go with their context
+        if self._owns_shaders:
+            self.shaders.release()

@@ -127,3 +127,9 @@ class ShaderLibrary:
             raise ShaderCompileError(f"compiling {names}:\n" + self._translate_errors(str(exc), sources)) from None
         self._programs[key] = prog
         return prog
+
+    def release(self) -> None:
+        """Release every program compiled through this library (its owner calls this when it is done)."""
+        for program in self._programs.values():
+            program.release()
+        self._programs.clear()
