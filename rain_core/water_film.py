@@ -1,2 +1,188 @@
-# temporary forwarder: the road helper moves the film model here
-from rain_core.road import WET_FILM_MM, film_depth_mm  # noqa: F401
+"""Water on the road (DESIGN §3 "Wet road"): standing water in cracks and puddles and the thin wet film.
+
+The one model of the water the road holds, shared by the road effect (which draws it), the spray (what the
+wheels throw) and the ripples (where drops land in water). NumPy float64, the reference; the GLSL twin is
+``shaders/road/film.glsl`` (tests/effects/road/test_film.py checks the constants and the values agree).
+GL-free: it imports no ``moderngl``.
+
+Standing water comes from the road heightmap h (0 lowest: cracks ≈ 0–0.35, ruts ≈ 0.5–0.65, lane centres
+0.7–0.85), the same map smoothed over PUDDLE_GROUND_SIGMA_M (h_s, without the cracks), and a seeded noise map
+n ∈ [0, 1] (uniform; periodic in 1200 m so it never tiles visibly). Cracks hold
+``CRACK_MAX_MM · clamp((cracks · CRACK_LEVEL − h) / CRACK_DEPTH_SPAN, 0, 1)`` mm (they fill and dry with the fast
+level). Puddles lie where the blended ground ``g = (1 − K)·h_s + K·n`` is below the slow level
+``L = PUDDLE_LEVEL_MAX · (puddles · puddle_amount)^PUDDLE_LEVEL_EXPONENT`` and hold
+``PUDDLE_MAX_MM · clamp((L − g) / PUDDLE_DEPTH_SPAN, 0, 1)`` mm: they follow the ruts and low spots, and the noise
+decides which stretch of rut floods. The wet film itself is ``WET_FILM_MM · wetness`` mm. No water off the
+asphalt (|x| > 7 m) nor under roofs higher than SHELTER_MIN_HEIGHT_M (the bridge deck, the fuel-station canopy).
+
+Frames: x across the road (m), z along it (m, any world z: every map here is periodic in ``layout.PERIOD_M``, so
+world z and the renderer's wrapped z give the same values).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+
+from rain_core import checks, layout
+from rain_core.world import HEIGHTMAP_TEXEL_M, sample_heightmap
+
+# shaders/road/film.glsl holds the same numbers.
+WET_FILM_MM = 0.2  # mm, water film on a fully wet road (between the macrotexture peaks)
+CRACK_MAX_MM = 3.0  # mm, deepest water in a crack
+CRACK_LEVEL = 0.42  # height01 reached by the crack level at cracks = 1 (just above the cracks, below the ruts)
+CRACK_DEPTH_SPAN = 0.2  # height01 below the crack level where a crack holds CRACK_MAX_MM
+PUDDLE_MAX_MM = 10.0  # mm, puddles are shallow (DESIGN §3)
+PUDDLE_NOISE_WEIGHT = 0.45  # K: share of the noise map in the puddle ground g = (1 − K)·h + K·n
+PUDDLE_LEVEL_MAX = 0.56  # the puddle level at puddles = puddle_amount = 1 (about half the road under water)
+PUDDLE_LEVEL_EXPONENT = 0.25  # level = MAX·(puddles·amount)^this: the low ground is a thin tail, so a
+#                               linear level would flood almost nothing until the end, then everything
+PUDDLE_DEPTH_SPAN = 0.35  # ground units below the level where a puddle is PUDDLE_MAX_MM deep
+PUDDLE_GROUND_SIGMA_M = 0.15  # m: puddles see the road's shape, not its cracks (the crack level fills those)
+ROAD_HALF_WIDTH_M = layout.ROAD_HALF_WIDTH_M
+PUDDLE_MAP_CELL_M = 0.25  # m, noise and shelter map texels (x over the road width, z over a period)
+SHELTER_MIN_HEIGHT_M = 0.5  # m, a roof higher than this above the road keeps the rain off it
+
+
+# --- maps ------------------------------------------------------------------------------------------------
+
+def _road_map_shape() -> tuple[int, int]:
+    """(rows along z over a period, columns across the road) of the puddle-map grid."""
+    return (int(round(layout.PERIOD_M / PUDDLE_MAP_CELL_M)), int(round(2 * ROAD_HALF_WIDTH_M / PUDDLE_MAP_CELL_M)))
+
+
+def _periodic_smooth_noise(rng: np.random.Generator, shape, sigma_cells: float) -> np.ndarray:
+    """Gaussian-filtered white noise, periodic on both axes (Fourier filter), zero mean, unit std."""
+    white = rng.standard_normal(shape)
+    kz = np.fft.fftfreq(shape[0])[:, None]
+    kx = np.fft.rfftfreq(shape[1])[None, :]
+    out = np.fft.irfft2(np.fft.rfft2(white) * np.exp(-2.0 * (np.pi * sigma_cells) ** 2 * (kz**2 + kx**2)), s=shape)
+    out -= out.mean()
+    return out / (out.std() + 1e-12)
+
+
+@lru_cache(maxsize=8)
+def puddle_noise(seed: int = 0) -> np.ndarray:
+    """The seeded puddle noise map, float32 (rows along z over PERIOD_M, columns across the road), values
+    uniformly distributed in (0, 1) (a rank transform of smooth Gaussian noise: puddle_amount then maps to
+    coverage predictably). Blobs of a few metres with a finer octave for ragged outlines."""
+    nz, nx = _road_map_shape()
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0x70AD]))
+    field = _periodic_smooth_noise(rng, (nz, nx), 6.0) + 0.35 * _periodic_smooth_noise(rng, (nz, nx), 1.5)
+    ranks = np.empty(field.size)
+    ranks[np.argsort(field, axis=None, kind="stable")] = (np.arange(field.size) + 0.5) / field.size
+    return ranks.reshape(nz, nx).astype(np.float32)
+
+
+def shelter_map(world) -> np.ndarray:
+    """Where roofs keep the rain off the road, float32 in [0, 1] on the puddle-map grid (1 = fully under a
+    roof higher than SHELTER_MIN_HEIGHT_M; edges softened over ~0.5 m as blown rain reaches a little under)."""
+    nz, nx = _road_map_shape()
+    occ = getattr(world, "occluder_map", None)
+    if occ is None:
+        return np.zeros((nz, nx), dtype=np.float32)
+    x = -ROAD_HALF_WIDTH_M + (np.arange(nx) + 0.5) * PUDDLE_MAP_CELL_M
+    z = (np.arange(nz) + 0.5) * PUDDLE_MAP_CELL_M
+    heights = np.asarray(world.occluder_height(x[None, :], z[:, None]), dtype=np.float64)
+    roof = (np.isfinite(heights) & (heights > SHELTER_MIN_HEIGHT_M)).astype(np.float64)
+    for _ in range(2):  # [1 2 1]/4 twice along both axes (z wraps, x clamps)
+        roof = 0.25 * np.roll(roof, 1, axis=0) + 0.5 * roof + 0.25 * np.roll(roof, -1, axis=0)
+        padded = np.pad(roof, ((0, 0), (1, 1)), mode="edge")
+        roof = 0.25 * padded[:, :-2] + 0.5 * padded[:, 1:-1] + 0.25 * padded[:, 2:]
+    return roof.astype(np.float32)
+
+
+def sample_road_map(grid: np.ndarray, x, z) -> np.ndarray:
+    """Bilinear sample of a puddle-map grid (rows z over PERIOD_M, columns x over the road) at x, z (m),
+    exactly as a GL LINEAR texture clamped across x and repeated along z (u = (x + 7)/14, v = z/PERIOD_M)."""
+    return sample_heightmap(grid, (2 * ROAD_HALF_WIDTH_M, layout.PERIOD_M), x, z)
+
+
+def smooth_heightmap(hmap: np.ndarray, sigma_m: float = PUDDLE_GROUND_SIGMA_M) -> np.ndarray:
+    """The road heightmap blurred by a Gaussian of sigma_m (m): wraps along z, clamps across x (like its
+    texture). The puddles' ground: a 5 cm crack does not cut a puddle's soft margin into a hard edge."""
+    sigma = sigma_m / HEIGHTMAP_TEXEL_M
+    radius = int(math.ceil(3 * sigma))
+    k = np.exp(-0.5 * (np.arange(-radius, radius + 1) / sigma) ** 2)
+    k /= k.sum()
+    h = np.asarray(hmap, dtype=np.float64)
+    out = sum(w * np.roll(h, s, axis=0) for s, w in zip(range(-radius, radius + 1), k, strict=True))
+    padded = np.pad(out, ((0, 0), (radius, radius)), mode="edge")
+    out = sum(w * padded[:, i:i + h.shape[1]] for i, w in enumerate(k))
+    return out.astype(np.float32)
+
+
+@lru_cache(maxsize=4)
+def smooth_heightmap_for(world) -> np.ndarray:
+    """:func:`smooth_heightmap` of ``world.road_heightmap``, cached per world."""
+    return smooth_heightmap(world.road_heightmap)
+
+
+@lru_cache(maxsize=4)
+def shelter_map_for(world) -> np.ndarray:
+    """:func:`shelter_map` of ``world``, cached per world."""
+    return shelter_map(world)
+
+
+@lru_cache(maxsize=1)
+def default_world():
+    """The default street, ``build_world(seed=1)`` (what the film functions use when given no world)."""
+    from rain_core.world import build_world
+
+    return build_world(seed=1)
+
+
+# --- standing water and film (NumPy twin of shaders/road/film.glsl) ----------------------------------------
+
+def crack_level(cracks: float) -> float:
+    """The crack flood level in height01 units (what the shader's u_road_levels.y holds)."""
+    return float(cracks) * CRACK_LEVEL
+
+
+def puddle_level(puddles: float, puddle_amount: float) -> float:
+    """The puddle water level in ground units (u_road_levels.z): PUDDLE_LEVEL_MAX·(puddles·amount)^exponent."""
+    return PUDDLE_LEVEL_MAX * (float(puddles) * float(puddle_amount)) ** PUDDLE_LEVEL_EXPONENT
+
+
+def _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount):
+    crack = CRACK_MAX_MM * np.clip((cracks * CRACK_LEVEL - h) / CRACK_DEPTH_SPAN, 0.0, 1.0)
+    ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
+    level = PUDDLE_LEVEL_MAX * (puddles * puddle_amount) ** PUDDLE_LEVEL_EXPONENT
+    puddle = PUDDLE_MAX_MM * np.clip((level - ground) / PUDDLE_DEPTH_SPAN, 0.0, 1.0)
+    return np.maximum(crack, puddle) * (1.0 - shelter)
+
+
+def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0):
+    """(standing water, film) depths in mm at road points x, z (m; arrays broadcast): standing water in cracks
+    and puddles, and the wet film WET_FILM_MM·wetness. Both 0 off the asphalt (|x| > 7 m) and under roofs."""
+    cracks, puddles, puddle_amount, wetness = (
+        checks.number(name, v, 0.0, 1.0) for name, v in (("cracks", cracks), ("puddles", puddles),
+                                                        ("puddle_amount", puddle_amount), ("wetness", wetness)))
+    world = world if world is not None else default_world()
+    x = np.asarray(x_m, dtype=np.float64)
+    z = np.asarray(z_m, dtype=np.float64)
+    x, z = np.broadcast_arrays(x, z)
+    h = sample_heightmap(world.road_heightmap, world.heightmap_extent_m, x, z)
+    h_smooth = sample_heightmap(smooth_heightmap_for(world), world.heightmap_extent_m, x, z)
+    n = sample_road_map(puddle_noise(int(seed)), x, z)
+    shelter = sample_road_map(shelter_map_for(world), x, z)
+    on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
+    standing = np.where(on_road, _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount),
+                        0.0)
+    film = np.where(on_road, WET_FILM_MM * wetness * (1.0 - shelter), 0.0)
+    return standing, film
+
+
+def film_depth_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0) -> np.ndarray:
+    """Water film depth (mm, ≤ PUDDLE_MAX_MM = 10) on the road at x, z (m; vectorised, any world z).
+
+    cracks, puddles: the weather's two flood levels in [0, 1]; puddle_amount in [0, 1] (settings.road): how much
+    of the road can hold puddles; seed: the puddle noise map's seed (settings.road.puddle_seed); world: gives
+    the road heightmap and the roofs (None: the default street, ``build_world(seed=1)``); wetness in [0, 1]
+    adds the thin film of a wet road (WET_FILM_MM at 1; default 0 = standing water only). 0 off the asphalt
+    (|x| > 7 m) and under roofs. The GLSL twin is ``road_film_depth_mm`` in shaders/road/film.glsl.
+    """
+    standing, film = water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount, seed, world, wetness)
+    return np.maximum(standing, film)

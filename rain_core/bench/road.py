@@ -19,8 +19,8 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from rain_core.bench._common import markdown_table, parser, write_output
+from rain_core.effects.road import RoadEffect
 from rain_core.gl import create_headless_context
-from rain_core.road import RoadEffect
 from rain_core.scene import Scene
 from rain_core.settings import Settings, set_value
 
@@ -65,6 +65,7 @@ def _reflection_pass_ms(ctx, scene: Scene, effect: RoadEffect, repeat: int) -> f
     """Median wall ms of the reflection pass alone (ctx.finish() before and after)."""
     frame = scene.frame()
     rc = scene.renderer.render_context(frame)
+    rc.active = tuple(e for e in scene.renderer.effects if e.active(frame))  # what the mirror view draws
     effect.update(frame, rc)
     samples = []
     for _ in range(repeat + 1):
@@ -90,7 +91,7 @@ def cost_table(ctx, size, frames: int, hour: float) -> tuple[str, list]:
     for _name, enabled, levels, reflections in CASES:
         settings = _settings(hour, enabled, levels, reflections)
         scene = Scene(ctx, size, settings, seed=1, effects=[], gpu_timing=False)
-        scene.renderer.effects.append(RoadEffect(ctx, scene.renderer.shaders, scene.world, settings))
+        scene.renderer.effects.append(RoadEffect(ctx, settings, shaders=scene.renderer.shaders))
         for _ in range(20):
             scene.step(1 / 30)
         _timed_frame(ctx, scene)  # warm-up: buffers, shader variants
@@ -121,7 +122,7 @@ def cost_table(ctx, size, frames: int, hour: float) -> tuple[str, list]:
 def scale_table(ctx, size, repeat: int, hour: float) -> tuple[str, list]:
     settings = _settings(hour, True, (1.0, 1.0, 1.0), True, 1.0)
     scene = Scene(ctx, size, settings, seed=1, effects=[], gpu_timing=False)
-    effect = RoadEffect(ctx, scene.renderer.shaders, scene.world, settings)
+    effect = RoadEffect(ctx, settings, shaders=scene.renderer.shaders)
     scene.renderer.effects.append(effect)
     for _ in range(20):
         scene.step(1 / 30)

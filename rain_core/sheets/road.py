@@ -14,9 +14,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
+from rain_core.effects.road import RoadEffect
 from rain_core.gl import create_headless_context
 from rain_core.lighting import lighting_for_hour
-from rain_core.road import RoadEffect
 from rain_core.scene import Scene
 from rain_core.settings import Settings, set_value
 from rain_core.sheets import DEFAULT_OUT, save_sheet
@@ -42,7 +42,7 @@ def render_frames(ctx, size: tuple[int, int]) -> tuple[list, list]:
     set_value(settings, "road.puddle_amount", 0.8)
     set_value(settings, "road.reflection_scale", 0.5)
     scene = Scene(ctx, size, settings, seed=1, effects=[])
-    scene.renderer.effects.append(RoadEffect(ctx, scene.renderer.shaders, scene.world, settings))
+    scene.renderer.effects.append(RoadEffect(ctx, settings, shaders=scene.renderer.shaders))
     for _ in range(45):  # the chase rig settles behind the car
         scene.step(1 / 30)
     images, labels = [], []

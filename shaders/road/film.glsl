@@ -1,9 +1,9 @@
-// Standing water and the wet film on the road: the GLSL twin of rain_core/road.py (water_depths_mm,
-// film_depth_mm). Keep the constants equal to the Python ones (tests/test_road.py compares them).
+// Standing water and the wet film on the road: the GLSL twin of rain_core/water_film.py (water_depths_mm,
+// film_depth_mm). Keep the constants equal to the Python ones (tests/effects/road/test_film.py compares them).
 // Positions are in the renderer's wrapped frame (world z − shift_z, a multiple of the period): every map is
 // periodic in 1200 m along z, so the wrapped and world frames give the same water.
-uniform sampler2D u_road_height;  // unit 4: road heightmap R (0 lowest), G smoothed (no cracks); clamp x, repeat z
-uniform sampler2D u_road_maps;    // unit 5: R puddle noise (uniform in 0..1), G shelter (1 under a roof)
+uniform sampler2D u_road_height;  // units.ROAD_HEIGHT: heightmap R (0 lowest), G smoothed (no cracks); clamp x, wrap z
+uniform sampler2D u_road_maps;    // units.ROAD_MAPS: R puddle noise (uniform in 0..1), G shelter (1 under a roof)
 uniform vec4 u_road_levels;       // wetness, crack level (cracks·CRACK_LEVEL), puddle level L, unused
 uniform vec2 u_road_height_extent;  // m: heightmap size across x, along z (14, 48)
 

@@ -1,4 +1,4 @@
-// The wet road (DESIGN §3 "Wet road"; rain_core/road.py explains the model and holds the NumPy twin).
+// The wet road (DESIGN §3 "Wet road"; rain_core/effects/road/ explains the model, surface.py is the NumPy twin).
 // The scene shader calls road_wet_surface before lighting (wet BRDF, water under which the base lies),
 // road_water_layer after it (the water surface: Fresnel blend of the reflection, highlights of the lights)
 // and road_emission for emissive surfaces. With u_road_wet = 0 (effect off, road dry) all three return at
@@ -10,12 +10,12 @@
 uniform float u_road_wet;             // 1 while the road effect is active, else 0 (the dry path)
 uniform float u_road_mirror;          // 1 while the reflection pass draws (lamp lenses dimmed, no reflection)
 uniform float u_road_debug;           // 1: flat colours for the dry / wet / drenched / puddle regions
-uniform float u_road_reflect;         // 1: this frame's planar reflection is bound on unit 6
-uniform sampler2D u_road_reflection;  // unit 6: the mirrored scene, pre-exposed HDR, mipmapped
+uniform float u_road_reflect;         // 1: this frame's planar reflection is bound on u_road_reflection
+uniform sampler2D u_road_reflection;  // units.ROAD_REFLECTION: the mirrored scene, pre-exposed HDR, mipmapped
 uniform vec2 u_road_proj_scale;       // (0.5·P00, 0.5·P11): texture uv per radian near the view axis
-uniform sampler2D u_road_ripples;     // unit 7: ripple slopes RG = (dh/dx, dh/dz), world-anchored square
+uniform sampler2D u_road_ripples;     // units.ROAD_RIPPLES: ripple slopes RG = (dh/dx, dh/dz), world-anchored
 uniform vec4 u_road_ripple_window;    // origin x, z (m, wrapped; centre of texel 0), extent (m), 1 if bound
-uniform sampler2D u_road_rain_rings;   // unit 3: tiled raindrop-ring slopes RG (ripples.RainRippleTexture)
+uniform sampler2D u_road_rain_rings;   // units.ROAD_RAIN_RINGS: tiled raindrop-ring slopes RG (rc.shared.rain_rings)
 uniform vec2 u_road_rain_rings_tile;   // tile size (m), 1 while it rains
 uniform vec3 u_road_waves;            // drift velocity of the wind waves x, z (m/s); their slope amplitude
 uniform mat4 u_road_cabin;            // wrapped world → ego car local frame (the cabin stays dry)
@@ -33,7 +33,7 @@ const float MIRROR_LENS_FACTOR = 0.05;
 const float WET_MIN = 0.02;
 const float SIDEWALK_OUTER_X_M = 10.3;  // roofs shelter the road, kerbs and sidewalks (the map's edge columns)
 const vec3 MURK_TINT = vec3(0.62, 0.57, 0.50);
-// Per material id (MAT_GENERIC … MAT_RUBBER), as MATERIAL_POROSITY / MATERIAL_FILM in rain_core/road.py.
+// Per material id (MAT_GENERIC … MAT_RUBBER), as MATERIAL_POROSITY / MATERIAL_FILM in effects/road/surface.py.
 const float ROAD_POROSITY[10] = float[10](0.6, 1.0, 0.2, 0.7, 0.0, 0.0, 0.4, 0.0, 0.0, 0.3);
 const float ROAD_FILM[10] = float[10](0.5, 1.0, 1.0, 0.8, 0.6, 0.0, 0.3, 0.0, 0.6, 0.5);
 const vec3 ROAD_REGION_COLORS[4] = vec3[4](vec3(0.55, 0.45, 0.25), vec3(0.15, 0.55, 0.15),

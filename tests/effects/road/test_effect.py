@@ -1,206 +1,30 @@
-"""The wet road (issue 4): wet BRDF calibration, water in cracks and puddles, film-depth parity NumPy ↔ GLSL,
-planar reflections against an independent mirror camera, the dry path, the debug regions, extreme settings."""
+"""The road effect in the scene (rain_core.effects.road.effect): the dry path, the debug regions, planar
+reflections against an independent mirror camera, ripple normals, wind waves, extreme settings, the clip plane,
+the benchmark."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import re
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from rain_core import layout, road
-from rain_core.camera import Camera, look_at
-from rain_core.gl import float_target
-from rain_core.lighting import Lighting
-from rain_core.mesh import MAT_ASPHALT, MAT_CONCRETE, MAT_METAL, MAT_PAINT
-from rain_core.paths import SHADERS_DIR
-from rain_core.renderer import Frame, Renderer
+from rain_core.camera import Camera
+from rain_core.effects import road
+from rain_core.gfx.targets import float_target
 from rain_core.scene import Scene
 from rain_core.settings import Settings, set_value
-from rain_core.weather import WeatherState
-from rain_core.world import _rects_up
 
 SIZE = (160, 90)
 
 
-@pytest.fixture(scope="module")
-def world():
-    return road._default_world()
-
-
-# --- NumPy model ---------------------------------------------------------------------------------------------
-
-def _glsl_consts(*names) -> dict[str, str]:
-    text = "".join((SHADERS_DIR / "common" / n).read_text() for n in names)
-    return dict(re.findall(r"const\s+\w+(?:\[\d+\])?\s+(\w+)(?:\[\d+\])?\s*=\s*([^;]+);", text))
-
-
-def _numbers(expr: str) -> list[float]:
-    return [float(v) for v in re.findall(r"-?\d+\.\d+", expr)]  # the literals (vec3, float[10] aside)
-
-
-def test_glsl_constants_match_numpy():
-    consts = _glsl_consts("road/film.glsl", "road/surface.glsl")
-    for name in ("WET_FILM_MM", "CRACK_MAX_MM", "CRACK_DEPTH_SPAN", "PUDDLE_MAX_MM", "PUDDLE_NOISE_WEIGHT",
-                 "PUDDLE_DEPTH_SPAN", "MACROTEXTURE_MM", "WET_ALBEDO_FACTOR", "WET_SMOOTHNESS_GAIN", "WATER_F0",
-                 "UNDERWATER_F0", "FILM_ROUGHNESS", "WATER_ROUGHNESS", "LIGHT_MIN_ROUGHNESS",
-                 "LIGHT_SOURCE_RADIANCE", "MIRROR_LENS_FACTOR", "WET_MIN"):
-        assert float(consts[name]) == pytest.approx(getattr(road, name)), name
-    assert float(consts["ROAD_HALF_WIDTH_M"]) == layout.ROAD_HALF_WIDTH_M
-    assert float(consts["ROAD_PERIOD_M"]) == layout.PERIOD_M
-    assert _numbers(consts["MURK_TINT"]) == pytest.approx(road.MURK_TINT)
-    ids = sorted(road.MATERIAL_POROSITY)
-    assert _numbers(consts["ROAD_POROSITY"]) == pytest.approx([road.MATERIAL_POROSITY[i] for i in ids])
-    assert _numbers(consts["ROAD_FILM"]) == pytest.approx([road.MATERIAL_FILM[i] for i in ids])
-    assert _numbers(consts["ROAD_REGION_COLORS"]) == pytest.approx(np.ravel(road.REGION_COLORS))
-
-
-def test_wet_material_follows_lagarde_per_material():
-    alb, rough = road.wet_material((0.2, 0.2, 0.2), 0.9, 0.0, MAT_ASPHALT)
-    np.testing.assert_allclose(alb, 0.2)
-    assert rough == pytest.approx(0.9)
-    alb, rough = road.wet_material((0.2, 0.2, 0.2), 0.9, 1.0, MAT_ASPHALT)
-    np.testing.assert_allclose(alb, 0.2 * 0.3)  # porous asphalt: ×0.3
-    assert 1 - rough == pytest.approx(0.1 * 2.5)  # smoothness ×2.5
-    _, rough = road.wet_material(0.5, 0.5, 1.0, MAT_ASPHALT)
-    assert rough == pytest.approx(0.02)  # smoothness capped at 1 (and the shader's roughness floor)
-    paint, _ = road.wet_material(0.6, 0.6, 1.0, MAT_PAINT)
-    concrete, _ = road.wet_material(0.6, 0.6, 1.0, MAT_CONCRETE)
-    metal, _ = road.wet_material(0.6, 0.6, 1.0, MAT_METAL)
-    assert 0.6 * 0.3 < concrete < paint < metal == pytest.approx(0.6)
-
-
-def test_film_depth_is_shallow_on_road_only_and_periodic(world):
-    rng = np.random.default_rng(1)
-    x = rng.uniform(-9.0, 9.0, 20000)
-    z = rng.uniform(0.0, layout.PERIOD_M, 20000)
-    d = road.film_depth_mm(x, z, 1.0, 1.0, 1.0, world=world, wetness=1.0)
-    assert d.shape == x.shape and np.isfinite(d).all()
-    assert d.min() >= 0.0 and d.max() <= road.PUDDLE_MAX_MM
-    assert d.max() > 0.8 * road.PUDDLE_MAX_MM  # full puddles are up to ~10 mm deep
-    assert (d[np.abs(x) > layout.ROAD_HALF_WIDTH_M] == 0).all()
-    np.testing.assert_allclose(road.film_depth_mm(x, z + 3 * layout.PERIOD_M, 1.0, 1.0, 1.0, world=world,
-                                                  wetness=1.0), d, atol=1e-9)
-    assert (road.film_depth_mm(x, z, 0.0, 0.0, 1.0, world=world) == 0).all()
-    # Under the railway bridge and the fuel-station canopy the rain does not reach the road.
-    under = road.film_depth_mm(np.linspace(-6.5, 6.5, 50), layout.BRIDGE_Z_M, 1.0, 1.0, 1.0, world=world,
-                               wetness=1.0)
-    assert (under == 0).all()
-    assert (road.film_depth_mm(5.0, layout.CANOPY_Z_M, 1.0, 1.0, 1.0, world=world, wetness=1.0) == 0).all()
-    other_seed = road.film_depth_mm(x, z, 1.0, 1.0, 0.5, seed=7, world=world)
-    assert np.abs(other_seed - road.film_depth_mm(x, z, 1.0, 1.0, 0.5, world=world)).max() > 1.0
-    with pytest.raises(ValueError, match="puddles"):
-        road.film_depth_mm(0.0, 0.0, 0.5, 1.5)
-
-
-def _road_grid(step=0.05, z0=520.0, length=120.0):
-    x = np.arange(-layout.ROAD_HALF_WIDTH_M, layout.ROAD_HALF_WIDTH_M, step) + step / 2
-    z = np.arange(z0, z0 + length, step) + step / 2
-    return np.meshgrid(x, z)
-
-
-def test_puddle_coverage_grows_with_the_flood_level_and_has_soft_margins(world):
-    x, z = _road_grid()
-    levels = np.linspace(0.0, 1.0, 11)
-    puddle, any_water = [], []
-    for p in levels:
-        standing, _ = road.water_depths_mm(x, z, 0.0, p, 0.5, world=world)
-        cover = road.water_coverage(standing)
-        puddle.append((cover >= 1).mean())
-        any_water.append((cover > 0).mean())
-        if p >= 0.5:
-            # Soft margins: every puddle is ringed by drenched ground, not a hard edge.
-            margin = (cover > 0) & (cover < 1)
-            assert margin.mean() > 0.5 * (cover >= 1).mean()
-            full = cover >= 1
-            hard = (full[:, 1:] & (cover[:, :-1] == 0)) | (full[:, :-1] & (cover[:, 1:] == 0))
-            edges = (full[:, 1:] != full[:, :-1])
-            assert hard.sum() < 0.2 * edges.sum()
-    assert puddle[0] == any_water[0] == 0.0
-    assert all(b > a for a, b in zip(any_water[1:], any_water[2:], strict=False))
-    assert all(b >= a for a, b in zip(puddle, puddle[1:], strict=False)) and puddle[-1] > 0.05
-    # Cracks fill first and only the cracks: at the crack level alone little of the road is under water.
-    standing, _ = road.water_depths_mm(x, z, 1.0, 0.0, 0.5, world=world)
-    assert 0.0 < (standing > 0).mean() < 0.05
-    # The four regions all occur at a moderate state.
-    regions = road.road_regions(x, z, 0.8, 0.8, 0.8, 0.5, world=world)
-    assert set(np.unique(regions)) >= {1, 2, 3}
-    assert (road.road_regions(x, z, 0.0, 0.0, 0.0, world=world) == 0).all()
-
-
-def test_wind_waves_follow_the_wind():
-    calm = road.wave_parameters((0.0, 0.0, 0.0), 1.0)
-    breeze = road.wave_parameters((3.0, 0.0, 0.0), 1.0)
-    gale = road.wave_parameters((0.0, 0.0, -30.0), 1.0)
-    assert 0.0 < calm[2] < breeze[2] < gale[2] == pytest.approx(road.WAVE_SLOPE_MAX)
-    assert breeze[0] > 0 and breeze[1] == 0.0  # ripples drift with the wind
-    assert gale[1] < 0 and math.hypot(gale[0], gale[1]) <= 0.35  # never faster than capillary waves
-    assert road.wave_parameters((5.0, 0.0, 5.0), 0.0)[2] == 0.0
-
-
-# --- GPU ------------------------------------------------------------------------------------------------------
-
-def test_film_depth_glsl_matches_numpy(gl_ctx, shaders, world):
-    effect = road.RoadEffect(gl_ctx, shaders, world)
-    rng = np.random.default_rng(2)
-    x = rng.uniform(-7.5, 7.5, 6000)
-    z = np.concatenate([rng.uniform(0.0, 2 * layout.PERIOD_M, 5000), rng.uniform(290.0, 310.0, 1000)])
-    for cracks, puddles, amount, seed, wet in ((0.7, 0.8, 0.6, 3, 0.5), (1.0, 1.0, 1.0, 0, 1.0)):
-        gpu = effect.film_depth_gpu(x, z, cracks, puddles, amount, seed, wet)
-        standing, film = road.water_depths_mm(x, z, cracks, puddles, amount, seed, world, wet)
-        assert (standing > 0).mean() > 0.1
-        # GPUs quantise bilinear weights (to 1/256 on many): a few hundredths of a mm at crack edges.
-        np.testing.assert_allclose(gpu[..., 0], standing, atol=0.05)
-        np.testing.assert_allclose(gpu[..., 1], film, atol=1e-3)
-    effect.release()
-
-
-def _flat_world():
-    """A big flat asphalt patch, nothing else: the BRDF calibration scene."""
-    verts = _rects_up(-7.0, 7.0, 0.0, layout.PERIOD_M, 0.0, (0.075, 0.075, 0.078), 0.9, MAT_ASPHALT)
-    return SimpleNamespace(vertices=verts, lamps=[])
-
-
-def _sun_only(direction) -> Lighting:
-    d = np.asarray(direction, float) / np.linalg.norm(direction)
-    return Lighting(12.0, d, np.full(3, 1.0e4), np.zeros(3), np.zeros(3), 0.0, 0.0, math.log2(1e4 / 2.5))
-
-
-def _calibration_radiance(gl_ctx, shaders, world, wetness, sun_deg, view_deg) -> float:
-    """Mean pre-exposure luminance of a patch lit by the sun from sun_deg (from the normal, −x side) and seen
-    from view_deg (+x side), with a narrow lens far away so the geometry is the same over the patch."""
-    settings = Settings()
-    set_value(settings, "road.reflections", False)
-    effect = road.RoadEffect(gl_ctx, shaders, world, settings)
-    renderer = Renderer(gl_ctx, (32, 32), _flat_world(), effects=[effect], shaders=shaders, gpu_timing=False)
-    sun = (-math.sin(math.radians(sun_deg)), math.cos(math.radians(sun_deg)), 0.0)
-    target = np.array([0.0, 0.0, 600.0])
-    eye = target + 40.0 * np.array([math.sin(math.radians(view_deg)), math.cos(math.radians(view_deg)), 0.0])
-    lighting = _sun_only(sun)
-    frame = Frame(0.0, 0.0, look_at(eye, target, fov_y_deg=1.0), lighting, renderer.world,
-                  weather=WeatherState(wetness=wetness), settings=settings)
-    renderer.render(frame)
-    hdr = renderer.hdr_image()
-    renderer.release()
-    effect.release()
-    gl_ctx.detect_framebuffer(0).use()  # not the released frame's framebuffer
-    return float(hdr[8:24, 8:24].mean() / lighting.exposure)
-
-
-def test_wet_asphalt_darker_diffuse_brighter_specular_in_calibrated_range(gl_ctx, shaders, world):
-    # Nakamae et al. 1990: wet diffuse ×0.1–0.3, specular ×5–10 (near normal incidence).
-    dry_d = _calibration_radiance(gl_ctx, shaders, world, 0.0, 0.0, 60.0)
-    wet_d = _calibration_radiance(gl_ctx, shaders, world, 1.0, 0.0, 60.0)
-    dry_s = _calibration_radiance(gl_ctx, shaders, world, 0.0, 30.0, 30.0)
-    wet_s = _calibration_radiance(gl_ctx, shaders, world, 1.0, 30.0, 30.0)
-    assert dry_d > 0 and dry_s > 0
-    assert 0.1 <= wet_d / dry_d <= 0.3
-    assert 5.0 <= wet_s / dry_s <= 10.0
-    half = _calibration_radiance(gl_ctx, shaders, world, 0.5, 30.0, 30.0)
-    assert dry_s < half < wet_s
+def _draw_without_effects(renderer, rc, include_sky, clip_plane):
+    """The renderer's scene pass into ``rc``'s bound target with no effect active (each binds its neutral
+    inputs)."""
+    rc.active = ()
+    renderer.shadow.bind()
+    renderer.scene.draw(rc, renderer.effects, include_sky=include_sky, clip_plane=clip_plane)
 
 
 def _settings(hour=12.0, camera="driver", wetness=1.0, cracks=0.0, puddles=0.0, **road_values) -> Settings:
@@ -216,10 +40,10 @@ def _settings(hour=12.0, camera="driver", wetness=1.0, cracks=0.0, puddles=0.0, 
 
 
 @pytest.fixture(scope="module")
-def wet_scene(gl_ctx, shaders, world):
+def wet_scene(gl_ctx):
     with gl_ctx:  # module fixtures run outside conftest's per-test _gl_current
         settings = _settings()
-        effect = road.make_road(gl_ctx, settings)  # takes the scene's world from the first frame
+        effect = road.RoadEffect(gl_ctx, settings)  # takes the scene's world from the first frame
         scene = Scene(gl_ctx, SIZE, settings, seed=1, effects=[effect], gpu_timing=False)
         for _ in range(20):
             scene.step(1 / 30)
@@ -329,7 +153,7 @@ def test_puddle_pixels_show_the_mirror_cameras_image(gl_ctx, wet_scene):
     def mirror_image(plane):
         target.fbo.use()
         target.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
-        scene.renderer.draw_scene(rc, [], include_sky=True, clip_plane=plane)
+        _draw_without_effects(scene.renderer, rc, include_sky=True, clip_plane=plane)
         data = np.frombuffer(target.fbo.read(components=3, dtype="f4", alignment=1), np.float32)
         return data.reshape(SIZE[1], SIZE[0], 3)[::-1, ::-1]
 
@@ -372,7 +196,7 @@ def test_ripple_normals_move_the_reflection_and_none_restores_flat_water(gl_ctx,
     effect.set_ripple_normals(None)
     scene.render()
     np.testing.assert_array_equal(scene.renderer.hdr_image(), flat)
-    effect._ripple_explicit = False  # back to reading rc.resources for the next tests
+    effect._ripple_explicit = False  # back to reading rc.shared for the next tests
     tex.release()
 
 
@@ -421,7 +245,7 @@ def test_clip_plane_removes_what_lies_below_it(gl_ctx, wet_scene):
         rc = renderer.render_context(frame, target)
         target.fbo.use()
         target.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
-        renderer.draw_scene(rc, [], include_sky=False, clip_plane=plane)
+        _draw_without_effects(renderer, rc, include_sky=False, clip_plane=plane)
         return np.frombuffer(target.fbo.read(components=3, dtype="f4", alignment=1), np.float32).copy()
 
     _ = gl_ctx.error  # reading it clears what earlier users of the shared context left
@@ -438,8 +262,6 @@ def test_clip_plane_removes_what_lies_below_it(gl_ctx, wet_scene):
     assert not gl_ctx.is_enabled(0x3000) if hasattr(gl_ctx, "is_enabled") else True
     scene.render()
     assert scene.image().std() > 5
-
-
 
 
 def test_benchmark_quick_writes_table_and_plot(gl_ctx, tmp_path):
