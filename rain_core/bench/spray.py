@@ -25,7 +25,7 @@ from PIL import Image, ImageDraw
 
 from rain_core import layout, physics
 from rain_core.bench._common import markdown_table, parser, write_output
-from rain_core.spray import (
+from rain_core.effects.spray import (
     FATE_AIR,
     FATE_BODY,
     FATE_ROAD,

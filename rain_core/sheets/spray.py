@@ -4,8 +4,8 @@ Frames: a chase camera beside a car entering a puddle at 30, 60 and 100 km/h; th
 at 100 km/h on a wet road (no standing water), by day and by night; the lorry's rooster tail against a low sun.
 The scenario builders here are also what ``python -m rain_core.bench spray`` measures.
 
-The puddle is the road's own standing water (``rain_core.road.film_depth_mm`` with the flood levels pinned
-full) where that module is present, else a 30 m sheet of 8 mm water placed across the road.
+The puddle is the road's own standing water (``rain_core.water_film.film_depth_mm`` with the flood levels pinned
+full), or a 30 m sheet of 8 mm water placed across the road if no puddle entry is found.
 """
 
 from __future__ import annotations
@@ -18,15 +18,16 @@ import numpy as np
 
 from rain_core import layout
 from rain_core.camera import look_at
+from rain_core.effects.spray import KMH, SprayEffect
 from rain_core.sheets import DEFAULT_OUT, save_sheet
-from rain_core.spray import KMH, Spray, _road_film_function
 from rain_core.vehicles import TRUCK_SPEC, Autopilot, Vehicle
+from rain_core.water_film import film_depth_mm
 
 FRAME_SIZE = (320, 180)
 DT_S = 1.0 / 30.0
 PUDDLE_SEARCH_START_M = 100.0  # m, first world z looked at for a puddle entry (clear of the bridge at 300 m)
 LORRY_COLOUR = (0.05, 0.09, 0.25)  # a dark blue box: a white one vanishes against the bright horizon
-FALLBACK_PUDDLE = (8.0, 30.0)  # mm deep, m long: the sheet's own puddle when the road module is absent
+FALLBACK_PUDDLE = (8.0, 30.0)  # mm deep, m long: the sheet's own puddle when the road has no puddle entry
 
 
 def rain_settings(hour: float = 12.0, puddles: bool = False, budget: int | None = None):
@@ -47,29 +48,28 @@ def rain_settings(hour: float = 12.0, puddles: bool = False, budget: int | None 
 
 
 def scene_with_spray(ctx, size, settings, seed: int = 1, film_depth_fn=None):
-    """A Scene drawing the registered effects with this Spray in place of a registered one, and the wet road
-    first if it is not registered yet (so the puddles show)."""
-    from rain_core.scene import Scene, default_effects
+    """A Scene drawing the registered effects with this SprayEffect (``film_depth_fn``, if given, replaces the
+    road's film under the wheels) in place of the registered one."""
+    from rain_core.effects import default_effects
+    from rain_core.scene import Scene
 
-    effect = Spray(ctx, settings=settings, seed=seed, film_depth_fn=film_depth_fn)
-    others = [e for e in default_effects(ctx, settings) if getattr(e, "name", "") != "spray"]
+    effect = SprayEffect(ctx, settings, seed=seed)
+    effect.emitter.film_depth_fn = film_depth_fn
+    others = []
+    for e in default_effects(ctx, settings):
+        if e.name == "spray":
+            e.release()  # replaced by ``effect``
+        else:
+            others.append(e)
     scene = Scene(ctx, size, settings, seed=seed, effects=[*others, effect])
-    if not any(getattr(e, "name", "") == "road" for e in others):
-        try:
-            from rain_core.road import RoadEffect
-        except ImportError:
-            return scene, effect
-        scene.renderer.effects.insert(0, RoadEffect(ctx, scene.renderer.shaders, scene.world, settings))
     return scene, effect
 
 
 def find_puddle_entry(settings, start_z: float = PUDDLE_SEARCH_START_M) -> tuple[int, float, float] | None:
     """(lane, world z m, length m) of the best puddle entry for a car heading −Z: ≥ 8 m of road without
     standing water, then ≥ 3 mm under both wheel tracks for ≥ 3 m; the longest such stretch of ≥ 2 mm wins.
-    None if the road module is absent or there is no such entry."""
-    fn = _road_film_function()
-    if fn is None:
-        return None
+    None if there is no such entry."""
+    fn = film_depth_mm
     step = 0.1
     z = np.arange(start_z, start_z + 900.0, step)
     best = None

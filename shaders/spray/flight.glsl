@@ -1,5 +1,6 @@
 // Closed-form flight of a spray parcel: linear drag towards the drift velocity u (m/s) with time constant tau (s).
-// The GLSL twin of rain_core.spray.flight_position / flight_velocity (tests/test_spray.py checks they agree).
+// The GLSL twin of rain_core.effects.spray.flight.flight_position / flight_velocity
+// (tests/effects/spray/test_optics.py checks they agree).
 // x(t) = x0 + u·t + (v0 − u)·τ·(1 − e^(−t/τ))
 
 // τ·(1 − e^(−t/τ)), with the series near t = 0 where the subtraction would lose digits.

@@ -1,7 +1,7 @@
 // Scattering by water drops much larger than the wavelength, per unit extinction (1/sr): half diffraction
 // (a narrow forward lobe), half geometric: refraction (a forward Henyey–Greenstein lobe) and external reflection
-// F(i)/(4π), i = (π − θ)/2. The GLSL twin of rain_core.spray.phase_function; the constants come from Python as
-// #defines (SPRAY_G_DIFFRACTION, SPRAY_G_REFRACTION, SPRAY_REFLECTION_SHARE, SPRAY_WATER_IOR).
+// F(i)/(4π), i = (π − θ)/2. The GLSL twin of rain_core.effects.spray.optics.phase_function; the constants come
+// from Python as #defines (SPRAY_G_DIFFRACTION, SPRAY_G_REFRACTION, SPRAY_REFLECTION_SHARE, SPRAY_WATER_IOR).
 const float SPRAY_PI = 3.14159265358979;
 
 float spray_hg(float mu, float g) {

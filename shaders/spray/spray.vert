@@ -1,5 +1,5 @@
 #version 330 core
-// Spray parcels (rain_core/spray.py): one camera-facing quad per parcel (instanced, 4-vertex strip), flown by
+// Spray parcels (rain_core/effects/spray): one camera-facing quad per parcel (instanced, 4-vertex strip), flown by
 // the closed form from what was stored at spawn, so nothing is uploaded per frame. A droplet parcel is
 // stretched along its screen motion over the exposure time (a streak); mist puffs are round and grow.
 // Lighting is evaluated per vertex (parcels are small): single scattering of sun and lights with the drops'

@@ -1,0 +1,188 @@
+"""The spray effect (GL): feeds the emitter every frame, uploads the newly spawned parcels to two GPU rings and
+draws them in the ``transparent`` stage."""
+
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+
+from rain_core import layout
+from rain_core.effects.spray.emitter import SprayEmitter
+from rain_core.effects.spray.optics import shader_defines
+from rain_core.effects.spray.parcels import PARTICLE_ATTRIBUTES, PARTICLE_DTYPE, PARTICLE_FORMAT
+from rain_core.effects.spray.wheels import WheelWater
+from rain_core.gfx import units
+from rain_core.gfx.effect import Effect
+from rain_core.gfx.targets import ColorView
+from rain_core.gfx.uniforms import set_uniforms
+
+
+class SprayEffect(Effect):
+    """Wheel splash and spray for every vehicle (``rain_core.effects.spray``), drawn in the ``transparent`` stage.
+
+    ``SprayEffect(ctx, settings=None, *, seed=0, shaders=None)``: settings are read per frame from
+    ``frame.settings.spray`` (enabled, strength, budget) and ``camera.exposure_s`` (streak length); ``settings``
+    here only sizes the first budget. ``emitter.film_depth_fn`` (x, z) → mm, if set, replaces the road's film
+    (the weather's wet film is still added).
+
+    After each frame: ``wheels`` (WheelWater per vehicle, ego first), :meth:`hydroplaning_risk`,
+    :meth:`landed_in_water`, ``emitter.stats``. Publishes ``rc.shared.droplet_impacts`` for the ripples. The HDR
+    depth is read on texture unit ``units.SPRAY_DEPTH``.
+    """
+
+    name = "spray"
+    stages = ("transparent",)
+
+    def __init__(self, ctx: moderngl.Context, settings=None, *, seed: int = 0, shaders=None):
+        self.ctx = ctx
+        self._shaders = shaders
+        budget = settings.spray.budget if settings is not None else 12_000
+        self.emitter = SprayEmitter(seed=seed, budget=budget)
+        self._buffers: list[moderngl.Buffer | None] = [None, None]
+        self._vaos: list[moderngl.VertexArray | None] = [None, None]
+        self._capacity = [-1, -1]
+        self._program = None
+        self._color_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
+        self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
+                                          repeat_x=False, repeat_y=False)
+
+    # --- queries for the app ------------------------------------------------------------------------------
+    @property
+    def wheels(self) -> list[WheelWater]:
+        return self.emitter.wheels
+
+    def hydroplaning_risk(self, vehicle=None) -> np.ndarray:
+        """(4,) risk per wheel (0…1) of ``vehicle`` (default: the first, the ego) in the last frame."""
+        for w in self.emitter.wheels:
+            if vehicle is None or w.vehicle is vehicle:
+                return w.hydroplaning_risk.copy()
+        return np.zeros(4)
+
+    @property
+    def ego_hydroplaning_risk(self) -> float:
+        """Largest per-wheel risk of the ego car in the last frame (0…1), for the panel's indicator."""
+        return float(self.hydroplaning_risk().max())
+
+    def landed_in_water(self) -> list[tuple[float, float, float]]:
+        """(x m, z m, downward momentum kg·m/s) of the parcels that landed in standing water this frame."""
+        return self.emitter.landed_in_water()
+
+    # --- Effect -------------------------------------------------------------------------------------------
+    @staticmethod
+    def _section(frame):
+        from rain_core.settings import SpraySection
+
+        settings = getattr(frame, "settings", None)
+        return settings.spray if settings is not None else SpraySection()
+
+    @staticmethod
+    def _switched_on(sec) -> bool:
+        return bool(sec.enabled and sec.budget > 0 and sec.strength > 0.0)
+
+    def observe(self, frame) -> None:
+        """The water model (and so the hydroplaning risk) is evaluated every frame, running or not; switched off,
+        the parcels in flight are dropped and the emitter forgets the last time it saw."""
+        self.emitter.observe(frame)
+        if not self._switched_on(self._section(frame)):
+            self.emitter.pause()
+
+    def active(self, frame) -> bool:
+        """Runs while wheels throw water or parcels are still in flight (and the effect is on with a budget)."""
+        if not self._switched_on(self._section(frame)):
+            return False
+        return self.emitter.throwing() or self.emitter.alive_until() > self.emitter.clock(frame.time_s)
+
+    def update(self, frame, rc) -> None:
+        sec = self._section(frame)
+        self.emitter.set_budget(sec.budget)
+        self.emitter.strength = sec.strength
+        self.emitter.emit(frame)
+        self._upload()
+        # Where the spray lands in standing water, the ripple effect (if running) presses dents.
+        rc.shared.droplet_impacts = self.emitter.landed_impacts()
+
+    def _upload(self) -> None:
+        dirty = self.emitter.take_dirty()
+        for ring in range(2):
+            data = self.emitter.rings[ring].data
+            cap = self.emitter.rings[ring].capacity
+            if self._capacity[ring] != cap:
+                for obj in (self._vaos[ring], self._buffers[ring]):
+                    if obj is not None:
+                        obj.release()
+                self._vaos[ring] = self._buffers[ring] = None
+                if cap:
+                    self._buffers[ring] = self.ctx.buffer(data.tobytes())
+                self._capacity[ring] = cap
+                continue
+            buf = self._buffers[ring]
+            for start, count in dirty[ring]:
+                buf.write(data[start:start + count].tobytes(), offset=start * PARTICLE_DTYPE.itemsize)
+
+    def _prog(self, rc) -> moderngl.Program:
+        if self._program is None:
+            lib = self._shaders or rc.shaders
+            self._program = lib.program("spray/spray.vert", "spray/spray.frag", defines=shader_defines())
+        return self._program
+
+    def _vao(self, ring: int, prog) -> moderngl.VertexArray | None:
+        if self._vaos[ring] is None and self._buffers[ring] is not None:
+            self._vaos[ring] = self.ctx.vertex_array(
+                prog, [(self._buffers[ring], PARTICLE_FORMAT, *PARTICLE_ATTRIBUTES)])
+        return self._vaos[ring]
+
+    def _hdr_color_fbo(self, rc) -> moderngl.Framebuffer:
+        # The pass reads the scene's depth, so it writes through a framebuffer without that depth attached.
+        return self._color_fbo.fbo(rc.hdr.color)
+
+    def render(self, stage: str, rc) -> None:
+        if stage != "transparent":
+            return
+        frame = rc.frame
+        now = self.emitter.clock(frame.time_s)
+        if self.emitter.alive_until() <= now:
+            return
+        ctx = self.ctx
+        prog = self._prog(rc)
+        rc.set_frame_uniforms(prog)
+        camera = frame.camera
+        fwd = camera.basis()[2]
+        cam_vel = np.asarray(frame.ego.velocity(), dtype=np.float64) if frame.ego is not None else np.zeros(3)
+        exposure_s = float(getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02))
+        set_uniforms(prog, {
+            "u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
+            "u_camera_vel": tuple(float(x) for x in cam_vel), "u_exposure_s": exposure_s,
+            "u_cam_forward": tuple(float(x) for x in fwd), "u_depth": units.SPRAY_DEPTH,
+            "u_viewport": (float(rc.size[0]), float(rc.size[1])),
+            "u_near": float(camera.near_m), "u_far": float(camera.far_m),
+            "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
+        })
+        self._depth_sampler.use(units.SPRAY_DEPTH)
+        rc.hdr.depth.use(units.SPRAY_DEPTH)
+        self._hdr_color_fbo(rc).use()
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = (moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE)
+        for ring in (1, 0):  # mist behind, droplets over it (no sorting: both are soft and mostly thin)
+            vao = self._vao(ring, prog)
+            if vao is not None and self.emitter.rings[ring].last_death() > now:
+                vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.emitter.rings[ring].capacity)
+        ctx.blend_func = moderngl.DEFAULT_BLENDING
+        ctx.disable(moderngl.BLEND)
+        ctx.enable(moderngl.DEPTH_TEST)  # as the scene pass left it
+        self._depth_sampler.clear(units.SPRAY_DEPTH)
+        rc.hdr.fbo.use()
+
+    def release(self) -> None:
+        """Free the rings' buffers and VAOs, the colour view and the depth sampler. The program belongs to the
+        shader library's cache (shared, released with its context)."""
+        for obj in (*self._vaos, *self._buffers):
+            if obj is not None:
+                obj.release()
+        self._vaos = [None, None]
+        self._buffers = [None, None]
+        self._capacity = [-1, -1]
+        self._color_fbo.release()
+        self._depth_sampler.release()

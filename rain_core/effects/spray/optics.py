@@ -1,0 +1,73 @@
+"""How spray drops scatter and hide light: phase function and extinction of water drops much larger than the
+wavelength, and the constants the spray shaders share with this module (``shader_defines``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rain_core import layout, physics
+
+EXTINCTION_EFFICIENCY = 2.0  # Q_ext of drops much larger than the wavelength
+
+# Optics: half of the extinction is diffraction (a narrow forward lobe), the other half geometric: refraction
+# (a forward Henyey–Greenstein lobe) and external reflection, F(i)/(4π) per unit geometric cross-section.
+WATER_IOR = 1.333
+G_DIFFRACTION = 0.95
+G_REFRACTION = 0.8
+GLINT_CHANCE = 0.03  # share of sparkle cells (about a pixel each) holding a glint; they carry 1/chance × the lobe
+
+
+def henyey_greenstein(mu, g: float) -> np.ndarray:
+    """Henyey–Greenstein phase function (1/sr) at mu = cos(scattering angle) (1 = straight on)."""
+    mu = np.asarray(mu, dtype=np.float64)
+    d = 1.0 + g * g - 2.0 * g * mu
+    return (1.0 - g * g) / (4.0 * math.pi * d * np.sqrt(d))
+
+
+def fresnel_reflection(cos_i, n: float = WATER_IOR) -> np.ndarray:
+    """Unpolarised Fresnel reflectance of water seen from air at incidence cos_i."""
+    ci = np.clip(np.asarray(cos_i, dtype=np.float64), 0.0, 1.0)
+    st2 = (1.0 - ci * ci) / (n * n)
+    ct = np.sqrt(np.maximum(1.0 - st2, 0.0))
+    rs = (ci - n * ct) / (ci + n * ct)
+    rp = (n * ci - ct) / (n * ci + ct)
+    return 0.5 * (rs * rs + rp * rp)
+
+
+def reflection_lobe(mu) -> np.ndarray:
+    """External reflection off a sphere, per unit geometric cross-section and steradian: F(i)/(4π), with the
+    incidence i = (π − θ)/2 for scattering angle θ (mu = cos θ)."""
+    cos_i = np.sqrt(np.clip((1.0 - np.asarray(mu, dtype=np.float64)) / 2.0, 0.0, 1.0))
+    return fresnel_reflection(cos_i) / (4.0 * math.pi)
+
+
+def _reflection_share() -> float:
+    mu = np.linspace(-1.0, 1.0, 20001)
+    f = reflection_lobe(mu)
+    return float(2.0 * math.pi * np.sum((f[1:] + f[:-1]) / 2.0 * np.diff(mu)))
+
+
+REFLECTION_SHARE = _reflection_share()  # ≈ 0.066: the reflected share of the geometric cross-section
+
+
+def phase_function(mu, glint: float = 1.0) -> np.ndarray:
+    """Phase function (1/sr, integrates to 1 over the sphere for glint = 1) of water drops ≫ λ, per unit
+    extinction: ½ diffraction + ½ (refraction + reflection); ``glint`` scales the reflection lobe (sparkle)."""
+    return 0.5 * henyey_greenstein(mu, G_DIFFRACTION) + 0.5 * (
+        (1.0 - REFLECTION_SHARE) * henyey_greenstein(mu, G_REFRACTION) + glint * reflection_lobe(mu))
+
+
+def extinction_area_m2(mass_kg, d_mm) -> np.ndarray:
+    """Extinction cross-section (m²) of mass_kg of water in drops of diameter d_mm (mm): Q·(3/2)·m/(ρ_w·D)."""
+    return EXTINCTION_EFFICIENCY * 1.5 * np.asarray(mass_kg, dtype=np.float64) / (
+        physics.RHO_WATER * np.asarray(d_mm, dtype=np.float64) * 1e-3)
+
+
+
+def shader_defines() -> dict[str, str]:
+    """The model constants the shaders share with this module (one source of truth)."""
+    return {"SPRAY_G_DIFFRACTION": repr(G_DIFFRACTION), "SPRAY_G_REFRACTION": repr(G_REFRACTION),
+            "SPRAY_REFLECTION_SHARE": repr(REFLECTION_SHARE), "SPRAY_WATER_IOR": repr(WATER_IOR),
+            "SPRAY_GLINT_CHANCE": repr(GLINT_CHANCE), "SPRAY_PERIOD_M": repr(float(layout.PERIOD_M))}

@@ -1,0 +1,114 @@
+"""The spray effect in a scene, and the road film it reads (rain_core.effects.spray.effect, .wheels)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from rain_core import layout, water_film
+from rain_core.effects.spray import wheels
+from rain_core.effects.spray.water import KMH
+from rain_core.effects.spray.wheels import road_film_depth_fn
+from rain_core.vehicles import TRUCK_SPEC, Vehicle
+from rain_core.weather import WeatherState
+
+
+def _puddle(depth_mm):
+    return lambda x, z: np.full(np.broadcast(np.asarray(x), np.asarray(z)).shape, float(depth_mm))
+
+
+def _truck_scene(gl_ctx, enabled=True, strength=1.0, hour=12.0, film=None):
+    from rain_core.effects.spray import SprayEffect
+    from rain_core.scene import Scene
+    from rain_core.settings import Settings
+    from rain_core.vehicles import Autopilot
+
+    s = Settings()
+    s.rain.rate_mm_h, s.rain.wetness, s.rain.cracks, s.rain.puddles = 8.0, 1.0, 0.0, 0.0
+    s.traffic.count, s.time_of_day.hour = 1, hour
+    s.spray.enabled, s.spray.strength, s.spray.budget = enabled, strength, 3000
+    effect = SprayEffect(gl_ctx, s, seed=1)
+    effect.emitter.film_depth_fn = film
+    scene = Scene(gl_ctx, (96, 54), s, seed=1, effects=[effect])
+    v = 100 * KMH
+    scene.ego.position[:] = [layout.LANE_CENTRES_X[0], 0.0, 600.0]
+    scene.ego.speed_m_s = v
+    truck = Vehicle(TRUCK_SPEC, (layout.LANE_CENTRES_X[0], 0.0, 580.0), 0.0, v, (0.75, 0.75, 0.72))
+    scene.traffic.vehicles, scene.traffic.lanes, scene.traffic.desired_speeds_m_s = [truck], [0], [v]
+    scene.autopilot = Autopilot(lane_index=0, target_speed_m_s=v, seed=1, wander_m=0.0)
+    return scene, effect
+
+
+def test_effect_draws_spray_behind_a_truck(gl_ctx):
+    images, stats = [], []
+    for enabled in (True, False):
+        scene, effect = _truck_scene(gl_ctx, enabled=enabled, film=_puddle(0.0))
+        for _ in range(12):
+            scene.step(1 / 30)
+            scene.render()
+        images.append(scene.renderer.hdr_image())
+        stats.append({s.name: s.ran for s in scene.renderer.stats})
+        if enabled:
+            assert effect.emitter.stats.mist_puffs > 0 and effect.emitter.alive_counts(scene.time_s)[0] > 0
+            assert effect.ego_hydroplaning_risk == 0.0  # a wet film, no standing water
+            assert len(effect.wheels) == 2 and effect.wheels[1].vehicle.spec.kind == "truck"
+        scene.release()
+    assert np.isfinite(images[0]).all()
+    assert stats[0]["spray.transparent"] and not stats[1]["spray"]
+    diff = np.abs(images[0] - images[1]).max(axis=-1)
+    assert (diff > 1e-3).mean() > 0.01  # the spray shows
+
+
+def test_effect_is_skipped_on_a_dry_road_and_reports_hydroplaning(gl_ctx):
+    scene, effect = _truck_scene(gl_ctx, film=_puddle(0.0))
+    scene.settings.rain.wetness = 0.0
+    scene.settings.rain.rate_mm_h = 0.0
+    scene.step(1 / 30)
+    scene.render()
+    assert not {s.name: s.ran for s in scene.renderer.stats}["spray"]
+    scene.release()
+    scene, effect = _truck_scene(gl_ctx, film=_puddle(8.0))
+    scene.ego.speed_m_s = 110 * KMH
+    scene.step(1 / 30)
+    scene.render()
+    assert effect.ego_hydroplaning_risk > 0.5
+    assert np.all(effect.hydroplaning_risk(scene.traffic.vehicles[0]) < effect.hydroplaning_risk())
+    scene.release()
+
+
+def test_road_film_depth_is_the_roads_film():
+    assert wheels.film_depth_mm is water_film.film_depth_mm  # one model of the film, no copy of its constants
+    wet_mm = water_film.WET_FILM_MM
+    x, z = np.array([0.0, 3.0, 7.5, 1.75]), np.array([10.0, 20.0, 30.0, 500.0])
+    wet = road_film_depth_fn(SimpleNamespace(weather=WeatherState(wetness=0.5), settings=None, world=None))
+    assert np.allclose(wet(x, z), [0.5 * wet_mm, 0.5 * wet_mm, 0.0, 0.5 * wet_mm])
+    flooded = WeatherState(wetness=1.0, cracks=1.0, puddles=1.0)
+    fn = road_film_depth_fn(SimpleNamespace(weather=flooded, settings=None, world=None))
+    zz = np.arange(100.0, 1100.0, 0.5)
+    assert np.allclose(fn(np.full_like(zz, 5.25), zz), water_film.film_depth_mm(5.25, zz, 1.0, 1.0, wetness=1.0))
+    assert fn(np.full_like(zz, 5.25), zz).max() > 3.0  # standing water where the wheels run
+
+
+def test_active_is_pure_and_observe_follows_the_frame(gl_ctx):
+    from rain_core.gfx.frame import SharedResources
+
+    scene, effect = _truck_scene(gl_ctx, film=_puddle(8.0))
+    scene.step(1 / 30)
+    frame = scene.frame()
+    assert not effect.active(frame) and effect.wheels == []  # nothing observed yet: active changed nothing
+    effect.observe(frame)
+    assert len(effect.wheels) == 2 and effect.active(frame) and effect.active(frame)
+    rc = SimpleNamespace(shared=SharedResources())
+    for _ in range(15):  # through standing water: parcels land in it and are published for the ripples
+        effect.update(scene.frame(), rc)
+        scene.step(1 / 30)
+        effect.observe(scene.frame())
+    impacts = rc.shared.droplet_impacts
+    assert isinstance(impacts, np.ndarray) and impacts.dtype == np.float64 and impacts.shape[1:] == (3,)
+    assert len(impacts) > 0 and np.all(impacts[:, 2] >= 0.0)
+    assert np.array_equal(impacts, np.array(effect.landed_in_water()))
+    scene.settings.spray.enabled = False
+    off = scene.frame()
+    assert not effect.active(off) and effect.emitter.alive_until() > -np.inf  # still pure when switched off
+    effect.observe(off)  # switched off: the parcels in flight are dropped, the last time forgotten
+    assert effect.emitter.alive_until() == -np.inf and effect.emitter._last_time is None
+    scene.release()
