@@ -50,6 +50,8 @@ R_MAX_MM_H = 500.0  # mm/h, largest accepted rain rate
 RHO_WATER = 1000.0  # kg/m³
 RHO_AIR = 1.2  # kg/m³, near sea level at 20 °C
 G_M_S2 = 9.81  # m/s², standard gravity
+# A clear day's aerial perspective: β = 3.912 / 40 km (meteorological visibility 40 km at 2% contrast).
+CLEAR_AIR_EXTINCTION_PER_M = 3.912 / 40000.0  # 1/m
 
 # Gunn & Kinzer (1949) Table 2, stagnant air at sea level (copy in /work/shared/reference/gunn_kinzer.csv).
 GUNN_KINZER_D_MM = np.array([

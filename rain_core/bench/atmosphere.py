@@ -16,14 +16,16 @@ import numpy as np
 import trimesh
 from PIL import Image, ImageDraw
 
-from rain_core import atmosphere as atm
 from rain_core import physics
 from rain_core.bench._common import markdown_table, parser, write_output
 from rain_core.camera import look_at
-from rain_core.gl import ShaderLibrary, create_headless_context
+from rain_core.effects import atmosphere as atm
+from rain_core.gfx.context import create_headless_context
+from rain_core.gfx.frame import Frame
+from rain_core.gfx.renderer import Renderer
+from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.lighting import lighting_for_hour
 from rain_core.mesh import MAT_CONCRETE, from_trimesh
-from rain_core.renderer import CLEAR_AIR_EXTINCTION_PER_M, Frame, Renderer
 from rain_core.settings import Settings
 
 LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -51,12 +53,11 @@ def rendered_extinction_per_m(ctx, shaders, rate_mm_h: float, size=(160, 90)) ->
     h, w = size[1], size[0]
     rows, centre = slice(h // 2 - 2, h // 2 + 3), slice(w // 2 - 2, w // 2 + 3)
     sky_cols = np.r_[w // 4 - 2: w // 4 + 1, 3 * w // 4: 3 * w // 4 + 3]
-    fogged = Renderer(ctx, size, world, effects=[atm.Atmosphere(ctx, shaders)], shaders=shaders,
+    fogged = Renderer(ctx, size, world, effects=[atm.AtmosphereEffect(ctx, shaders=shaders)], shaders=shaders,
                       gpu_timing=False)
     fogged.render(frame)
     img = fogged.hdr_image() @ LUMA
-    plain = Renderer(ctx, size, world, shaders=shaders, gpu_timing=False)
-    plain.extinction_per_m = 0.0
+    plain = Renderer(ctx, size, world, effects=[atm.NoAirEffect()], shaders=shaders, gpu_timing=False)  # β = 0
     plain.render(frame)
     l0 = float(np.median((plain.hdr_image() @ LUMA)[rows, centre]))
     l_obj = float(np.median(img[rows, centre]))
@@ -91,7 +92,7 @@ def _scene(ctx, size, hour: float):
     settings = Settings()
     settings.time_of_day.hour = hour
     settings.camera.mode = "chase"
-    scene = Scene(ctx, size, settings, seed=1, effects=[atm.Atmosphere(ctx)])
+    scene = Scene(ctx, size, settings, seed=1, effects=[atm.AtmosphereEffect(ctx)])
     return scene, settings
 
 
@@ -217,7 +218,7 @@ def plot(path, vis_rows, glow) -> None:
         d.text((x0 - 45, vy(v) - 6), f"{v:g}", fill=(0, 0, 0))
     rs = np.logspace(-1, 2, 200)
     for beta_fn, colour in ((lambda r: atm.extinction_per_m(r), (30, 90, 200)),
-                            (lambda r: CLEAR_AIR_EXTINCTION_PER_M + 0.365e-3 * r**0.63, (200, 120, 30))):
+                            (lambda r: atm.CLEAR_AIR_EXTINCTION_PER_M + 0.365e-3 * r**0.63, (200, 120, 30))):
         pts = [(vx(r), vy(min(max(float(atm.visibility_m(beta_fn(r))), 300), 30000))) for r in rs]
         d.line(pts, fill=colour, width=2)
     for row in vis_rows:

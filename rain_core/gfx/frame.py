@@ -79,7 +79,7 @@ class SharedResources:
 
     | field            | producer (stage)   | consumers                  |
     |------------------|--------------------|----------------------------|
-    | film_depth_fn    | road (update)      | spray (update), ripples (update) |
+    | film_depth_fn    | road (update)      | ripples (update)           |
     | droplet_impacts  | spray (update)     | ripples (update)           |
     | water_normals    | ripples (update)   | road (scene binding)       |
     | rain_rings       | ripples (update)   | road (scene binding)       |

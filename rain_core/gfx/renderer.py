@@ -27,9 +27,7 @@ from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
 from rain_core.gfx.targets import RenderTarget, float_target
 from rain_core.gfx.timing import PassTimer
 from rain_core.lighting import lights_for_frame, pack_lights
-
-# A clear day's aerial perspective: β ≈ 3.912 / 40 km (meteorological visibility 40 km).
-CLEAR_AIR_EXTINCTION_PER_M = 3.912 / 40000.0
+from rain_core.physics import CLEAR_AIR_EXTINCTION_PER_M
 
 
 def clear_air_uniforms(lighting) -> dict:

@@ -12,9 +12,9 @@ import argparse
 
 import numpy as np
 
-from rain_core.atmosphere import Atmosphere, sky_overcast
 from rain_core.camera import look_at
-from rain_core.gl import create_headless_context
+from rain_core.effects.atmosphere import AtmosphereEffect, sky_overcast
+from rain_core.gfx.context import create_headless_context
 from rain_core.lighting import lighting_for_hour
 from rain_core.sheets import DEFAULT_OUT, save_sheet
 
@@ -31,7 +31,7 @@ def render(ctx, rate_mm_h: float, view: str, size=SIZE) -> np.ndarray:
     settings.rain.rate_mm_h = rate_mm_h
     night = view == "night street"
     settings.time_of_day.hour = 22.0 if night else 15.0
-    scene = Scene(ctx, size, settings, seed=1, effects=[Atmosphere(ctx)])
+    scene = Scene(ctx, size, settings, seed=1, effects=[AtmosphereEffect(ctx)])
     for _ in range(30):
         scene.step(1.0 / 30.0)
     if night:  # behind and to the left of the car, so its beams are seen from the side, not hidden by it

@@ -1,8 +1,9 @@
-// Aerial perspective: transmittance exp(−β·d) with in-scattered airlight (rain_core/atmosphere.py has the
-// NumPy twin of every function here, and the model with its sources).
-// Clear air: a clear-day β and the horizon sky's colour (set by the renderer). The atmosphere effect raises β
-// with the rain rate and the haze, makes the airlight rain-grey, and adds the sun's forward-peaked share.
-// Its extra uniforms stay 0 when it is off, and then every function below equals plain apply_atmosphere.
+// Aerial perspective: transmittance exp(−β·d) with in-scattered airlight (rain_core/effects/atmosphere/model.py
+// has the NumPy twins — transmittance, phase_hg, phase_rain, airlight — and the model with its sources).
+// Clear air: a clear-day β and the horizon sky's colour (the renderer's clear_air_uniforms). The atmosphere
+// effect (its frame_uniforms) raises β with the rain rate and the haze, makes the airlight rain-grey, and adds
+// the sun's forward-peaked share. Its extra terms are 0 when it is off, and then every function below equals
+// plain apply_atmosphere.
 uniform float u_extinction_per_m;  // 1/m, total: clear air + rain + haze
 uniform vec3 u_airlight;           // cd/m², isotropic airlight (the surroundings' mean radiance)
 uniform float u_medium_extinction_per_m;  // 1/m, the rain + haze share of β (0 in clear air)

@@ -1,0 +1,200 @@
+"""The atmosphere's GL side: the medium every program of the frame sees, and the post pass (glow, light
+scattering). The model is in ``model.py``, the NumPy references of the post pass in ``glow.py`` and
+``scattering.py``.
+
+The medium reaches the shaders through the contract (``rain_core.gfx.effect``): ``frame_uniforms`` returns the
+common/atmosphere.glsl uniforms of the frame, which the renderer puts over its clear air and writes into every
+program it draws with (scene, sky, rain, spray, the post passes here). So the scene, its reflections and the
+transparent effects are fogged alike, and with the effect idle every program sees clear air again.
+
+Cost: with no rain and no haze (or the effect off) ``active`` is False: no update, no post pass; the clear-air
+aerial perspective stays in the scene shader, one exp per pixel, at no extra cost. With fog but glow and light
+scattering both 0 the post pass draws nothing.
+"""
+
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+
+from rain_core.effects.atmosphere.glow import MAX_BLUR_RADIUS, blur_radius
+from rain_core.effects.atmosphere.model import (
+    AtmosphereState,
+    atmosphere_state,
+    atmosphere_uniforms,
+    medium_extinction_per_m,
+)
+from rain_core.effects.atmosphere.scattering import SCATTER_MAX_M, SCATTER_SAMPLES
+from rain_core.gfx import units
+from rain_core.gfx.effect import Effect
+from rain_core.gfx.frame import Frame, RenderContext
+from rain_core.gfx.shaders import ShaderLibrary
+from rain_core.gfx.targets import ColorView, RenderTarget, float_target
+from rain_core.gfx.uniforms import mat4_bytes, set_uniform, set_uniforms
+from rain_core.settings import AtmosphereSection
+
+
+class AtmosphereEffect(Effect):
+    """Rain-correlated fog and extinction, rain-grey airlight, glow and light scattering (``model``).
+
+    ``AtmosphereEffect(ctx, settings=None, *, seed=0, shaders=None)``: the settings are read from
+    ``frame.settings.atmosphere`` each frame (``settings`` only stands in for frames without settings; ``seed``
+    is unused: nothing here is random); shaders default to the renderer's library. After ``update`` the frame's
+    model is in ``self.state`` (None while the effect is idle).
+    """
+
+    name = "atmosphere"
+    stages = ("post",)
+
+    def __init__(self, ctx: moderngl.Context, settings=None, *, seed: int = 0, shaders: ShaderLibrary | None = None):
+        self.ctx = ctx
+        self.settings = settings
+        self._shaders = shaders
+        self.state: AtmosphereState | None = None
+        self.glow_sigma_px = 0.0  # of the last frame, full-resolution pixels
+        self._post_draws = False
+        self._scatter_count = 0
+        self._glow_factor = 1
+        self._programs: dict[str, moderngl.Program] = {}
+        self._vaos: dict[str, moderngl.VertexArray] = {}
+        self._targets: tuple[int, tuple[int, int], list[RenderTarget]] | None = None  # (factor, size, [a, b])
+        self._hdr_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
+        self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
+                                          repeat_x=False, repeat_y=False)
+
+    # --- per frame ------------------------------------------------------------------------------------------
+    def _section(self, frame) -> AtmosphereSection:
+        settings = getattr(frame, "settings", None) or self.settings
+        return settings.atmosphere if settings is not None else AtmosphereSection()
+
+    def _state(self, frame) -> AtmosphereState:
+        return atmosphere_state(self._section(frame), frame.rain_rate_mm_h, frame.lighting,
+                                lamp_lit=bool(getattr(frame.world, "lamps", None)))
+
+    def observe(self, frame: Frame) -> None:
+        self.state = None  # until ``update`` models this frame: an idle effect holds no stale medium
+
+    def active(self, frame) -> bool:
+        """Runs only while there is a medium: rain (with fog_scale > 0) or haze, and the effect enabled."""
+        sec = self._section(frame)
+        return sec.enabled and medium_extinction_per_m(frame.rain_rate_mm_h, sec.fog_scale, sec.haze_per_km) > 0.0
+
+    def frame_uniforms(self, frame: Frame) -> dict:
+        """β, the rain-grey airlight and the medium's sun airlight and phase (common/atmosphere.glsl)."""
+        return atmosphere_uniforms(self._state(frame))
+
+    def describe(self) -> str:
+        if self.state is None:
+            return "clear air"
+        return f"visibility {self.state.visibility_m / 1000.0:.2f} km (5% contrast)"
+
+    def update(self, frame: Frame, rc: RenderContext) -> None:
+        sec = self._section(frame)
+        self.state = state = self._state(frame)
+        focal_px = 0.5 * rc.size[1] / math.tan(math.radians(frame.camera.fov_y_deg) / 2.0)
+        self.glow_sigma_px = state.glow_sigma_rad * focal_px
+        scatter = state.scatter_per_m > 0.0 and sec.scatter_lights > 0 and rc.lights[3] > 0
+        self._scatter_count = min(sec.scatter_lights, rc.lights[3]) if scatter else 0
+        self._glow_factor = max(1, round(1.0 / sec.glow_resolution))
+        self._post_draws = state.glow_strength > 0.0 or scatter
+
+    # --- GL -------------------------------------------------------------------------------------------------
+    def _program(self, rc: RenderContext, frag: str) -> tuple[moderngl.Program, moderngl.VertexArray]:
+        if frag not in self._programs:
+            lib = self._shaders or rc.shaders
+            self._programs[frag] = prog = lib.program("common/fullscreen.vert", frag)
+            self._vaos[frag] = self.ctx.vertex_array(prog, [])
+        return self._programs[frag], self._vaos[frag]
+
+    def _glow_targets(self, size: tuple[int, int], factor: int) -> list[RenderTarget]:
+        low = (max(1, -(-size[0] // factor)), max(1, -(-size[1] // factor)))
+        if self._targets is None or self._targets[:2] != (factor, low):
+            self._release_targets()
+            self._targets = (factor, low, [float_target(self.ctx, low, 4, "f2") for _ in range(2)])
+        return self._targets[2]
+
+    def _frame_uniforms(self, prog: moderngl.Program, rc: RenderContext) -> None:
+        """The frame's uniforms (the medium included) and the inverse camera the depth reconstruction needs."""
+        rc.set_frame_uniforms(prog)
+        set_uniform(prog, "u_inv_view_proj", mat4_bytes(np.linalg.inv(rc.view_proj)))
+
+    def render(self, stage: str, rc: RenderContext) -> None:
+        if stage == "post" and self.state is not None and self._post_draws:
+            self._draw_post(rc)
+
+    def _draw_post(self, rc: RenderContext) -> None:
+        ctx = self.ctx
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.disable(moderngl.BLEND)
+        self._depth_sampler.use(units.ATMOSPHERE_DEPTH)
+        rc.hdr.depth.use(units.ATMOSPHERE_DEPTH)
+        a, b = self._glow_targets(rc.size, self._glow_factor)
+        if self.state.glow_strength > 0.0:
+            self._glow(rc, a, b)
+        prog, vao = self._program(rc, "atmosphere/composite.frag")
+        self._frame_uniforms(prog, rc)
+        a.color.use(units.ATMOSPHERE_GLOW)
+        set_uniforms(prog, u_glow=units.ATMOSPHERE_GLOW, u_depth=units.ATMOSPHERE_DEPTH,
+                     u_glow_factor=self._glow_factor, u_glow_strength=self.state.glow_strength,
+                     u_scatter_count=self._scatter_count, u_scatter_samples=SCATTER_SAMPLES,
+                     u_scatter_per_m=self.state.scatter_per_m, u_scatter_max_m=SCATTER_MAX_M)
+        # The composite reads the scene's depth, so it writes through a framebuffer without that depth attached.
+        self._hdr_fbo.fbo(rc.hdr.color).use()
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
+        vao.render(moderngl.TRIANGLES, vertices=3)
+        ctx.blend_func = moderngl.DEFAULT_BLENDING
+        ctx.disable(moderngl.BLEND)
+        ctx.enable(moderngl.DEPTH_TEST)  # as the scene pass left it
+        self._depth_sampler.clear(units.ATMOSPHERE_DEPTH)
+        rc.hdr.fbo.use()
+
+    def _glow(self, rc: RenderContext, a: RenderTarget, b: RenderTarget) -> None:
+        """c·w box-averaged into ``a``, then blurred a → b → a."""
+        down, down_vao = self._program(rc, "atmosphere/glow_down.frag")
+        self._frame_uniforms(down, rc)
+        rc.hdr.color.use(units.ATMOSPHERE_GLOW)
+        set_uniforms(down, u_color=units.ATMOSPHERE_GLOW, u_depth=units.ATMOSPHERE_DEPTH, u_factor=self._glow_factor)
+        a.fbo.use()
+        down_vao.render(moderngl.TRIANGLES, vertices=3)
+        sigma = min(self.glow_sigma_px / self._glow_factor, MAX_BLUR_RADIUS / 3.0)
+        blur, blur_vao = self._program(rc, "atmosphere/blur.frag")
+        set_uniforms(blur, u_src=units.ATMOSPHERE_GLOW, u_sigma_px=sigma, u_radius=blur_radius(sigma))
+        for step, src, dst in (((1, 0), a, b), ((0, 1), b, a)):
+            set_uniform(blur, "u_step", step)
+            src.color.use(units.ATMOSPHERE_GLOW)
+            dst.fbo.use()
+            blur_vao.render(moderngl.TRIANGLES, vertices=3)
+
+    def _release_targets(self) -> None:
+        if self._targets is not None:
+            for t in self._targets[2]:
+                t.release()
+            self._targets = None
+
+    def release(self) -> None:
+        self._release_targets()
+        for vao in self._vaos.values():
+            vao.release()
+        self._vaos.clear()
+        self._programs.clear()  # owned by the (shared, caching) ShaderLibrary: not ours to release
+        self._hdr_fbo.release()
+        self._depth_sampler.release()
+
+
+class NoAirEffect(Effect):
+    """No aerial perspective at all (β = 0): a surface's own radiance, for measuring what the medium does to it
+    (tests, the atmosphere bench). Draws nothing."""
+
+    name = "no_air"
+
+    def __init__(self, ctx=None, settings=None, *, seed: int = 0, shaders=None):
+        pass
+
+    def active(self, frame) -> bool:
+        return True
+
+    def frame_uniforms(self, frame) -> dict:
+        return {"u_extinction_per_m": 0.0}

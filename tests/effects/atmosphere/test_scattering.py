@@ -1,0 +1,62 @@
+"""Atmosphere light scattering (issue 9): the post pass against the dense single-scattering quadrature."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rain_core.camera import look_at
+from rain_core.effects import atmosphere as atm
+from rain_core.lighting import Light, pack_lights
+from rain_core.settings import Settings
+
+LUMA = np.array([0.2126, 0.7152, 0.0722])
+
+
+def test_light_scattering_matches_single_scattering_reference(gl_ctx, shaders, kit):
+    """A down-lit street lamp, a sideways lamp and a low-beam headlight cone against the dense quadrature."""
+    size = (96, 64)
+    world = kit.world([kit.box((0.0, -50.0, -3000.0), (1.0, 1.0, 1.0), (0.1, 0.1, 0.1))])
+    lights = [
+        Light(np.array([2.0, 6.0, 580.0]), np.array([0.0, -1.0, 0.0]), 6000.0, np.ones(3),
+              math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0),
+        Light(np.array([-4.0, 3.0, 575.0]), np.array([1.0, 0.0, 0.0]), 3000.0, np.array([1.0, 0.8, 0.6]),
+              math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0),
+        Light(np.array([1.0, 0.7, 590.0]), np.array([0.0, -0.026, -1.0]) / np.linalg.norm([0.0, -0.026, -1.0]),
+              20000.0, np.array([1.0, 0.96, 0.88]), math.cos(math.radians(30)), math.cos(math.radians(12)),
+              150.0, low_beam=True),
+    ]
+    camera = look_at((-3.0, 2.0, 604.0), (1.0, 2.5, 570.0), fov_y_deg=60.0)
+    rate = 20.0
+    images = []
+    for scale in (0.0, 1.0):
+        settings = Settings()
+        settings.atmosphere.glow = 0.0
+        settings.atmosphere.light_scattering = scale
+        r = kit.renderer(gl_ctx, shaders, world, size)
+        original = r.render_context
+
+        def with_lights(frame, *args, _original=original, **kwargs):
+            rc = _original(frame, *args, **kwargs)
+            rc.lights = pack_lights(lights)  # our lights, no vehicles needed
+            return rc
+
+        r.render_context = with_lights
+        frame = kit.frame(camera, world, settings, rate, 22.0)
+        r.render(frame)
+        images.append(kit.bottom_first(r)[0])
+        state, rc = r.effects[0].state, r.render_context(frame)
+        kit.release(r)
+    shader = (images[1] - images[0])[1::3, 1::3]  # every third pixel: the reference is dense and slow
+    _, dirs = atm.pixel_distances(np.ones(size[::-1]), rc.view_proj, rc.camera_position)
+    ref = sum(atm.light_inscatter_reference(rc.camera_position, dirs[1::3, 1::3], atm.SCATTER_MAX_M, light,
+                                            state.extinction_per_m, state.scatter_per_m, n=4000)
+              for light in lights) * frame.lighting.exposure
+    y_ref, y_gl = ref @ LUMA, shader @ LUMA
+    lit = y_ref > 0.01 * y_ref.max()
+    assert lit.mean() > 0.1  # the cones cover a good part of the frame …
+    assert (~lit).mean() > 0.05  # … but not all of it (the headlight cone is clipped)
+    rel = np.abs(y_gl[lit] - y_ref[lit]) / y_ref[lit]
+    assert np.median(rel) < 0.04 and np.percentile(rel, 98) < 0.10
+    assert np.abs(y_gl[~lit]).max() < 0.02 * y_ref.max()
