@@ -17,7 +17,7 @@ import numpy as np
 from rain_core import layout, physics
 from rain_core.bench._common import markdown_table, parser, write_output
 from rain_core.camera import Camera
-from rain_core.rainfall import (
+from rain_core.effects.rainfall import (
     RainfallSim,
     RainInput,
     StreakCamera,
@@ -115,8 +115,8 @@ def density_errors(budget: int, rate: float, frames: int, seed: int = 1) -> dict
 
 def gpu_costs(budgets, size, frames: int) -> list[dict]:
     """Frame time of the streak pass (wall time to ctx.finish) against the budget, heavy rain, driver view."""
+    from rain_core.effects.rainfall import RainfallEffect
     from rain_core.gl import create_headless_context
-    from rain_core.rainfall import RainfallEffect
     from rain_core.scene import Scene
     from rain_core.settings import Settings
 

@@ -28,7 +28,7 @@ DETAILS = (("moderate", 2.0, "day", 12.0, 0.0), ("heavy", 8.0, "day", 12.0, 0.0)
 def rain_scene(ctx, size, settings, seed: int = 1):
     """A Scene with the registered effects and a RainfallEffect (replacing a registered one) before the
     atmosphere's post pass. Returns (scene, rainfall effect)."""
-    from rain_core.rainfall import RainfallEffect
+    from rain_core.effects.rainfall import RainfallEffect
     from rain_core.scene import Scene, default_effects
 
     effect = RainfallEffect(ctx, settings=settings, seed=seed)

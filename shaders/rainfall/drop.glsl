@@ -1,4 +1,4 @@
-// Rainfall (rain_core/rainfall.py): what a falling drop looks like, and where the drops of the container are.
+// Rainfall (rain_core/effects/rainfall/): what a falling drop looks like, and where the drops of the container are.
 // A drop is a tiny fish-eye lens: it shows ~94 % of the radiance of a ~165° field of view behind it (Garg &
 // Nayar 2004), so it is usually brighter than what it covers. On top of that it scatters the sun, street lamps
 // and headlights towards the eye; for a drop of radius r lit with illuminance E the scattered intensity is
@@ -31,7 +31,7 @@ float rain_phase(float cos_theta) {
            + RAIN_PHASE_BACK_WEIGHT * rain_hg(RAIN_PHASE_BACK_G, cos_theta);
 }
 
-uniform sampler2D u_rain_env;  // rainfall_env.frag: mean radiance behind a drop, by view direction
+uniform sampler2D u_rain_env;  // rainfall/env.frag: mean radiance behind a drop, by view direction
 
 // Mean radiance (cd/m²) of the environment in the ~165° cone around the view direction d.
 vec3 rain_environment(vec3 d) {

@@ -1,5 +1,5 @@
 #version 330 core
-// What a drop shows (rain_core/rainfall.py): for each view direction d (equirectangular texel), the mean sky
+// What a drop shows (rain_core/effects/rainfall/): for each view direction d (equirectangular texel), the mean sky
 // radiance (cd/m²) over the ~165° field of view behind the drop around d (Garg & Nayar 2004) — 64 directions
 // spread evenly over the spherical cap (Fibonacci spiral). Drawn once per frame; the streak and splash passes
 // read it instead of integrating per vertex.

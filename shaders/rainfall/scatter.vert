@@ -1,5 +1,5 @@
 #version 330 core
-// Writes single texels of the drop state texture (rain_core/rainfall.py): one point per texel.
+// Writes single texels of the drop state texture (rain_core/effects/rainfall/): one point per texel.
 in int in_texel;
 in vec4 in_value;
 uniform ivec2 u_size;  // texels

@@ -1,5 +1,5 @@
 #version 330 core
-// Impact splashes (rain_core/rainfall.py): one instance per ring slot, a billboard standing on the impact
+// Impact splashes (rain_core/effects/rainfall/): one instance per ring slot, a billboard standing on the impact
 // point and turned to the camera about the vertical; the fragment shader draws the crown and its droplets.
 #include "rainfall/drop.glsl"
 

@@ -1,6 +1,6 @@
 #version 330 core
-// Rain streaks (rain_core/rainfall.py): one instance per drop slot, a screen-aligned quad around the drop's path
-// relative to the camera during the exposure. Keep in step with the NumPy twin rainfall.streak_geometry.
+// Rain streaks (rain_core/effects/rainfall/): one instance per drop slot, a screen-aligned quad around the drop's path
+// relative to the camera during the exposure. Keep in step with the NumPy twin streaks.streak_geometry.
 #include "rainfall/drop.glsl"
 
 #ifndef LAYERS

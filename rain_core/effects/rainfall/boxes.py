@@ -1,0 +1,88 @@
+"""The container: nested axis-aligned boxes (layers) that follow the camera, their fade-in membership and the
+drawn density a drop's weight divides by (package docstring, "Container")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rain_core.effects.rainfall.constants import (
+    BOX_BOTTOM_Y_M,
+    FADE_FRACTION,
+    FORWARD_OFFSET,
+    GROUND_Y_M,
+    LAYER_PROFILE,
+    LAYER_SCALES,
+    PERIOD_M,
+    TOP_PAD_M,
+    TOP_SLOPE,
+)
+
+
+@dataclass
+class Boxes:
+    """The layers' boxes: lo, hi (L, 3) in world coordinates (m), fade (L, 3) widths (m), profile ν (L,)."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+    fade: np.ndarray
+    nu: np.ndarray
+
+    @property
+    def volumes(self) -> np.ndarray:
+        return np.prod(self.hi - self.lo, axis=1)
+
+
+def layer_boxes(camera_position, camera_forward, container_m: float) -> Boxes:
+    """The container's nested boxes (m, world) for a camera at camera_position looking along camera_forward.
+
+    container_m: horizontal size (m) of the outer box. Each box is centred FORWARD_OFFSET half-sizes ahead of the
+    camera along the horizontal view direction (scaled by its horizontal share, so a camera looking straight
+    down sits at the centre)."""
+    cam = np.asarray(camera_position, dtype=np.float64)
+    f = np.asarray(camera_forward, dtype=np.float64)
+    fh = np.array([f[0], f[2]])
+    n = float(np.hypot(*fh))
+    fh = fh / n if n > 1e-9 else np.zeros(2)
+    h = 0.5 * float(container_m) * np.asarray(LAYER_SCALES)
+    centre = cam[[0, 2]][None, :] + fh[None, :] * (FORWARD_OFFSET * h * min(n, 1.0))[:, None]
+    top = max(float(cam[1]), GROUND_Y_M) + TOP_SLOPE * h + TOP_PAD_M
+    lo = np.stack([centre[:, 0] - h, np.full_like(h, BOX_BOTTOM_Y_M), centre[:, 1] - h], axis=1)
+    hi = np.stack([centre[:, 0] + h, top, centre[:, 1] + h], axis=1)
+    fade = np.stack([FADE_FRACTION * h, FADE_FRACTION * (top - BOX_BOTTOM_Y_M), FADE_FRACTION * h], axis=1)
+    return Boxes(lo, hi, fade, np.asarray(LAYER_PROFILE, dtype=np.float64))
+
+
+def wrap_near(z, around_z):
+    """z (m) shifted by whole periods to lie within half a period of around_z (m)."""
+    return z - PERIOD_M * np.round((np.asarray(z) - around_z) / PERIOD_M)
+
+
+def membership(p, boxes: Boxes, layer) -> np.ndarray:
+    """Fade-in factor in [0, 1] of points p (n, 3) in the boxes of their layers (n,): linear ramps over the fade
+    widths at the sides and the top, none at the bottom (the ground ends the drops). Mirrors the shader."""
+    lo, hi, fade = boxes.lo[layer], boxes.hi[layer], boxes.fade[layer]
+    a = np.clip((p - lo) / fade, 0.0, 1.0)
+    b = np.clip((hi - p) / fade, 0.0, 1.0)
+    a[:, 1] = (p[:, 1] >= lo[:, 1]).astype(np.float64)
+    return np.prod(a, axis=1) * np.prod(b, axis=1)
+
+
+def drawn_density_factor(p, boxes: Boxes) -> np.ndarray:
+    """max(Σ_k ν_k·m_k(p), ν_outer) at points p (n, 3): the drawn density ÷ κ that a weight divides by."""
+    p = np.atleast_2d(p)
+    total = np.zeros(len(p))
+    for k in range(len(boxes.nu)):
+        total += boxes.nu[k] * membership(p, boxes, np.full(len(p), k))
+    return np.maximum(total, boxes.nu[-1])
+
+
+
+def full_region(boxes: Boxes, layer: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    """The part of a layer's box (default the outer one) where no fade applies (m, world): lo, hi."""
+    lo = boxes.lo[layer] + boxes.fade[layer] * np.array([1.0, 0.0, 1.0])
+    hi = boxes.hi[layer] - boxes.fade[layer]
+    lo = lo.copy()
+    lo[1] = GROUND_Y_M
+    return lo, hi

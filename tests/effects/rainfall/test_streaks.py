@@ -1,0 +1,108 @@
+"""rainfall streaks: the tilt of the streaks, the shader against its NumPy twin, drops glowing in headlights."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from rain_core import physics
+from rain_core.effects.rainfall import RainfallSim, StreakCamera, streak_geometry
+
+# --- what the camera sees ---------------------------------------------------------------------------------------
+
+
+def test_tilt_equals_atan_of_car_speed_over_fall_speed(rain):
+    """For a steady car the streak (the drop's path relative to the camera) leans towards the windshield by
+    atan(v_car / v_fall), drop by drop, in the NumPy twin of the vertex shader."""
+    v_car = 25.0
+    sim = RainfallSim(3000, seed=4)
+    t = rain.drive(sim, 1.0, speed=v_car, rate=8.0)
+    slots = np.flatnonzero(sim.pool.alive)
+    eye = np.array([1.75, 1.2, 600.0 - v_car * t])
+    from rain_core.camera import Camera
+
+    cam = Camera(position=eye, forward=np.array([0.0, 0.0, -1.0]))
+    view_proj = cam.projection_matrix(16 / 9) @ cam.view_matrix()
+    sc = StreakCamera(view_proj, eye, 0.0, np.array([0.0, 0.0, -v_car]), 1.0 / 60.0, (320, 180))
+    g = streak_geometry(sim, slots, t, sc, sim.boxes)
+    seg = g["head"] - g["tail"]  # where the drop is now minus where it was relative to the camera
+    vis = g["visible"] & (np.linalg.norm(seg, axis=1) > 1e-6)
+    tilt = np.degrees(np.arctan2(seg[vis, 2], -seg[vis, 1]))  # from the vertical, towards +Z (the windshield)
+    expected = np.degrees(np.arctan(v_car / physics.terminal_velocity(sim.diameter[slots[vis]])))
+    assert vis.sum() > 500
+    assert np.max(np.abs(tilt - expected)) < 1.0
+    assert np.all(np.abs(seg[vis, 0]) < 1e-9)  # no sideways lean without wind
+    # Parked: the streaks are vertical; reversing: they lean the other way.
+    for speed, sign in ((0.0, 0.0), (-5.0, -1.0)):
+        sc2 = dataclasses.replace(sc, velocity=np.array([0.0, 0.0, -speed]))
+        s2 = streak_geometry(sim, slots, t, sc2, sim.boxes)
+        seg2 = s2["head"] - s2["tail"]
+        lean = np.degrees(np.arctan2(seg2[vis, 2], -seg2[vis, 1]))
+        want = sign * np.degrees(np.arctan(abs(speed) / physics.terminal_velocity(sim.diameter[slots[vis]])))
+        assert np.max(np.abs(lean - want)) < 1.0
+
+
+def test_shader_draws_the_twins_streaks(gl_ctx, shaders, rain):
+    """Every pixel the streak pass lights lies on a streak of the NumPy twin, and the light it adds (with the
+    radiance switched to a constant) matches the twin's light budget."""
+    from rain_core.camera import Camera
+
+    s = rain.settings(rate=8.0, mode="driver", budget=300, container_m=16.0, splashes=False)
+    s.wind.speed_m_s = 0.0
+    scene, effect = rain.scene(gl_ctx, shaders, s, size=(240, 135))
+    scene.ego.speed_m_s = 15.0
+    scene.step(1.0 / 60.0)
+    eye = scene.camera().position + np.array([1.6, 0.3, 0.0])  # beside the car, looking right
+    cam = Camera(position=eye, forward=np.array([1.0, 0.0, 0.0]), fov_y_deg=60.0)
+    frame = scene.render(cam)
+    rain = scene.renderer.hdr_image()
+    slots = np.flatnonzero(effect.sim.pool.alive)
+    g = streak_geometry(effect.sim, slots, frame.time_s, effect.streak_camera(scene.renderer.render_context(frame)),
+                        effect.sim.boxes)
+    s.rainfall.enabled = False
+    scene.render(cam)
+    light = np.abs(rain - scene.renderer.hdr_image()).sum(axis=2)
+    w, h = scene.renderer.size
+    ys, xs = np.nonzero(light > 1e-5)
+    assert xs.size > 200
+    px = np.stack([xs + 0.5 - w / 2, h / 2 - (ys + 0.5)], axis=1)
+    vis = g["visible"]
+    a, b, width = g["head_px"][vis], g["tail_px"][vis], g["width_px"][vis]
+    ab = b - a
+    t = np.clip(((px[:, None] - a[None]) * ab[None]).sum(2) / np.maximum((ab**2).sum(1), 1e-9)[None], 0, 1)
+    dist = np.linalg.norm(px[:, None] - (a[None] + t[..., None] * ab[None]), axis=2) - 0.5 * width[None]
+    assert dist.min(axis=1).max() < 1.5  # within the 0.5 px antialiasing margin and the pixel's half-diagonal
+    # The car's speed tilts the streaks: seen from the side they are almost horizontal.
+    ok = vis & (np.linalg.norm(g["head_px"] - g["tail_px"], axis=1) > 3)
+    d = g["tail_px"][ok] - g["head_px"][ok]
+    from_horizontal = np.abs(np.degrees(np.arctan(d[:, 1] / np.where(d[:, 0] == 0, 1e-9, d[:, 0]))))
+    assert np.median(from_horizontal) < 30.0
+
+
+def test_drops_in_a_headlight_beam_glow(gl_ctx, shaders, rain):
+    from rain_core.camera import Camera
+
+    s = rain.settings(rate=8.0, hour=23.0, mode="driver", budget=8000, splashes=False)
+    s.wind.speed_m_s = 0.0
+    scene, effect = rain.scene(gl_ctx, shaders, s)
+    scene.ego.speed_m_s = 0.0
+    scene.step(1.0 / 60.0)
+    ego = scene.ego
+    # A camera on the kerb side, looking across the road through the beams in front of the car.
+    target = ego.position + ego.forward() * 6.0 + np.array([0.0, 0.8, 0.0])
+    eye = target + ego.right() * 6.0 + np.array([0.0, 0.2, 0.0])
+    cam = Camera(position=eye, forward=(target - eye) / np.linalg.norm(target - eye), fov_y_deg=50.0)
+    lit = []
+    for on in (True, False):
+        frame = dataclasses.replace(scene.frame(cam), headlights_on=on)
+        scene.renderer.render(frame)
+        rain = scene.renderer.hdr_image()
+        s.rainfall.enabled = False
+        scene.renderer.render(frame)
+        dry = scene.renderer.hdr_image()
+        s.rainfall.enabled = True
+        h, w = rain.shape[:2]
+        centre = (rain - dry)[h // 4: 3 * h // 4, w // 4: 3 * w // 4]  # the beam, away from the street lamps
+        lit.append(float(np.clip(centre, 0, None).sum()))
+    assert lit[0] > 3.0 * lit[1] and lit[0] > 0.0
