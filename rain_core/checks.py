@@ -45,6 +45,13 @@ def array(name: str, value, lo: float = 0.0, hi: float = math.inf, unit: str = "
 def number(name: str, value, lo: float = -math.inf, hi: float = math.inf, unit: str = "",
            lo_open: bool = False) -> float:
     """A finite scalar in [lo, hi] (or (lo, hi] with ``lo_open``) as a float; booleans and strings are refused."""
+    if type(value) in (float, int):  # the common case without NumPy (sub-µs): some callers run per frame
+        try:
+            x = float(value)
+        except OverflowError:
+            x = math.nan
+        if math.isfinite(x) and (x > lo if lo_open else x >= lo) and x <= hi:
+            return x
     if isinstance(value, (bool, str, bytes)) or np.ndim(value) != 0:
         raise ValueError(f"{name} must be a number in {_range(lo, hi, lo_open)}{' ' + unit if unit else ''}, "
                          f"got {quote(value)}")

@@ -18,15 +18,12 @@ import time
 import numpy as np
 
 from rain_core.bench._common import markdown_table, parser, write_output
-from rain_core.ripples import (
-    CAPILLARY_SPEED_M_S,
-    DEFAULT_DAMPING_PER_S,
-    RippleField,
-    WaveSolver,
-    WaveSolverF32,
-    WaveSolverGPU,
-    choose_backend,
-)
+from rain_core.effects.ripples.backend import choose_backend, make_field
+from rain_core.effects.ripples.constants import CAPILLARY_SPEED_M_S, DEFAULT_DAMPING_PER_S
+from rain_core.effects.ripples.gpu import WaveSolverGPU
+from rain_core.effects.ripples.solver import WaveSolver
+from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+from rain_core.effects.ripples.textures import RippleTextures
 
 EXTENT_M = 25.0
 MODE = (6, 4)
@@ -155,26 +152,29 @@ def sleep_and_retime_table(ctx, n: int, frames: int) -> str:
                                                  ("steady 60 Hz, asleep (no sources, settled)", 0.25, 0.0, True),
                                                  ("±5 % jitter, exact retime every frame", 0.0, 0.05, False),
                                                  ("±5 % jitter, reuse tolerance 0.25", 0.25, 0.05, False)):
-            field = RippleField(ctx, n=n, extent_m=EXTENT_M, backend=backend, reuse_tolerance=tolerance)
+            field = make_field(ctx, n=n, extent_m=EXTENT_M, backend=backend, reuse_tolerance=tolerance)
+            textures = RippleTextures(ctx, field) if ctx is not None else None
             field.recenter(0.0, 0.0)
             field.solver.sleep_energy = 1e300 if asleep else 0.0
             field.solver.add_impulse(12.0, 12.0, 1.0, 1e-3)
             rng = np.random.default_rng(0)
             for _ in range(30):  # warm up (and, for the asleep row, let it fall asleep: checks every 8 frames)
                 field.update(1 / 60)
-                _ = field.normal_texture if ctx is not None else None
+                _ = textures.normal_texture if textures is not None else None
             retimes0 = field.solver.retimes
             samples = []
             for _ in range(frames):
                 t0 = time.perf_counter()
                 field.update((1 / 60) * (1 + jitter * rng.uniform(-1, 1)))
-                if ctx is not None:
-                    _ = field.normal_texture
+                if textures is not None:
+                    _ = textures.normal_texture
                     ctx.finish()
                 samples.append((time.perf_counter() - t0) * 1e3)
             ms = float(np.median(samples))
             rows.append((BACKEND_LABELS[backend], label, f"{ms:.3f}", field.solver.retimes - retimes0,
                          "yes" if field.asleep else "no"))
+            if textures is not None:
+                textures.release()
             field.release()
     return markdown_table(["backend", f"frame ({n}², update + normals)", "median ms / frame", "retimes",
                            "asleep"], rows)

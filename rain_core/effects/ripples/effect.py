@@ -1,0 +1,124 @@
+"""The ripples effect: drives the ripple field with the frame (the ego car's window, the wheels, the rain, the
+spray's droplets) and publishes the water's slopes and the far puddles' ring map for the road."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rain_core.effects.ripples.backend import make_field
+from rain_core.effects.ripples.field import RippleField, WheelSweep
+from rain_core.effects.ripples.rain_tiles import RainRippleTexture
+from rain_core.effects.ripples.textures import RippleTextures
+from rain_core.gfx.effect import Effect
+from rain_core.gfx.frame import RainRings
+from rain_core.gfx.shaders import ShaderLibrary
+
+
+class RipplesEffect(Effect):
+    """Interactive water (DESIGN §3): wakes of every wheel in the window and raindrop rings on the simulated field
+    around the ego car, plus the tiled rain-ring map for puddles beyond it.
+
+    It only runs where there is standing water (flood levels above 0) — a dry or merely wet road costs nothing —
+    and the solver itself sleeps once the water has settled. It reads the road's ``rc.shared.film_depth_fn``
+    (None: the road is off, the water stays flat) and the spray's ``rc.shared.droplet_impacts``, and publishes
+    ``rc.shared.water_normals`` (the field's slopes) and, while it rains, ``rc.shared.rain_rings`` (the tiled
+    map) for the road's water shading. Settings: ``settings.ripples`` and ``settings.quality.ripple_grid``.
+
+    ``backend`` (one of ``BACKENDS``, default "auto": timed at start-up) is read when the field is built, on the
+    first active frame and whenever the grid settings change."""
+
+    name = "ripples"
+    stages = ()
+
+    def __init__(self, ctx, settings=None, *, seed: int = 0, shaders=None):
+        self.ctx = ctx
+        self.seed = int(seed)
+        self.backend = "auto"
+        self._owns_shaders = shaders is None and ctx is not None  # a library of our own: ours to release
+        self.shaders = shaders if shaders is not None or ctx is None else ShaderLibrary(ctx)
+        self.field: RippleField | None = None
+        self.textures: RippleTextures | None = None
+        self._config = None
+        self.rain_tiles = RainRippleTexture(ctx, seed=self.seed, shaders=self.shaders) if ctx is not None else None
+        self.last_report: dict = {}
+
+    def _ensure_field(self, settings) -> RippleField:
+        r = settings.ripples
+        config = (settings.quality.ripple_grid, r.extent_m, r.speed_m_s, r.damping_per_s)
+        if config != self._config:
+            self._release_field()
+            n, extent, speed, damping = config
+            self.field = make_field(self.ctx, n=n, extent_m=extent, speed_m_s=speed, damping_per_s=damping,
+                                    backend=self.backend, seed=self.seed, shaders=self.shaders)
+            if self.ctx is not None:
+                self.textures = RippleTextures(self.ctx, self.field, self.shaders)
+            self._config = config
+        self.field.wake_gain = r.wheel_strength
+        self.field.rain_gain = r.rain_strength
+        return self.field
+
+    def active(self, frame) -> bool:
+        settings, weather = frame.settings, frame.weather
+        if settings is None or weather is None or not settings.ripples.enabled:
+            return False
+        return max(weather.cracks, weather.puddles) > 0.0
+
+    def wheel_sweeps(self, frame, field: RippleField) -> list[WheelSweep]:
+        """The wheels whose contact path this frame lies in the window (world m, speeds m/s)."""
+        ox, oz = field.origin_xz
+        sweeps = []
+        for vehicle in frame.vehicles:
+            now = vehicle.wheel_contacts()
+            before = getattr(vehicle, "previous_wheel_contacts", None)
+            before = now if before is None else before
+            xs, zs = np.concatenate([now[:, 0], before[:, 0]]), np.concatenate([now[:, 2], before[:, 2]])
+            if xs.max() < ox or xs.min() > ox + field.extent_m or zs.max() < oz or zs.min() > oz + field.extent_m:
+                continue
+            speeds, widths = np.abs(vehicle.wheel_speeds()), vehicle.wheel_widths()
+            for i in range(4):
+                sweeps.append(WheelSweep((before[i, 0], before[i, 2]), (now[i, 0], now[i, 2]), float(speeds[i]),
+                                         float(widths[i])))
+        return sweeps
+
+    def update(self, frame, rc) -> None:
+        field = self._ensure_field(frame.settings)
+        film_fn = rc.shared.film_depth_fn
+        if film_fn is None:  # the road effect is off: keep the water flat rather than guessing where it is
+            return
+        ego = frame.ego
+        center = None if ego is None else (float(ego.position[0]), float(ego.position[2]))
+        rate = frame.rain_rate_mm_h
+        field.add_droplet_impacts(rc.shared.droplet_impacts)
+        self.last_report = field.update(frame.dt_s, center_xz=center, rate_mm_h=rate,
+                                        wheels=self.wheel_sweeps(frame, field), film_depth_fn=film_fn)
+        if self.textures is not None:
+            rc.shared.water_normals = self.textures.water_normals()
+        if rate > 0.0 and self.rain_tiles is not None:
+            self.rain_tiles.render(frame.time_s, rate)
+            rc.shared.rain_rings = RainRings(self.rain_tiles.texture, self.rain_tiles.tile_m)
+
+    def describe(self) -> str:
+        if self.field is None:
+            return ""
+        state = "asleep" if self.field.asleep else f"{self.last_report.get('substeps', 0)} sub-steps"
+        return f"{self.field.backend} {self.field.n}², {state}"
+
+    def _release_field(self) -> None:
+        if self.textures is not None:
+            self.textures.release()
+            self.textures = None
+        if self.field is not None:
+            self.field.release()
+            self.field = None
+
+    def release(self) -> None:
+        """Free the field's and the ring map's GL objects, and the programs when the shader library is our own
+        (a shared library's owner releases it)."""
+        self._release_field()
+        self._config = None
+        if self.rain_tiles is not None:
+            self.rain_tiles.release()
+            self.rain_tiles = None
+        if self._owns_shaders:
+            self.shaders.release()
+            self._owns_shaders = False

@@ -1,0 +1,213 @@
+"""The GPU path of the wave solver: the scheme of ``WaveSolver`` in fragment shaders (``shaders/ripples/``)."""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from rain_core.effects.ripples.solver import WaveSolver, shifted
+from rain_core.gfx import units
+from rain_core.gfx.shaders import ShaderLibrary
+from rain_core.gfx.targets import PingPong, float_target, fullscreen_triangle
+from rain_core.gfx.uniforms import set_uniforms
+
+REDUCE_BLOCK = 8  # cells per side summed by one fragment of the reduction pass
+
+# Program (by GL name) → the constant uniforms last written into it. The shader library caches programs, so two
+# solvers may share one; a solver re-writes its constants only when another wrote its own since.
+_CONSTANTS_IN: dict[int, dict] = {}
+
+
+class WaveSolverGPU(WaveSolver):
+    """The same solver in fragment shaders (OpenGL 3.3): an RG32F texture (current, previous) ping-ponged
+    through ``shaders/ripples/step.frag``; sources are summed on the CPU into a displacement texture and added
+    by ``shaders/ripples/impulse.frag`` with additive blending. ``height`` reads the texture back (float32).
+
+    ``WaveSolverGPU(ctx, n, cell_m, speed_m_s, damping_per_s=0.0, shaders=None, **kw)``. Passes bind their
+    inputs to the scratch texture units (``units.SCRATCH``) and leave blending disabled and the scissor reset.
+    The programs come from the (caching) shader library, which may share them: every pass sets this solver's
+    constant uniforms before it draws, unless they are already there."""
+
+    dtype = np.float32
+
+    def __init__(self, ctx, n: int, cell_m: float, speed_m_s: float, damping_per_s: float = 0.0, *,
+                 shaders=None, **kwargs):
+        self.ctx = ctx
+        self._owns_shaders = shaders is None  # a library of our own: ours to release
+        self.shaders = shaders if shaders is not None else ShaderLibrary(ctx)
+        super().__init__(n, cell_m, speed_m_s, damping_per_s, **kwargs)
+
+    def _alloc(self):
+        ctx, n = self.ctx, self.n
+        self.state = PingPong(ctx, (n, n), components=2, dtype="f4", filter_linear=False)
+        for target in self.state.targets:
+            target.fbo.clear(0.0, 0.0, 0.0, 0.0)
+        self.mask_texture = ctx.texture((n, n), 1, np.full(n * n, 255, np.uint8).tobytes(), dtype="f1")
+        self.source_texture = ctx.texture((n, n), 1, dtype="f4")
+        nb = -(-n // REDUCE_BLOCK)
+        self.reduce_target = float_target(ctx, (nb, nb), 4, "f4", filter_linear=False)
+        for tex in (self.mask_texture, self.source_texture):
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        prog = self.shaders.program
+        self._progs = {
+            "step": prog("common/fullscreen.vert", "ripples/step.frag"),
+            "retime": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_RETIME": 1}),
+            "reduce": prog("common/fullscreen.vert", "ripples/step.frag",
+                           defines={"RIPPLES_REDUCE": 1, "RIPPLES_BLOCK": REDUCE_BLOCK}),
+            "shift": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_SHIFT": 1}),
+            "impulse": prog("common/fullscreen.vert", "ripples/impulse.frag"),
+        }
+        self._vaos = {name: fullscreen_triangle(ctx, p) for name, p in self._progs.items()}
+        state_unit, mask_unit, source_unit = units.SCRATCH
+        self._constants = {"u_state": state_unit, "u_mask": mask_unit, "u_source": source_unit, "u_n": n,
+                           "u_s2": self.speed_m_s ** 2, "u_inv_h2": 1.0 / self.cell_m ** 2}
+        self._pending = np.zeros((n, n), np.float32)
+        self._pending_box: list[int] | None = None  # [x0, z0, x1, z1) of pending sources
+
+    def _own(self, prog) -> None:
+        """Write this solver's constant uniforms into ``prog`` unless they are already there."""
+        if _CONSTANTS_IN.get(prog.glo) is not self._constants:
+            set_uniforms(prog, self._constants)
+            _CONSTANTS_IN[prog.glo] = self._constants
+
+    def _draw(self, name: str, target, **uniforms):
+        prog = self._progs[name]
+        self._own(prog)
+        set_uniforms(prog, uniforms)
+        state_unit, mask_unit, _ = units.SCRATCH
+        self.state.src.color.use(state_unit)
+        self.mask_texture.use(mask_unit)
+        target.fbo.use()
+        self._vaos[name].render(vertices=3)
+
+    def _pass(self, name: str, **uniforms):
+        """Run a full-grid pass from state.src into state.dst and swap."""
+        self._draw(name, self.state.dst, **uniforms)
+        self.state.swap()
+
+    def _flush(self):
+        """Add the pending source displacement to both stored levels (one blended, scissored pass)."""
+        if self._pending_box is None:
+            return
+        x0, z0, x1, z1 = self._pending_box
+        region = np.ascontiguousarray(self._pending[z0:z1, x0:x1])
+        self.source_texture.write(region.tobytes(), viewport=(x0, z0, x1 - x0, z1 - z0))
+        self._pending[z0:z1, x0:x1] = 0.0
+        self._pending_box = None
+        fbo = self.state.src.fbo
+        self._own(self._progs["impulse"])
+        _, mask_unit, source_unit = units.SCRATCH
+        self.source_texture.use(source_unit)
+        self.mask_texture.use(mask_unit)
+        fbo.use()
+        fbo.scissor = (x0, z0, x1 - x0, z1 - z0)
+        self.ctx.enable(moderngl.BLEND)
+        self.ctx.blend_func = moderngl.ONE, moderngl.ONE
+        try:
+            self._vaos["impulse"].render(vertices=3)
+        finally:
+            self.ctx.disable(moderngl.BLEND)
+            fbo.scissor = None
+
+    def _deposit(self, flat: np.ndarray, values: np.ndarray):
+        n = self.n
+        np.add.at(self._pending.ravel(), flat, values.astype(np.float32))
+        rows, cols = np.divmod(flat, n)
+        box = [int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1]
+        if self._pending_box is not None:
+            old = self._pending_box
+            box = [min(old[0], box[0]), min(old[1], box[1]), max(old[2], box[2]), max(old[3], box[3])]
+        self._pending_box = box
+
+    def _get_state(self):
+        self._flush()
+        data = np.frombuffer(self.state.src.color.read(), np.float32).reshape(self.n, self.n, 2)
+        return data[..., 0].astype(np.float64), data[..., 1].astype(np.float64)
+
+    def _set_state(self, z, zp):
+        self._pending[:] = 0.0
+        self._pending_box = None
+        data = np.stack([np.asarray(z, np.float32), np.asarray(zp, np.float32)], axis=-1)
+        self.state.src.color.write(np.ascontiguousarray(data).tobytes())
+
+    @property
+    def height(self) -> np.ndarray:
+        z, _ = self._get_state()
+        return z.astype(np.float32)
+
+    @property
+    def texture(self):
+        """The current state texture (RG32F: R height, G previous height, metres); changes every step."""
+        self._flush()
+        return self.state.src.color
+
+    def _advance(self, k: int, alpha: float, kc2: float):
+        self._flush()
+        self._own(self._progs["step"])
+        set_uniforms(self._progs["step"], u_alpha=alpha, u_k=kc2)
+        for _ in range(k):
+            self._pass("step")
+
+    def _sums(self, dt_old, synced=None):
+        self._flush()
+        self._draw("reduce", self.reduce_target, u_dt_old=0.0 if dt_old is None else dt_old)
+        sums = np.frombuffer(self.reduce_target.color.read(), np.float32).reshape(-1, 4).astype(np.float64)
+        total = sums.sum(axis=0)
+        return float(total[0]), float(total[1]), float(total[2])
+
+    def _retime(self, dt_new: float):
+        dt_old = self._dt
+        lam = mu = 1.0
+        if dt_old is not None and dt_new < dt_old:
+            lam, mu = self._guard(dt_old, dt_new, self._sums(dt_old))
+        self.retimes += dt_old is not None
+        self._flush()
+        self._pass("retime", u_dt_old=0.0 if dt_old is None else dt_old, u_dt_new=dt_new,
+                   u_lambda=lam, u_mu=mu)
+        self._dt = dt_new
+
+    def energy(self) -> float:
+        """Discrete energy (m⁴/s²) from GPU block sums: h²·[½Σu² + ½s²Σz·Az − (Δt²s⁴/8)Σ(Az)²], the same
+        quantity as the reference's staggered form (equal algebraically, see the module docstring)."""
+        k_sum, p_sum, r_sum = self._sums(self._dt)
+        dt = self._dt or 0.0
+        s2 = self.speed_m_s ** 2
+        return self.cell_m ** 2 * (0.5 * k_sum + 0.5 * s2 * p_sum - dt * dt * s2 * s2 / 8.0 * r_sum)
+
+    def _upload_mask(self):
+        m = np.ones((self.n, self.n)) if self._mask is None else self._mask
+        self.mask_texture.write((np.asarray(m) > 0.5).astype(np.uint8).__mul__(255).tobytes())
+
+    def _apply_mask_to_state(self):
+        self._flush()
+        self._upload_mask()
+        self._pass("shift", u_shift=(0, 0))
+
+    def set_water_mask(self, mask):
+        super().set_water_mask(mask)
+        if mask is None:
+            self._upload_mask()
+
+    def shift(self, dx_cells: int, dz_cells: int):
+        dx, dz = int(dx_cells), int(dz_cells)
+        if dx == 0 and dz == 0:
+            return
+        self._flush()
+        if self._mask is not None:
+            self._mask = shifted(self._mask, dx, dz, 1.0)
+            self._upload_mask()
+        if not self._asleep:
+            self._pass("shift", u_shift=(dx, dz))
+
+    def release(self):
+        """Free the GL objects, and the programs when the shader library is our own."""
+        for prog in self._progs.values():  # the programs stay with the library; forget our constants in them
+            if _CONSTANTS_IN.get(prog.glo) is self._constants:
+                del _CONSTANTS_IN[prog.glo]
+        self.state.release()
+        self.reduce_target.release()
+        for obj in (self.mask_texture, self.source_texture, *self._vaos.values()):
+            obj.release()
+        if self._owns_shaders:
+            self.shaders.release()
+

@@ -1,0 +1,83 @@
+"""The ripple field's GL face: its height as a texture and its slopes (the normals pass) for the road's water."""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from rain_core.effects.ripples.field import RippleField
+from rain_core.effects.ripples.gpu import WaveSolverGPU
+from rain_core.gfx import units
+from rain_core.gfx.frame import WaterNormals
+from rain_core.gfx.shaders import ShaderLibrary
+from rain_core.gfx.targets import float_target, fullscreen_triangle
+from rain_core.gfx.uniforms import set_uniforms
+
+
+class RippleTextures:
+    """``height_texture`` (R = height in m) and ``normal_texture`` (RG16F slopes dh/dx, dh/dz) of a
+    ``RippleField``, both n×n with [iz, ix] = row, column, brought up to date on access when the field has
+    changed (``field.version``). On the GPU backend the height texture is the solver's own state texture;
+    otherwise the float32 height is uploaded. ``RippleTextures(ctx, field, shaders=None)``."""
+
+    def __init__(self, ctx: moderngl.Context, field: RippleField, shaders: ShaderLibrary | None = None):
+        self._owns_shaders = shaders is None  # a library of our own: ours to release
+        self.shaders = shaders = shaders if shaders is not None else ShaderLibrary(ctx)
+        self.ctx = ctx
+        self.field = field
+        n = field.n
+        self._normals = float_target(ctx, (n, n), 2, "f2", filter_linear=True)
+        self._prog = shaders.program("common/fullscreen.vert", "ripples/normals.frag")
+        self._vao = fullscreen_triangle(ctx, self._prog)
+        self._height_tex = None
+        if not isinstance(field.solver, WaveSolverGPU):
+            self._height_tex = ctx.texture((n, n), 1, dtype="f4")
+            self._height_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            self._height_tex.repeat_x = self._height_tex.repeat_y = False
+        self._version: int | None = None  # field.version the textures show (None: not drawn yet)
+
+    def refresh(self):
+        """Bring height_texture and normal_texture up to date (done on access)."""
+        field = self.field
+        if self._version == field.version:
+            return
+        if self._height_tex is not None:
+            self._height_tex.write(np.ascontiguousarray(field.solver.height, dtype=np.float32).tobytes())
+            height = self._height_tex
+        else:
+            height = field.solver.texture
+        unit = units.SCRATCH[0]
+        height.use(unit)
+        # Set every time: the library's cached program may be shared with another field's textures.
+        set_uniforms(self._prog, u_height=unit, u_inv_2h=0.5 / field.cell_m)
+        self._normals.fbo.use()
+        self._vao.render(vertices=3)
+        self._version = field.version
+
+    @property
+    def height_texture(self):
+        """Texture whose R channel is the height in m. On the GPU backend it is the solver's state texture, a
+        different object after each step: fetch it every frame."""
+        self.refresh()
+        return self._height_tex if self._height_tex is not None else self.field.solver.texture
+
+    @property
+    def normal_texture(self):
+        """RG16F texture of the slopes (dh/dx, dh/dz) of the height (dimensionless), linear filtering."""
+        self.refresh()
+        return self._normals.color
+
+    def water_normals(self) -> WaterNormals:
+        """What the road reads from ``rc.shared.water_normals``: the slope texture, the world (x, z) in m of the
+        centre of its texel 0, and the extent in m from the first texel centre to the last."""
+        return WaterNormals(self.normal_texture, self.field.origin_xz, self.field.extent_m)
+
+    def release(self):
+        """Free the GL objects made here, and the program when the shader library is our own (the field is
+        not ours)."""
+        self._normals.release()
+        self._vao.release()
+        if self._height_tex is not None:
+            self._height_tex.release()
+        if self._owns_shaders:
+            self.shaders.release()
