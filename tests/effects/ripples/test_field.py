@@ -142,33 +142,3 @@ def test_arriving_drops_are_flux_weighted():
     samples = field._flux_weighted_diameters(rate, 200_000)
     assert samples.mean() == pytest.approx(expected, rel=0.005)
     assert expected > 1.1 * airborne
-
-
-def test_simulation_runs_without_moderngl():
-    """The solvers and the field import and step with ``moderngl`` (and rain_core.gfx) impossible to import."""
-    import subprocess
-    import sys
-
-    code = """
-import sys
-
-class Block:
-    def find_spec(self, name, path=None, target=None):
-        if name.split('.')[0] == 'moderngl' or name.startswith('rain_core.gfx') or name == 'rain_core.renderer':
-            raise ImportError('blocked: ' + name)
-
-sys.meta_path.insert(0, Block())
-import numpy as np
-from rain_core.effects.ripples import RippleField, WaveSolver, WaveSolverF32
-field = RippleField(n=32, extent_m=3.1, seed=1)
-report = field.update(1 / 60, center_xz=(0.0, 0.0), rate_mm_h=5.0,
-                      film_depth_fn=lambda x, z: np.full(np.shape(x), 3.0))
-assert report['substeps'] >= 1 and report['drops'] > 0 and np.isfinite(field.height).all()
-for cls in (WaveSolver, WaveSolverF32):
-    solver = cls(16, 0.05, 0.35)
-    solver.add_impulse(0.4, 0.4, 0.1, 1e-3)
-    assert solver.step(1 / 60) >= 1
-assert 'moderngl' not in sys.modules
-"""
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert result.returncode == 0, result.stderr
