@@ -66,6 +66,14 @@ for cls in (WaveSolver, WaveSolverF32):
     solver.add_impulse(0.4, 0.4, 0.1, 1e-3)
     assert solver.step(1 / 60) >= 1
 """,
+    "windshield": """
+from rain_core.effects.windshield import GlassInputs, WindshieldSim
+from rain_core.effects.windshield.splats import drop_splats, film_splats
+sim = WindshieldSim(seed=1)
+for _ in range(30):
+    sim.step(1 / 30, GlassInputs.for_speed(60.0, 8.0, wiper_mode='high'))
+assert sim.count > 0 and len(drop_splats(sim, 0.003)) and len(film_splats(sim, 0.003))
+""",
     "water film": """
 from rain_core.water_film import film_depth_mm
 assert np.all(np.asarray(film_depth_mm(np.zeros(4), np.arange(4.0), 1.0, 1.0, wetness=1.0)) >= 0.0)

@@ -36,7 +36,7 @@ def _fill(sim, inputs, target: int, limit_s: float = 30.0) -> None:
 
 def cpu_cost(counts, repeat: int) -> list[tuple]:
     """(drops, parked ms, 60 km/h ms, 120 km/h ms) per frame, median of ``repeat`` frames."""
-    from rain_core.windshield import GlassInputs, WindshieldSim
+    from rain_core.effects.windshield import GlassInputs, WindshieldSim
 
     rows = []
     for n in counts:
@@ -71,12 +71,12 @@ def _render_state(ctx, base_sim, settings, resolution: int, size, frames: int):
     """Render ``frames`` frames from a copy of ``base_sim`` at a water-texture resolution; returns (median ms
     of
     the windshield passes, last image as float sRGB, the water thickness texture averaged to 64² cells)."""
+    from rain_core.effects.windshield import FILM_CELLS, WindshieldEffect
     from rain_core.scene import Scene
-    from rain_core.windshield import FILM_CELLS, WindshieldEffect
 
     s = copy.deepcopy(settings)
     s.quality.windshield_resolution = resolution
-    effect = WindshieldEffect(ctx, None, s, seed=1)
+    effect = WindshieldEffect(ctx, s, seed=1)
     effect.sim = copy.deepcopy(base_sim)
     scene = Scene(ctx, size, s, seed=1, effects=[effect])
     scene.ego.speed_m_s = 60.0 / 3.6
@@ -88,7 +88,7 @@ def _render_state(ctx, base_sim, settings, resolution: int, size, frames: int):
         times.append(_frame_passes(scene))
     image = scene.image().astype(np.float64) / 255.0
     n = effect.resolution
-    water = np.frombuffer(effect._water.color.read(), np.float16).reshape(n, n, 4)[..., 0].astype(np.float64)
+    water = np.frombuffer(effect.water_texture.read(), np.float16).reshape(n, n, 4)[..., 0].astype(np.float64)
     k = n // FILM_CELLS
     cells = water.reshape(FILM_CELLS, k, FILM_CELLS, k).mean(axis=(1, 3)) if k >= 1 else water
     scene.release()
@@ -96,8 +96,8 @@ def _render_state(ctx, base_sim, settings, resolution: int, size, frames: int):
 
 
 def gpu_resolution(ctx, resolutions, size, frames: int) -> list[tuple]:
+    from rain_core.effects.windshield import GlassInputs, WindshieldSim
     from rain_core.settings import Settings
-    from rain_core.windshield import GlassInputs, WindshieldSim
 
     settings = Settings()
     settings.rain.rate_mm_h = 4.0
@@ -119,8 +119,8 @@ def gpu_resolution(ctx, resolutions, size, frames: int) -> list[tuple]:
 
 def gpu_drops(ctx, counts, size, frames: int) -> list[tuple]:
     """(drops, ms of the windshield passes) at the default 512² water texture."""
+    from rain_core.effects.windshield import GlassInputs, WindshieldSim
     from rain_core.settings import Settings
-    from rain_core.windshield import GlassInputs, WindshieldSim
 
     settings = Settings()
     settings.rain.rate_mm_h = 4.0
@@ -137,14 +137,14 @@ def gpu_drops(ctx, counts, size, frames: int) -> list[tuple]:
 
 def skip_check(ctx, size) -> tuple[bool, float]:
     """(whether any windshield pass ran, their cost in ms) for a dry glass without rain, wipers on auto."""
+    from rain_core.effects.windshield import WindshieldEffect
     from rain_core.scene import Scene
     from rain_core.settings import Settings
-    from rain_core.windshield import WindshieldEffect
 
     s = Settings()
     s.rain.rate_mm_h = 0.0
     s.wipers.mode = "auto"
-    scene = Scene(ctx, size, s, seed=1, effects=[WindshieldEffect(ctx, None, s)])
+    scene = Scene(ctx, size, s, seed=1, effects=[WindshieldEffect(ctx, s)])
     scene.step(1.0 / FPS)
     scene.render()
     ran = [row for row in scene.renderer.pass_table() if row[0].startswith("windshield.") and row[1]]

@@ -26,7 +26,7 @@ RAINFALL_ENV = 9
 ATMOSPHERE_GLOW = 10
 ATMOSPHERE_DEPTH = 11
 
-# Windshield: film, coarse film, normals, the frame behind the glass.
+# Windshield: each of its passes binds its (up to three) textures here; the fourth is spare.
 WINDSHIELD = (12, 13, 14, 15)
 
 # Spray.

@@ -36,9 +36,9 @@ def _scene(
     size=SIZE,
     traffic: int | None = None,
 ):
+    from rain_core.effects.windshield import WindshieldEffect
     from rain_core.scene import Scene
     from rain_core.settings import Settings
-    from rain_core.windshield import WindshieldEffect
 
     s = Settings()
     s.rain.rate_mm_h = rate_mm_h
@@ -48,7 +48,7 @@ def _scene(
     s.camera.mode = "driver"
     if traffic is not None:
         s.traffic.count = traffic
-    effect = WindshieldEffect(ctx, None, s, seed=seed)
+    effect = WindshieldEffect(ctx, s, seed=seed)
     scene = Scene(ctx, size, s, seed=seed, effects=[effect], gpu_timing=False)
     scene.ego.speed_m_s = speed_kmh / 3.6
     scene.autopilot.target_speed_m_s = speed_kmh / 3.6
@@ -65,8 +65,7 @@ def _advance(scene, effect, seconds: float, render_last_s: float = 0.5, fps: flo
         if k >= frames - drawn:
             scene.render(camera(scene) if camera else None)
         else:
-            effect.sim.step(1.0 / fps, effect.inputs_for(scene.frame()))
-            effect._last_time = scene.time_s
+            effect.catch_up(scene.frame(), 1.0 / fps)
     return scene.image()
 
 

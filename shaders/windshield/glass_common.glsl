@@ -1,5 +1,5 @@
-// The windshield's own frame (rain_core.windshield.GlassGeometry): s (m) to the car's right, t (m) up the glass,
-// UV u = s / width(t) + 1/2, v = t / H. Plus the procedural patterns the water texture uses.
+// The windshield's own frame (rain_core.effects.windshield.glass.GlassGeometry): s (m) to the car's right, t (m)
+// up the glass, UV u = s / width(t) + 1/2, v = t / H. Plus the procedural patterns the water texture uses.
 uniform vec3 u_glass;  // width at the bottom (m), width at the top (m), height H along the glass (m)
 
 float glass_width(float t) { return u_glass.x + (u_glass.y - u_glass.x) * t / u_glass.z; }

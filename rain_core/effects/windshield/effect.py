@@ -1,0 +1,386 @@
+"""``WindshieldEffect``: runs ``WindshieldSim`` and draws the water on the glass and the refraction through it.
+
+The GPU water texture is a *rendering* of the simulation's state plus purely visual detail: drops are splatted
+into a height texture each frame, and a high-resolution film texture carries what the coarse CPU grid cannot
+(streaks of wiper residue, wet trail lines, splash speckle, the slow beading of a thin film). Each frame that
+texture is rescaled so that its local mean over a coarse cell equals the CPU film there (its mipmap at the
+coarse level is the cell mean), so the picture never shows water the bookkeeping does not have.
+"""
+
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+
+from rain_core.car_mesh import windshield_surface
+from rain_core.checks import MAX_FRAME_DT_S
+from rain_core.effects.windshield.constants import (
+    EVAP_AIR_M_S,
+    FILM_CELLS,
+    FILM_EVAP_KG_M2_S,
+    RESIDUE_M,
+    SPHERE_PER_RADIUS,
+)
+from rain_core.effects.windshield.inputs import GlassInputs
+from rain_core.effects.windshield.sim import WindshieldSim
+from rain_core.effects.windshield.splats import drop_splats, film_splats
+from rain_core.gfx import units
+from rain_core.gfx.effect import Effect
+from rain_core.gfx.shaders import ShaderLibrary
+from rain_core.gfx.targets import float_target, fullscreen_triangle
+from rain_core.gfx.uniforms import mat4_bytes, set_uniform, set_uniforms
+from rain_core.physics import RHO_WATER
+from rain_core.vehicles import CAR_SPEC, VehicleSpec
+
+FILM_DIFFUSION_M2_S = 5e-6  # visual spreading of thin water in the film texture
+FILM_BEAD_RATE_PER_S = 0.15  # a thin film left alone pulls into micro-droplets over several seconds
+CABIN_DEPTH_M = 1.3  # the frame nearer than this (view depth) is the cabin: refracted rays see past it
+PUPIL_RADIUS_M = 0.002  # the driver's eye, focused on the road, sees each point of the glass through its pupil
+EYE_APERTURE_BLUR = 0.0037  # blur through water as a fraction of the frame height (a ~4 mm pupil at ~1 m)
+_UNIT_A, _UNIT_B, _UNIT_C = units.WINDSHIELD[:3]  # each pass binds its (up to) three textures to these
+
+
+class WindshieldEffect(Effect):
+    """The windshield effect: runs ``WindshieldSim``, draws the glass.
+
+    Stages: ``prepare`` (the water textures: film relaxation and deposits, drop and bead splats, the water
+    thickness/slope texture) and ``overlay`` (copy the frame without the glass, then draw the glass mesh over
+    it with refraction, haze, glints and the blades). Active only with the camera inside the car and the
+    effect enabled, and then only if there is water on the glass, rain reaching it, or the wipers are running:
+    a dry, clean glass costs nothing.
+
+    ``WindshieldEffect(ctx, settings=None, *, seed=0, shaders=None, spec=CAR_SPEC)``. ``status()`` gives numbers
+    for a panel (drops, water on the glass in g, wiper cycles, rain-sensor reading).
+    """
+
+    name = "windshield"
+    stages = ("prepare", "overlay")
+
+    def __init__(self, ctx, settings=None, *, seed: int = 0, shaders=None, spec: VehicleSpec = CAR_SPEC):
+        self.ctx = ctx
+        self._owns_shaders = shaders is None  # then the programs are ours to release
+        self.shaders = shaders or ShaderLibrary(ctx)
+        self.settings = settings
+        self.seed = int(seed)
+        self.sim = WindshieldSim(spec, seed)
+        self.glass = self.sim.glass
+        self.film_prog = self.shaders.program("common/fullscreen.vert", "windshield/film.frag")
+        self.normals_prog = self.shaders.program("common/fullscreen.vert", "windshield/normals.frag")
+        self.splat_prog = self.shaders.program("windshield/splat.vert", "windshield/splat.frag")
+        self.glass_prog = self.shaders.program("windshield/glass.vert", "windshield/glass.frag")
+        for prog in (self.film_prog, self.normals_prog, self.splat_prog, self.glass_prog):
+            set_uniform(prog, "u_glass", (self.glass.width_bottom, self.glass.width_top, self.glass.height))
+        self.splat_prog["u_cap_rn"].value = SPHERE_PER_RADIUS
+        self._film_vao = fullscreen_triangle(ctx, self.film_prog)
+        self._normals_vao = fullscreen_triangle(ctx, self.normals_prog)
+        pos, nrm, uv, tris = windshield_surface(spec, 48, 24)
+        verts = np.hstack([pos, nrm, uv]).astype(np.float32)
+        self._mesh_vbo = ctx.buffer(verts.tobytes())
+        self._mesh_ibo = ctx.buffer(np.asarray(tris, np.int32).tobytes())
+        self._glass_vao = ctx.vertex_array(
+            self.glass_prog,
+            [(self._mesh_vbo, "3f 3f 2f", "in_position", "in_normal", "in_uv")],
+            index_buffer=self._mesh_ibo,
+            index_element_size=4,
+        )
+        self._splat_buf = ctx.buffer(reserve=32 * 1024)
+        self._splat_vao = ctx.vertex_array(self.splat_prog, [(self._splat_buf, "4f 4f/i", "in_seg", "in_info")])
+        self.resolution = 0
+        self._film: list = []
+        self._film_index = 0
+        self._coarse = [ctx.texture((FILM_CELLS, FILM_CELLS), 1, dtype="f4") for _ in range(2)]
+        for tex in self._coarse:
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            tex.write(np.zeros((FILM_CELLS, FILM_CELLS), np.float32).tobytes())
+        self._coarse_index = 0
+        self._frame_copy = None
+        self._last_time: float | None = None
+        self._inputs = GlassInputs()
+        self._dt = 0.0
+
+    # --- resources ------------------------------------------------------------------------------------------
+    @property
+    def water_texture(self) -> moderngl.Texture | None:
+        """The water texture of the last frame (RGBA f16 over the glass's UV square: drop thickness mm, film µm,
+        slopes), or None before the first ``prepare``."""
+        return self._water.color if self.resolution else None
+
+    def _ensure_textures(self, resolution: int) -> None:
+        if resolution == self.resolution:
+            return
+        self._release_textures()
+        n = int(resolution)
+        size = (n, n)
+        self._film = [float_target(self.ctx, size, 1, "f2") for _ in range(2)]
+        for target in self._film:
+            target.color.build_mipmaps()
+            target.color.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+            target.fbo.clear(0.0, 0.0, 0.0, 0.0)
+            target.color.build_mipmaps()
+        self._drops = float_target(self.ctx, size, 1, "f2")
+        self._water = float_target(self.ctx, size, 4, "f2")
+        self.resolution = n
+
+    def _release_textures(self) -> None:
+        for target in [*self._film, getattr(self, "_drops", None), getattr(self, "_water", None)]:
+            if target is not None:
+                target.release()
+        self._film = []
+        self._drops = self._water = None
+        self.resolution = 0
+
+    def _ensure_frame_copy(self, size: tuple[int, int]):
+        if self._frame_copy is None or self._frame_copy.size != tuple(size):
+            if self._frame_copy is not None:
+                self._frame_copy.release()
+            self._frame_copy = float_target(self.ctx, size, 4, "f2", depth=True)
+            self._frame_copy.depth.compare_func = ""
+            self._frame_copy.color.build_mipmaps()
+            self._frame_copy.color.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        return self._frame_copy
+
+    # --- the contract ---------------------------------------------------------------------------------------
+    def _settings(self, frame):
+        return frame.settings if frame.settings is not None else self.settings
+
+    def _sheltered(self, frame) -> bool:
+        centre = frame.ego.to_world(self.glass.local_points(np.array([[0.0, 0.5 * self.glass.height]])))[0]
+        roof = float(np.asarray(frame.world.occluder_height(centre[0], centre[2])))
+        return roof > centre[1]
+
+    def active(self, frame) -> bool:
+        settings = self._settings(frame)
+        if not frame.camera.inside_car or frame.ego is None:
+            return False
+        if settings is not None and not settings.windshield.enabled:
+            return False
+        if self.sim.has_water() or self.sim.wipers.running:
+            return True
+        if settings is not None and settings.wipers.mode in ("intermittent", "low", "high"):
+            return True
+        scale = settings.windshield.drop_scale if settings is not None else 1.0
+        return frame.rain_rate_mm_h > 0.0 and scale > 0.0 and not self._sheltered(frame)
+
+    def inputs_for(self, frame) -> GlassInputs:
+        """The GlassInputs of a frame (weather, ego motion, roof, settings)."""
+        settings = self._settings(frame)
+        ego = frame.ego
+        wind = np.zeros(3)
+        if frame.weather is not None:
+            wind = np.asarray(frame.weather.wind.velocity_m_s, dtype=np.float64)
+        kw = {}
+        if settings is not None:
+            w, ws = settings.wipers, settings.windshield
+            kw = dict(
+                drop_scale=ws.drop_scale,
+                drop_budget=ws.drop_budget,
+                wiper_mode=w.mode,
+                wiper_interval_s=w.interval_s,
+                wiper_low_cpm=w.low_cycles_per_min,
+                wiper_high_cpm=w.high_cycles_per_min,
+                wiper_sensitivity=w.auto_sensitivity,
+                blade_wear=w.blade_wear,
+            )
+        return GlassInputs(
+            rate_mm_h=frame.rain_rate_mm_h,
+            car_velocity_m_s=ego.velocity(),
+            wind_m_s=wind,
+            car_rotation=ego.model_matrix()[:3, :3],
+            sheltered=self._sheltered(frame),
+            **kw,
+        )
+
+    def catch_up(self, frame, dt_s: float) -> None:
+        """Step the simulation alone by ``dt_s`` (s) with the inputs of ``frame`` and count the time up to
+        ``frame.time_s`` as simulated, so the next ``update`` does not step it again (fill the glass fast
+        without drawing every frame)."""
+        self.sim.step(dt_s, self.inputs_for(frame))
+        self._last_time = float(frame.time_s)
+
+    def update(self, frame, rc) -> None:
+        # The time since the last update (or catch_up): the scene may step several times between renders.
+        if self._last_time is None or frame.time_s < self._last_time:
+            dt = float(frame.dt_s)
+        else:
+            dt = float(frame.time_s - self._last_time)
+        self._last_time = float(frame.time_s)
+        self._inputs = self.inputs_for(frame)
+        self._dt = min(dt, MAX_FRAME_DT_S)
+        self.sim.step(self._dt, self._inputs)
+
+    def render(self, stage: str, rc) -> None:
+        if stage == "prepare":
+            self._draw_water(rc)
+        elif stage == "overlay":
+            self._draw_glass(rc)
+
+    def describe(self) -> str:
+        st = self.status()
+        return f"{st['drops']} drops, {st['water_g']:.1f} g on the glass, {st['wipe_cycles']} wipes"
+
+    def status(self) -> dict:
+        """Numbers for the Rain Manager: drops, water on the glass (g), wiper cycles, sensor (g/m²)."""
+        sim = self.sim
+        return {
+            "drops": sim.count,
+            "water_g": 1e3 * sim.mass_on_glass(),
+            "film_g": 1e3 * float(sim.film.sum()),
+            "wipe_cycles": sim.wipers.cycles,
+            "sensor_g_m2": 1e3 * sim.sensor_kg_m2,
+            "arrived_g": 1e3 * sim.arrived,
+            "wiped_g": 1e3 * sim.wiped,
+            "shed_g": 1e3 * sim.shed,
+        }
+
+    # --- the water textures ---------------------------------------------------------------------------------
+    def _texel_m(self) -> float:
+        return max(self.glass.width_bottom, self.glass.height) / self.resolution
+
+    def _draw_splats(self, splats: np.ndarray, equation) -> None:
+        """Blend splats into the bound target: FUNC_ADD accumulates water, MAX keeps the tallest drop."""
+        data = np.ascontiguousarray(splats, dtype=np.float32)
+        if data.nbytes > self._splat_buf.size:
+            self._splat_buf.orphan(int(data.nbytes * 1.5))
+        if not len(data):
+            return
+        self._splat_buf.write(data.tobytes())
+        ctx = self.ctx
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = (moderngl.ONE, moderngl.ONE)
+        ctx.blend_equation = equation
+        self._splat_vao.render(moderngl.TRIANGLES, vertices=6, instances=len(data))
+        ctx.blend_equation = moderngl.FUNC_ADD
+        ctx.disable(moderngl.BLEND)
+
+    def _draw_water(self, rc) -> None:
+        ctx = self.ctx
+        settings = self._settings(rc.frame)
+        self._ensure_textures(int(settings.quality.windshield_resolution) if settings is not None else 512)
+        n = self.resolution
+        lod = math.log2(n / FILM_CELLS)
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.disable(moderngl.CULL_FACE)
+        # The CPU film now, as mean thickness (µm) per cell.
+        cur = 1 - self._coarse_index
+        self._coarse[cur].write((self.sim.film_thickness_m() * 1e6).astype(np.float32).tobytes())
+        prev = self._coarse[self._coarse_index]
+        src, dst = self._film[self._film_index], self._film[1 - self._film_index]
+        # 1. relax last frame's film (rescaled to the CPU film it showed) and wipe what the blades swept.
+        src.color.use(_UNIT_A)
+        prev.use(_UNIT_B)
+        dt = self._dt
+        head = max(float(self._inputs.relative_air_local()[2]), 0.0) * 0.65
+        residue_um = RESIDUE_M * (1.0 + 4.0 * self._inputs.blade_wear) * 1e6
+        blades, sweeps = [], []
+        for blade, sweep in zip(self.sim.blades, self.sim.frame_sweeps(), strict=True):
+            blades.append((*blade.pivot, blade.r_inner_m, blade.r_outer_m))
+            sweeps.append((sweep[0], sweep[1], 1.0, residue_um) if sweep else (0.0, 0.0, 0.0, 0.0))
+        set_uniforms(
+            self.film_prog,
+            u_film=_UNIT_A,
+            u_coarse=_UNIT_B,
+            u_coarse_lod=lod,
+            u_texel=(1.0 / n, 1.0 / n),
+            u_diffusion=min(FILM_DIFFUSION_M2_S * dt / self._texel_m() ** 2, 0.2),
+            u_dry_um=FILM_EVAP_KG_M2_S * (1.0 + head / EVAP_AIR_M_S) * dt / RHO_WATER * 1e6,
+            u_bead_mix=1.0 - math.exp(-FILM_BEAD_RATE_PER_S * dt),
+            u_blade=np.array(blades, np.float32).tobytes(),
+            u_sweep=np.array(sweeps, np.float32).tobytes(),
+            u_seed=self.seed % 100000,
+        )
+        dst.fbo.use()
+        ctx.disable(moderngl.BLEND)
+        self._film_vao.render(moderngl.TRIANGLES, vertices=3)
+        # 2. deposits: wet trails and splash speckle, added.
+        self._draw_splats(film_splats(self.sim, self._texel_m()), moderngl.FUNC_ADD)
+        dst.color.build_mipmaps()
+        # 3. drops and beads: heights (mm), overlapping splats keep the highest.
+        self._drops.fbo.use()
+        self._drops.fbo.clear(0.0, 0.0, 0.0, 0.0)
+        self._draw_splats(drop_splats(self.sim, self._texel_m()), moderngl.MAX)
+        # 4. the water texture: thickness, film, slopes.
+        self._drops.color.use(_UNIT_A)
+        dst.color.use(_UNIT_B)
+        self._coarse[cur].use(_UNIT_C)
+        set_uniforms(
+            self.normals_prog,
+            u_drops=_UNIT_A,
+            u_film=_UNIT_B,
+            u_coarse=_UNIT_C,
+            u_coarse_lod=lod,
+            u_texel=(1.0 / n, 1.0 / n),
+        )
+        self._water.fbo.use()
+        self._normals_vao.render(moderngl.TRIANGLES, vertices=3)
+        self._film_index = 1 - self._film_index
+        self._coarse_index = cur
+
+    # --- the glass ------------------------------------------------------------------------------------------
+    def _draw_glass(self, rc) -> None:
+        ctx = self.ctx
+        frame = rc.frame
+        settings = self._settings(frame)
+        copy = self._ensure_frame_copy(rc.size)
+        ctx.copy_framebuffer(copy.fbo, rc.hdr.fbo)
+        copy.color.build_mipmaps()
+        prog = self.glass_prog
+        rc.set_frame_uniforms(prog)
+        model = frame.ego.model_matrix().copy()
+        model[2, 3] -= rc.shift_z
+        rot = model[:3, :3]
+        lighting = frame.lighting
+        cabin = 0.02 * 0.5 * (np.asarray(lighting.sky_zenith) + np.asarray(lighting.sky_horizon)) * lighting.exposure
+        blades = [(*b.pivot, b.r_inner_m, b.r_outer_m) for b in self.sim.blades]
+        set_uniforms(
+            prog,
+            u_model=mat4_bytes(model),
+            u_axis_s=tuple(rot @ self.glass.right),
+            u_axis_t=tuple(rot @ self.glass.up),
+            u_refraction=float(settings.windshield.refraction) if settings is not None else 1.0,
+            u_drop_lod=math.log2(max(1.0, EYE_APERTURE_BLUR * rc.size[1])) + 0.5,
+            u_blade=np.array(blades, np.float32).tobytes(),
+            u_blade_angle=np.array(self.sim.blade_angles(), np.float32).tobytes(),
+            u_cabin=tuple(float(c) for c in cabin),
+            u_aperture_m=PUPIL_RADIUS_M,
+            u_near_far=(frame.camera.near_m, frame.camera.far_m),
+            u_cabin_depth=CABIN_DEPTH_M,
+            u_water=_UNIT_A,
+            u_frame=_UNIT_B,
+            u_depth=_UNIT_C,
+        )
+        self._water.color.use(_UNIT_A)
+        copy.color.use(_UNIT_B)
+        copy.depth.use(_UNIT_C)
+        rc.hdr.fbo.use()
+        ctx.enable(moderngl.DEPTH_TEST)
+        rc.hdr.fbo.depth_mask = False
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = (moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
+        self._glass_vao.render(moderngl.TRIANGLES)
+        ctx.disable(moderngl.BLEND)
+        ctx.blend_func = moderngl.DEFAULT_BLENDING
+        rc.hdr.fbo.depth_mask = True
+
+    def release(self) -> None:
+        """Free the textures, buffers and vertex arrays, and the programs when the shader library is our own."""
+        self._release_textures()
+        gl_objects = [
+            *self._coarse,
+            self._mesh_vbo,
+            self._mesh_ibo,
+            self._splat_buf,
+            self._glass_vao,
+            self._splat_vao,
+            self._film_vao,
+            self._normals_vao,
+        ]
+        for obj in gl_objects:
+            obj.release()
+        if self._frame_copy is not None:
+            self._frame_copy.release()
+            self._frame_copy = None
+        if self._owns_shaders:  # a shared library's owner releases it: its programs serve every effect using it
+            self.shaders.release()

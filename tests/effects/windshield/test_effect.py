@@ -1,0 +1,148 @@
+"""rain_core.effects.windshield.effect: the settings it reads, the skip rule, the GPU water texture against the CPU
+state, the view through wet glass, determinism."""
+
+import numpy as np
+import pytest
+
+from rain_core.effects.windshield import FILM_CELLS, WindshieldEffect
+from rain_core.settings import Settings, SettingsError, set_value
+
+
+def test_settings_have_wiper_and_windshield_options():
+    s = Settings()
+    assert s.wipers.mode in ("off", "intermittent", "low", "high", "auto")
+    assert s.wipers.low_cycles_per_min < s.wipers.high_cycles_per_min
+    set_value(s, "wipers.interval_s", 8.0)
+    set_value(s, "windshield.drop_budget", 2000)
+    with pytest.raises(SettingsError):
+        set_value(s, "windshield.drop_budget", -1)
+    with pytest.raises(SettingsError):
+        set_value(s, "wipers.mode", "turbo")
+    assert 64 <= s.quality.windshield_resolution <= 2048
+
+
+def _scene(gl_ctx, settings, effect, size=(160, 90)):
+    from rain_core.scene import Scene
+
+    scene = Scene(gl_ctx, size, settings, seed=1, effects=[effect], gpu_timing=False)
+    scene.ego.speed_m_s = 0.0
+    return scene
+
+
+class _Brake:
+    throttle, brake, steer, reverse = 0.0, 1.0, 0.0, False
+
+
+def test_dry_glass_costs_nothing_and_outside_camera_skips(gl_ctx, shaders):
+    s = Settings()
+    s.rain.rate_mm_h = 0.0
+    s.wipers.mode = "auto"
+    effect = WindshieldEffect(gl_ctx, s, seed=1, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+    scene.step(1 / 30, _Brake)
+    scene.render()
+
+    def ran():
+        return {name: done for name, done, *_ in scene.renderer.pass_table()}
+
+    assert ran()["windshield"] is False and "windshield.overlay" not in ran()
+    s.rain.rate_mm_h = 4.0
+    scene.step(1 / 30, _Brake)
+    scene.render(scene.camera("chase"))
+    assert ran()["windshield"] is False  # outside the car
+    scene.render()
+    assert ran()["windshield.prepare"] and ran()["windshield.overlay"]
+    scene.release()
+
+
+def test_gpu_water_texture_agrees_with_the_cpu_state(gl_ctx, shaders):
+    s = Settings()
+    s.rain.rate_mm_h = 8.0
+    s.wipers.mode = "off"
+    s.quality.windshield_resolution = 256
+    effect = WindshieldEffect(gl_ctx, s, seed=2, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+    for _ in range(12):
+        scene.step(1 / 30, _Brake)
+        scene.render()
+    n = effect.resolution
+    water = np.frombuffer(effect.water_texture.read(), np.float16).reshape(n, n, 4).astype(np.float64)
+    assert np.all(np.isfinite(water))
+    # The film channel, averaged over each CPU cell, is the CPU film (the rescaling keeps them together).
+    k = n // FILM_CELLS
+    gpu_cells = water[..., 1].reshape(FILM_CELLS, k, FILM_CELLS, k).mean(axis=(1, 3))
+    cpu_cells = effect.sim.film_thickness_m() * 1e6
+    wet = cpu_cells > 0.05
+    assert wet.sum() > 100
+    ratio = np.median(gpu_cells[wet] / cpu_cells[wet])
+    assert 0.8 < ratio < 1.25
+    # Every drop is a bump in the thickness texture where the CPU has it.
+    uv = effect.glass.to_uv(effect.sim.pos)
+    texel = np.clip((uv * n).astype(int), 0, n - 1)
+    big = effect.sim.radius() > 1e-3
+    assert np.mean(water[texel[big, 1], texel[big, 0], 0] > 0.05) > 0.9
+    dry = water[..., 0] < 1e-4
+    assert dry.mean() > 0.2
+    scene.release()
+
+
+def test_wet_glass_changes_the_view_and_stays_finite(gl_ctx, shaders):
+    s = Settings()
+    s.rain.rate_mm_h = 16.0
+    s.wipers.mode = "off"
+    effect = WindshieldEffect(gl_ctx, s, seed=3, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+    scene.step(1 / 30, _Brake)
+    scene.render()
+    dry = scene.renderer.hdr_image()
+    for _ in range(40):
+        scene.step(1 / 30, _Brake)
+        effect.catch_up(scene.frame(), 1 / 30)  # the water builds faster than we draw
+    scene.step(1 / 30, _Brake)
+    scene.render()
+    wet = scene.renderer.hdr_image()
+    assert np.all(np.isfinite(wet))
+    assert np.mean(np.abs(wet - dry)) > 0.01 * np.mean(dry)
+    scene.release()
+
+
+def test_rendering_is_deterministic(gl_ctx, shaders):
+    def frame():
+        s = Settings()
+        s.rain.rate_mm_h = 8.0
+        s.wipers.mode = "high"
+        effect = WindshieldEffect(gl_ctx, s, seed=4, shaders=shaders)
+        scene = _scene(gl_ctx, s, effect)
+        for _ in range(8):
+            scene.step(1 / 30, _Brake)
+            scene.render()
+        image = scene.image()
+        scene.release()
+        return image
+
+    assert np.array_equal(frame(), frame())
+
+
+def test_release_frees_every_gl_object_it_made(gl_ctx):
+    import gc
+
+    old_mode = gl_ctx.gc_mode
+    gl_ctx.gc_mode = "context_gc"  # unreleased objects whose wrapper died land in gl_ctx.objects
+    try:
+        s = Settings()
+        s.rain.rate_mm_h = 8.0
+        s.quality.windshield_resolution = 128
+        effect = WindshieldEffect(gl_ctx, s, seed=5)  # its own shader library: its programs are its to release
+        scene = _scene(gl_ctx, s, effect, size=(96, 54))
+        for _ in range(3):
+            scene.step(1 / 30, _Brake)
+            scene.render()
+        assert effect.water_texture is not None
+        scene.release()
+        del scene, effect
+        gc.collect()
+        leaked = [type(o).__name__ for o in gl_ctx.objects if type(o).__name__ != "InvalidObject"]
+        assert not leaked, f"unreleased GL objects: {sorted(set(leaked))}"
+    finally:
+        gl_ctx.objects.clear()
+        gl_ctx.gc_mode = old_mode
