@@ -1,36 +1,9 @@
-"""Moved to rain_core.effects.road (the GL effect, the wet surface, the mirror) and rain_core.water_film (the
-standing water and the wet film); kept so earlier imports (``rain_core.road.film_depth_mm``, ``RoadEffect``)
-still work."""
+"""Moved to ``rain_core.effects.road`` (the GL effect, the wet surface, the mirror) and ``rain_core.water_film``
+(the standing water and the wet film); kept so earlier imports (``rain_core.road.film_depth_mm``) still work."""
 
-from rain_core.effects.road import (
-    FILM_ROUGHNESS,
-    LIGHT_MIN_ROUGHNESS,
-    LIGHT_SOURCE_RADIANCE,
-    MACROTEXTURE_MM,
-    MATERIAL_FILM,
-    MATERIAL_POROSITY,
-    MIRROR_CLIP_Y_M,
-    MIRROR_LENS_FACTOR,
-    MURK_TINT,
-    REGION_COLORS,
-    REGIONS,
-    UNDERWATER_F0,
-    WATER_F0,
-    WATER_ROUGHNESS,
-    WAVE_CALM_FRACTION,
-    WAVE_FULL_WIND_M_S,
-    WAVE_SLOPE_MAX,
-    WET_ALBEDO_FACTOR,
-    WET_MIN,
-    WET_SMOOTHNESS_GAIN,
-    RoadEffect,
-    mirror_about_road,
-    road_regions,
-    water_coverage,
-    wave_parameters,
-    wet_material,
-)
-from rain_core.water_film import (
+from rain_core.effects.road import *  # noqa: F403
+from rain_core.effects.road import __all__ as _moved
+from rain_core.water_film import (  # noqa: F401  (re-exported below)
     CRACK_DEPTH_SPAN,
     CRACK_LEVEL,
     CRACK_MAX_MM,
@@ -54,14 +27,7 @@ from rain_core.water_film import (
     water_depths_mm,
 )
 
-__all__ = [
-    "CRACK_DEPTH_SPAN", "CRACK_LEVEL", "CRACK_MAX_MM", "FILM_ROUGHNESS", "LIGHT_MIN_ROUGHNESS",
-    "LIGHT_SOURCE_RADIANCE", "MACROTEXTURE_MM", "MATERIAL_FILM", "MATERIAL_POROSITY", "MIRROR_CLIP_Y_M",
-    "MIRROR_LENS_FACTOR", "MURK_TINT", "PUDDLE_DEPTH_SPAN", "PUDDLE_GROUND_SIGMA_M", "PUDDLE_LEVEL_EXPONENT",
-    "PUDDLE_LEVEL_MAX", "PUDDLE_MAP_CELL_M", "PUDDLE_MAX_MM", "PUDDLE_NOISE_WEIGHT", "REGIONS", "REGION_COLORS",
-    "ROAD_HALF_WIDTH_M", "SHELTER_MIN_HEIGHT_M", "UNDERWATER_F0", "WATER_F0", "WATER_ROUGHNESS",
-    "WAVE_CALM_FRACTION", "WAVE_FULL_WIND_M_S", "WAVE_SLOPE_MAX", "WET_ALBEDO_FACTOR", "WET_FILM_MM", "WET_MIN",
-    "WET_SMOOTHNESS_GAIN", "RoadEffect", "crack_level", "film_depth_mm", "mirror_about_road", "puddle_level",
-    "puddle_noise", "road_regions", "sample_road_map", "shelter_map", "smooth_heightmap", "water_coverage",
-    "water_depths_mm", "wave_parameters", "wet_material",
-]
+__all__ = [*_moved, "CRACK_DEPTH_SPAN", "CRACK_LEVEL", "CRACK_MAX_MM", "PUDDLE_DEPTH_SPAN", "PUDDLE_GROUND_SIGMA_M",
+           "PUDDLE_LEVEL_EXPONENT", "PUDDLE_LEVEL_MAX", "PUDDLE_MAP_CELL_M", "PUDDLE_MAX_MM", "PUDDLE_NOISE_WEIGHT",
+           "ROAD_HALF_WIDTH_M", "SHELTER_MIN_HEIGHT_M", "WET_FILM_MM", "crack_level", "film_depth_mm",
+           "puddle_level", "puddle_noise", "sample_road_map", "shelter_map", "smooth_heightmap", "water_depths_mm"]

@@ -116,7 +116,6 @@ class RenderContext:
     # (Effect.frame_uniforms) over the clear-air defaults, and the sun shadow map's.
     uniforms: dict = field(default_factory=dict)
     active: tuple = ()  # the effects that run this frame
-    resources: dict = field(default_factory=dict)  # TRANSITION: removed once every effect uses ``shared``
 
     @property
     def view_proj(self) -> np.ndarray:

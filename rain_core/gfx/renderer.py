@@ -123,10 +123,6 @@ class Renderer:
         finally:
             self.ctx.front_face = "ccw"
 
-    def draw_scene(self, rc, active_effects, include_sky=True, clip_plane=None):  # TRANSITION: road's old mirror
-        rc.active = tuple(active_effects)
-        self._draw_scene(rc, include_sky, clip_plane)
-
     # --- passes ---------------------------------------------------------------------------------------------
     def _timed(self, name: str, fn) -> None:
         timer = self._timers.get(name)
