@@ -1,34 +1,68 @@
-"""Command line of ``python -m app``: every flag validated where it enters, errors name the flag (exit code 2)."""
+"""Command line of ``python -m app``: every flag validated where it enters, errors name the flag (exit code 2).
+
+Everything is checked before any rendering starts: numbers and their ranges, the output paths (not a folder
+where a file is meant, in a folder that exists and is writable, every name at most NAME_MAX_BYTES long) and the
+scenario file. Numbers use ASCII digits only; a negative value may follow its flag with a space
+(``--seconds -inf``) or an equals sign (``--seconds=-inf``) and is answered with the flag's range.
+"""
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
+import re
+import stat
+import sys
+import tempfile
 from pathlib import Path
+
+from rain_core.checks import quote
 
 CAMERA_MODES = ("driver", "chase", "free")
 WINDOW_BACKENDS = ("pyglet", "glfw", "sdl2", "pygame2", "pyqt5", "pyside2", "tk", "headless")
 MAX_SIZE = 8192
+NAME_MAX_BYTES = 255  # longest file or folder name (one path component) on the usual file systems
+PATH_MAX_BYTES = 4095  # longest whole path (Linux PATH_MAX less the terminating NUL)
+
+# ASCII only (no Unicode digits, no underscores): a decimal number, or inf / nan so that they get the range message.
+_NUMBER = re.compile(r"\s*[+-]?(\d+\.?\d*(e[+-]?\d+)?|\.\d+(e[+-]?\d+)?|inf|infinity|nan)\s*", re.ASCII | re.I)
+_INTEGER = re.compile(r"\s*[+-]?\d+\s*", re.ASCII)
+_SIZE = re.compile(r"\s*(\d+)[xX](\d+)\s*", re.ASCII)
+
+EPILOG = """\
+accepted values:
+  numbers      ASCII digits: 3, 0.5, 2e3 (no Unicode digits, no '_'); a negative value may follow
+               its flag with a space or '=' (--seconds=-1) and is refused with the flag's range
+  --size       WIDTHxHEIGHT in pixels, 'x' or 'X' between them (1280x720, 1280X720), each in [16, 8192]
+  --screenshot a .png file in an existing, writable folder; not a folder itself
+  --record     a folder (created if missing) in an existing, writable folder
+  file names   every part of a path at most 255 bytes long
+  --seconds    a long run prints its frame count and a time estimate on stderr, then its progress
+"""
 
 
 def _size(text: str) -> tuple[int, int]:
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels (e.g. 1280x720), got {text!r}") from None
+    m = _SIZE.fullmatch(text)
+    if not m:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels with ASCII digits (e.g. 1280x720), "
+                                         f"got {quote(text)}")
+    # A number of more than 6 digits is out of range (and int() refuses one of 4300 digits).
+    w, h = (int(g) if len(g.lstrip("0")) <= 6 else MAX_SIZE + 1 for g in m.groups())
     if not (16 <= w <= MAX_SIZE and 16 <= h <= MAX_SIZE):
-        raise argparse.ArgumentTypeError(f"width and height must be in [16, {MAX_SIZE}] pixels, got {text!r}")
+        raise argparse.ArgumentTypeError(f"width and height must be in [16, {MAX_SIZE}] pixels, got {quote(text)}")
     return w, h
 
 
 def _finite(lo: float, hi: float, unit: str):
     def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number in [{lo}, {hi}] {unit}, got {text!r}") from None
+        if not _NUMBER.fullmatch(text):
+            raise argparse.ArgumentTypeError(f"expected a number (ASCII digits) in [{lo:g}, {hi:g}] {unit}, "
+                                             f"got {quote(text)}")
+        value = float(text)  # a 400-digit number reads as inf and is out of range
         if not math.isfinite(value) or not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be a finite number in [{lo}, {hi}] {unit}, got {text!r}")
+            raise argparse.ArgumentTypeError(f"must be a finite number in [{lo:g}, {hi:g}] {unit}, "
+                                             f"got {quote(text)}")
         return value
 
     return parse
@@ -36,36 +70,45 @@ def _finite(lo: float, hi: float, unit: str):
 
 def _int_in(lo: int, hi: int):
     def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer in [{lo}, {hi}], got {text!r}") from None
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be in [{lo}, {hi}], got {value}")
+        if not _INTEGER.fullmatch(text):
+            raise argparse.ArgumentTypeError(f"expected an integer (ASCII digits) in [{lo}, {hi}], "
+                                             f"got {quote(text)}")
+        digits = text.strip().lstrip("+-").lstrip("0")
+        value = int(text) if len(digits) <= 30 else None  # int() refuses 4300 digits; 30 are out of any range
+        if value is None or not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in [{lo}, {hi}], got {quote(text)}")
         return value
 
     return parse
 
 
+def _path(text: str) -> Path:
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must not be empty (name a file or folder)")
+    return Path(text)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m app",
-        description="Rainroad: drive through rain. Without --headless a window opens; --headless renders offscreen.")
+        description="Rainroad: drive through rain. Without --headless a window opens; --headless renders offscreen.",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--headless", action="store_true", help="render without a window (EGL), autopilot driving")
-    p.add_argument("--size", type=_size, default=(1280, 720), help="frame size WIDTHxHEIGHT in pixels")
+    p.add_argument("--size", type=_size, default=(1280, 720),
+                   help=f"frame size WIDTHxHEIGHT in pixels, each in [16, {MAX_SIZE}] (x or X)")
     p.add_argument("--seconds", type=_finite(0.0, 86400.0, "s"), default=3.0,
-                   help="headless: simulated seconds to drive before the screenshot (s)")
+                   help="headless: simulated seconds to drive before the screenshot, in [0, 86400] s")
     p.add_argument("--fps", type=_finite(1.0, 240.0, "frames/s"), default=30.0,
-                   help="headless: simulation and recording frame rate (frames/s)")
+                   help="headless: simulation and recording frame rate, in [1, 240] frames/s")
     p.add_argument("--seed", type=_int_in(0, 2**31 - 1), default=1, help="world, traffic and rain seed")
-    p.add_argument("--screenshot", type=Path, help="headless: write the last frame to this PNG")
-    p.add_argument("--record", type=Path, metavar="DIR", help="headless: write every frame as DIR/frame_00000.png")
+    p.add_argument("--screenshot", type=_path, help="headless: write the last frame to this PNG")
+    p.add_argument("--record", type=_path, metavar="DIR", help="headless: write every frame as DIR/frame_00000.png")
     p.add_argument("--camera", choices=CAMERA_MODES, help="camera mode (default: driver)")
-    p.add_argument("--hour", type=_finite(0.0, 24.0, "h"), help="time of day in hours (12 noon, 22 night)")
-    p.add_argument("--traffic", type=_int_in(0, 20), help="number of traffic vehicles")
-    p.add_argument("--scenario", type=Path, help="scenario TOML file (see assets/scenarios/)")
+    p.add_argument("--hour", type=_finite(0.0, 24.0, "h"), help="time of day in hours, in [0, 24] (12 noon, 22 night)")
+    p.add_argument("--traffic", type=_int_in(0, 20), help="number of traffic vehicles, in [0, 20]")
+    p.add_argument("--scenario", type=_path, help="scenario TOML file (see assets/scenarios/)")
     p.add_argument("--preset", help="named rain preset (drizzle, light, moderate, heavy, very_heavy, extreme)")
-    p.add_argument("--rain-rate", type=_finite(0.0, 500.0, "mm/h"), help="rain rate in mm/h")
+    p.add_argument("--rain-rate", type=_finite(0.0, 500.0, "mm/h"), help="rain rate in mm/h, in [0, 500]")
     p.add_argument("--panel", action="store_true", help="headless: draw the Rain Manager panel into the frames")
     p.add_argument("--frames", type=_int_in(1, 10**9), help="window: close after this many frames (smoke tests)")
     p.add_argument("--window", default="pyglet", choices=WINDOW_BACKENDS,
@@ -73,29 +116,130 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _check_folder(parser, flag: str, folder: Path) -> None:
+def _is_number(text: str) -> bool:
+    return bool(_NUMBER.fullmatch(text))
+
+
+def join_negative_values(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """``--flag -x`` → ``--flag=-x`` where ``-x`` reads as a number and the flag takes a value.
+
+    argparse takes a token that starts with '-' and is not a plain negative number (``-inf``, ``-nan``, ``-1e3``)
+    for an option and answers "expected one argument"; joined, the value reaches the flag's own range check.
+    """
+    takes_value = {opt for a in parser._actions if a.nargs is None and a.option_strings for opt in a.option_strings}
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        if tok in takes_value and i + 1 < len(argv) and argv[i + 1].startswith("-") and _is_number(argv[i + 1]):
+            out.append(f"{tok}={argv[i + 1]}")
+            i += 2
+            continue
+        if tok == "--":
+            out.extend(argv[i:])
+            break
+        out.append(tok)
+        i += 1
+    return out
+
+
+def _name_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be a file name on this system (too long), or None."""
+    raw = os.fsencode(path)
+    if len(raw) > PATH_MAX_BYTES:
+        return f"the path is {len(raw)} bytes long, at most {PATH_MAX_BYTES} are allowed"
+    for part in path.parts:
+        size = len(os.fsencode(part))
+        if size > NAME_MAX_BYTES:
+            return f"the name {quote(part)} is {size} bytes long, at most {NAME_MAX_BYTES} are allowed"
+    return None
+
+
+def _probe_folder(folder: Path) -> str | None:
+    """Why no file can be created in ``folder`` (missing, not a folder, not writable), or None.
+
+    The check creates and removes a hidden temporary file: permission bits alone do not tell (root, read-only
+    mounts, /proc).
+    """
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        if not folder.exists():
+            return f"folder {folder} does not exist"
+        if not folder.is_dir():
+            return f"{folder} is not a folder"
+        fd, probe = tempfile.mkstemp(prefix=".rainroad-check-", dir=folder)
     except OSError as exc:
-        parser.error(f"argument {flag}: cannot create folder {folder}: {exc.strerror or exc}")
+        return f"cannot write in folder {folder}: {exc.strerror or exc}"
+    os.close(fd)
+    os.unlink(probe)
+    return None
+
+
+def check_output_file(path: Path) -> str | None:
+    """Why a PNG cannot be written at ``path``, or None. Creates nothing (a probe file is removed again)."""
+    if path.suffix.lower() != ".png":
+        return f"must end in .png, got {quote(str(path))}"
+    problem = _name_problem(path)
+    if problem:
+        return problem
+    try:
+        st = path.stat()
+    except (FileNotFoundError, NotADirectoryError):  # the folder checks below say which
+        st = None
+    except OSError as exc:
+        return f"cannot use {path}: {exc.strerror or exc}"
+    if st is not None:
+        if stat.S_ISDIR(st.st_mode):
+            return f"{path} is a folder; name a .png file"
+        if not stat.S_ISREG(st.st_mode):
+            return f"{path} exists and is not a regular file"
+        try:
+            with open(path, "ab"):  # opens for writing without changing the file
+                pass
+        except OSError as exc:
+            return f"cannot write {path}: {exc.strerror or exc}"
+        return None
+    return _probe_folder(path.parent)
+
+
+def check_output_folder(folder: Path) -> str | None:
+    """Why frames cannot be written into ``folder`` (created later if missing, in an existing folder), or None."""
+    problem = _name_problem(folder)
+    if problem:
+        return problem
+    try:
+        exists = folder.exists()
+    except OSError as exc:
+        return f"cannot use {folder}: {exc.strerror or exc}"
+    if exists and not folder.is_dir():
+        return f"{folder} exists and is not a folder"
+    return _probe_folder(folder if exists else folder.parent)
+
+
+def check_input_file(path: Path) -> str | None:
+    """Why ``path`` cannot be read as a file, or None."""
+    problem = _name_problem(path)
+    if problem:
+        return problem
+    try:
+        if not path.is_file():
+            return f"no such file: {path}" if not path.exists() else f"{path} is not a file"
+    except OSError as exc:
+        return f"cannot read {path}: {exc.strerror or exc}"
+    return None
 
 
 def parse_args(argv=None) -> argparse.Namespace:
     """Parse and validate; on bad input argparse prints the flag and the reason and exits with code 2."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_negative_values(parser, list(sys.argv[1:] if argv is None else argv)))
     if not args.headless and (args.screenshot or args.record):
         parser.error("argument --screenshot/--record: only with --headless (press F12 in the window instead)")
-    if args.scenario is not None and not args.scenario.is_file():
-        parser.error(f"argument --scenario: no such file: {args.scenario}")
+    if args.scenario is not None and (problem := check_input_file(args.scenario)):
+        parser.error(f"argument --scenario: {problem}")
     # Output paths are checked before minutes of rendering, not after.
-    if args.screenshot is not None:
-        if args.screenshot.suffix.lower() != ".png":
-            parser.error(f"argument --screenshot: must end in .png, got {args.screenshot}")
-        _check_folder(parser, "--screenshot", args.screenshot.parent)
-    if args.record is not None:
-        if args.record.exists() and not args.record.is_dir():
-            parser.error(f"argument --record: {args.record} exists and is not a folder")
-        _check_folder(parser, "--record", args.record)
+    if args.screenshot is not None and (problem := check_output_file(args.screenshot)):
+        parser.error(f"argument --screenshot: {problem}")
+    if args.record is not None and (problem := check_output_folder(args.record)):
+        parser.error(f"argument --record: {problem}")
     args.parser = parser
     return args

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import itertools
 import json
 import math
 import re
@@ -27,10 +28,65 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from rain_core import physics
+from rain_core import checks, physics
 from rain_core.paths import ASSETS_DIR
 
 SCENARIOS_DIR = ASSETS_DIR / "scenarios"
+MAX_SCENARIO_BYTES = 1 << 20  # a scenario file is a few KB; a bigger one is refused before it is parsed
+
+
+_BRIEF_ITEMS = 4  # a container in an error message shows at most this many items …
+_BRIEF_DEPTH = 3  # … and this many levels (a 5M-item or 1000-deep value is summarised, not formatted)
+_BRIEF_TEXT = 100  # a string or bytes value is cut to this many characters before it is quoted
+
+
+class _Shown:
+    """A ready-made text that ``checks.quote`` repeats (and cuts) as the repr of a value."""
+
+    def __init__(self, text: str):
+        self.text = text
+
+    def __repr__(self) -> str:
+        return self.text
+
+
+def _brief(value: Any, depth: int = 0) -> str:
+    """A short repr of ``value`` in bounded time: containers show a few items and levels, huge ints their size."""
+    if isinstance(value, bool) or value is None:
+        return repr(value)
+    if isinstance(value, int):
+        if value.bit_length() > 256:  # repr of a 10**5000 would itself raise (int max str digits)
+            return f"<integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
+        return repr(value)
+    if isinstance(value, str | bytes):
+        # checks.quote keeps the head and the tail of the repr and cuts the middle
+        return repr(value if len(value) <= 2 * _BRIEF_TEXT else value[:_BRIEF_TEXT] + value[-8:])
+    if isinstance(value, list | tuple | dict | set | frozenset):
+        opening, closing = {list: "[]", tuple: "()"}.get(type(value), "{}")
+        if depth >= _BRIEF_DEPTH:
+            return opening + ("…" if value else "") + closing
+        head = list(itertools.islice(value.items() if isinstance(value, dict) else value, _BRIEF_ITEMS))
+        if isinstance(value, dict):
+            parts = [f"{_brief(k, depth + 1)}: {_brief(v, depth + 1)}" for k, v in head]
+        else:
+            parts = [_brief(v, depth + 1) for v in head]
+        if len(value) > _BRIEF_ITEMS:
+            parts.append(f"… {len(value)} items")
+        return opening + ", ".join(parts) + closing
+    try:
+        return checks.quote(value)
+    except Exception:  # a repr that fails must not hide the real error
+        return f"<{type(value).__name__}>"
+
+
+def _quote(value: Any) -> str:
+    """``value`` as an error message shows it: its repr, cut by ``checks.quote`` to a readable length."""
+    return checks.quote(_Shown(_brief(value)))
+
+
+def _path_text(path: Any) -> str:
+    """A field path as a message shows it: as is when short, else quoted and cut."""
+    return path if isinstance(path, str) and len(path) <= 80 and path.isprintable() else _quote(path)
 
 
 class SettingsError(ValueError):
@@ -41,7 +97,8 @@ class SettingsError(ValueError):
                  line: int | None = None, message: str | None = None):
         self.field_path, self.value, self.allowed, self.source, self.line = field_path, value, allowed, source, line
         where = f"{source}: " if source else ""
-        super().__init__(message or f"{where}{field_path} = {value!r} is not allowed: expected {allowed}")
+        super().__init__(message or f"{where}{_path_text(field_path)} = {_quote(value)} is not allowed: "
+                                    f"expected {allowed}")
 
 
 class ScenarioSyntaxError(SettingsError):
@@ -97,7 +154,7 @@ _KINDS = {float: "float", int: "int", bool: "bool", str: "str"}
 def _unknown(path: str, value: Any, allowed: str, source: str | None = None) -> SettingsError:
     where = f"{source}: " if source else ""
     return SettingsError(path, value, allowed, source,
-                         message=f"{where}unknown setting {path} (value {value!r}): {allowed}")
+                         message=f"{where}unknown setting {_path_text(path)} (value {_quote(value)}): {allowed}")
 
 
 def _field_infos(cls, prefix: str) -> dict[str, FieldInfo]:
@@ -136,7 +193,10 @@ def _coerce(info: FieldInfo, value: Any, source: str | None = None) -> Any:
             fail()
         value = int(value)
     else:
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:  # an int too large for a float is out of every range
+            fail()
         if not math.isfinite(value):
             fail()
     if info.range and not info.range[0] <= value <= info.range[1]:
@@ -384,7 +444,8 @@ def _resolve(path: str) -> tuple[str, str, FieldInfo]:
     parts = path.split(".") if isinstance(path, str) else []
     sections = Settings.section_types()
     if len(parts) != 2 or parts[0] not in sections:
-        raise _unknown(str(path), None, "a path is 'section.key' with section one of " + ", ".join(sections))
+        raise _unknown(path if isinstance(path, str) else _quote(path), None,
+                       "a path is 'section.key' with section one of " + ", ".join(sections))
     infos = sections[parts[0]].field_infos()
     if parts[1] not in infos:
         raise _unknown(path, None, f"[{parts[0]}] has " + ", ".join(infos))
@@ -430,18 +491,28 @@ def apply_rain_preset(settings: Settings, name: str) -> None:
 def load_scenario(path: str | Path, base: Settings | None = None) -> Settings:
     """Read a TOML scenario file into Settings (on top of ``base``; default: the defaults).
 
-    A syntax error raises ScenarioSyntaxError (a SettingsError) naming the file and line; a bad value raises
-    SettingsError naming the file, the field path, the value and the allowed range.
+    The file is UTF-8, with or without a byte-order mark. A syntax error raises ScenarioSyntaxError (a
+    SettingsError) naming the file and line, as does a value nested too deeply to parse (a scenario needs only
+    ``[section]`` tables of ``key = value``); a bad value raises SettingsError naming the file, the field path,
+    the value (cut to a readable length) and the allowed range. A file over MAX_SCENARIO_BYTES is refused
+    unread (a ScenarioSyntaxError).
     """
     path = Path(path)
-    raw = path.read_bytes()
+    with path.open("rb") as f:
+        raw = f.read(MAX_SCENARIO_BYTES + 1)
+    if len(raw) > MAX_SCENARIO_BYTES:
+        raise ScenarioSyntaxError(str(path), f"larger than {MAX_SCENARIO_BYTES // 1024} KiB; a scenario is a few "
+                                  "KB of [section] tables of key = value", None)
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        data = tomllib.loads(raw.decode("utf-8-sig"))
     except UnicodeDecodeError as exc:
-        raise ScenarioSyntaxError(str(path), f"not UTF-8 ({exc.reason})", None) from None
+        raise ScenarioSyntaxError(str(path), f"not UTF-8 ({exc.reason} at byte {exc.start})", None) from None
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"line (\d+)", str(exc))
         raise ScenarioSyntaxError(str(path), str(exc), int(m.group(1)) if m else None) from None
+    except RecursionError:  # tomllib parses nested arrays, inline tables and dotted keys recursively
+        raise ScenarioSyntaxError(str(path), "a value or key is nested too deeply to read (a scenario needs only "
+                                  "[section] tables of key = value)", None) from None
     return Settings.from_dict(data, base=base, source=str(path))
 
 

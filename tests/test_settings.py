@@ -1,6 +1,8 @@
 """rain_core.settings: defaults, validation with named fields, TOML round trips, shipped presets."""
 
+import functools
 import math
+import time
 
 import numpy as np
 import pytest
@@ -184,3 +186,101 @@ def test_apply_rain_preset():
     assert s.rain.rate_mm_h == physics.RAIN_PRESETS["very_heavy"] and s.rain.preset == "very_heavy"
     with pytest.raises(SettingsError, match="rain.preset"):
         apply_rain_preset(s, "monsoon")
+
+
+# --- issue 18: integers too large for a float, capped messages, deep nesting, BOM ------------------------
+
+NUMERIC = [i for i in all_fields() if i.kind in ("float", "int")]
+
+
+@pytest.mark.parametrize("value", [10**60, 10**400, -(10**400), 10**5000], ids=["1e60", "1e400", "-1e400", "1e5000"])
+@pytest.mark.parametrize("path", [i.path for i in NUMERIC])
+def test_huge_integers_are_value_errors_at_every_entrance(path, value):
+    sec, key = path.split(".")
+    section_type = Settings.section_types()[sec]
+    entrances = [
+        lambda: set_value(Settings(), path, value),
+        lambda: section_type(**{key: value}),
+        lambda: Settings.from_dict({sec: {key: value}}),
+    ]
+    for enter in entrances:
+        with pytest.raises(SettingsError) as exc:
+            enter()
+        msg = str(exc.value)
+        assert exc.value.field_path == path and path in msg and field_info(path).allowed() in msg
+        assert len(msg) < 300
+
+
+@pytest.mark.parametrize("value", ["3.0", "nan", b"1", [1.0], {"v": 1}, 1j])
+def test_strings_and_other_types_where_numbers_are_expected(value):
+    for info in NUMERIC:
+        with pytest.raises(SettingsError, match=info.path.replace(".", r"\.")):
+            set_value(Settings(), info.path, value)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: "x" * 10_000_000,
+    lambda: b"x" * 10_000_000,
+    lambda: list(range(5_000_000)),
+    lambda: {str(i): i for i in range(200_000)},
+    lambda: np.zeros(5_000_000),
+    lambda: functools.reduce(lambda inner, _: [inner], range(5000), []),  # 5000 levels deep
+])
+def test_messages_quote_a_capped_value_quickly(make):
+    value = make()
+    start = time.perf_counter()
+    for path in ("rain.rate_mm_h", "traffic.count", "road.enabled", "camera.mode"):
+        with pytest.raises(SettingsError) as exc:
+            set_value(Settings(), path, value)
+        assert len(str(exc.value)) < 300 and path in str(exc.value)
+    with pytest.raises(SettingsError) as exc:
+        Settings.from_dict({"rain": {"nope": value}})
+    assert len(str(exc.value)) < 400
+    assert time.perf_counter() - start < 0.5
+
+
+def test_long_unknown_keys_are_cut_in_the_message():
+    with pytest.raises(SettingsError, match="unknown setting") as exc:
+        set_value(Settings(), "rain." + "k" * 1_000_000, 1.0)
+    assert len(str(exc.value)) < 400
+    with pytest.raises(SettingsError, match="unknown setting") as exc:
+        Settings.from_dict({"k" * 1_000_000: {}})
+    assert len(str(exc.value)) < 400
+
+
+@pytest.mark.parametrize("text", [
+    "[rain]\nrate_mm_h = " + "[" * 1000 + "]" * 1000 + "\n",
+    "[rain]\nrate_mm_h = " + "{a = " * 1000 + "1" + "}" * 1000 + "\n",
+    "[rain]\n" + ".".join(["a"] * 5000) + " = 1\n",
+    ".".join(["a"] * 5000) + " = 1\n",
+    "x = " + "[" * 100_000 + "\n",
+], ids=["array-1000", "inline-table-1000", "dotted-key-5000-in-section", "dotted-key-5000", "unclosed-100000"])
+def test_deeply_nested_files_are_clear_errors(tmp_path, text):
+    p = tmp_path / "deep.toml"
+    p.write_text(text)
+    with pytest.raises(SettingsError) as exc:  # not RecursionError
+        load_scenario(p)
+    msg = str(exc.value)
+    assert str(p) in msg and len(msg) < 400
+    assert "nested too deeply" in msg or "unknown setting" in msg
+
+
+def test_a_byte_order_mark_is_accepted(tmp_path):
+    p = tmp_path / "bom.toml"
+    p.write_bytes(b"\xef\xbb\xbf[rain]\nrate_mm_h = 3.5\n")
+    assert load_scenario(p).rain.rate_mm_h == 3.5
+    p.write_bytes(b"\xef\xbb\xbf")
+    assert load_scenario(p) == Settings()
+
+
+def test_big_values_in_files_give_short_messages_and_huge_files_are_refused(tmp_path):
+    p = tmp_path / "big.toml"
+    p.write_text('[rain]\nrate_mm_h = "' + "y" * 500_000 + '"\n')
+    with pytest.raises(SettingsError, match="rain.rate_mm_h") as exc:
+        load_scenario(p)
+    assert len(str(exc.value)) < 300
+    p.write_text('[rain]\nrate_mm_h = "' + "y" * 10_000_000 + '"\n')
+    start = time.perf_counter()
+    with pytest.raises(ScenarioSyntaxError, match="larger than") as exc:
+        load_scenario(p)
+    assert str(p) in str(exc.value) and time.perf_counter() - start < 0.5

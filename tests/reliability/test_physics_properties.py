@@ -1,0 +1,300 @@
+"""Property-based tests of the public physics functions (issue 18): random valid inputs give finite outputs in
+their documented range; NaN, infinite, negative or too-large inputs raise ValueError naming the argument.
+
+Where a function returns inf or NaN for huge *finite* input, the test is ``xfail(strict=True)`` with the failing
+input as an explicit ``@example`` (so it fails the same way every run) — the fix belongs in rain_core/physics.py.
+The contract those tests state: a finite result, or a ValueError naming an argument.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import assume, example, given
+from hypothesis import strategies as st
+
+from rain_core import physics as P
+
+R_MAX = P.R_MAX_MM_H
+F_MAX = float(np.finfo(np.float64).max)
+
+rates = st.floats(0.0, R_MAX)
+positive_rates = st.floats(0.0, R_MAX, exclude_min=True)
+diameters = st.floats(0.0, F_MAX)  # any finite diameter ≥ 0
+moderate = st.floats(0.0, 1e6)
+vectors = st.tuples(*[st.floats(-1e6, 1e6)] * 3)
+any_vectors = st.tuples(*[st.floats(-F_MAX, F_MAX)] * 3)
+normals = st.tuples(*[st.floats(-1e3, 1e3)] * 3).filter(lambda n: math.hypot(*n) > 1e-6)
+BAD_NUMBERS = st.sampled_from([math.nan, math.inf, -math.inf]) | st.floats(max_value=-1e-300)
+
+
+def _not_a_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return True
+    return False
+
+
+# Numeric strings ("1", ["0"]) are accepted today: see test_numeric_strings_are_refused (xfail).
+NON_NUMERIC_TEXT = st.text(max_size=5).filter(_not_a_number)
+WRONG_TYPES = NON_NUMERIC_TEXT | st.lists(NON_NUMERIC_TEXT, min_size=1, max_size=2) | st.dictionaries(
+    st.text(max_size=2), st.integers(), min_size=1, max_size=2)
+
+
+def finite(x) -> bool:
+    return bool(np.all(np.isfinite(np.asarray(x, dtype=np.float64))))
+
+
+def finite_or_value_error(fn, *args, **kwargs) -> None:
+    """The contract at any finite input: a finite result, or a ValueError (naming an argument)."""
+    try:
+        out = fn(*args, **kwargs)
+    except ValueError as exc:
+        assert any(name in str(exc) for name in fn.__code__.co_varnames[:fn.__code__.co_argcount]), str(exc)
+        return
+    with np.errstate(all="ignore"):
+        assert finite(out), f"{fn.__name__}{args} → {out}"
+    assert np.all(np.asarray(out) >= 0), f"{fn.__name__}{args} → {out}"
+
+
+# --- valid inputs: finite, in range ---------------------------------------------------------------------
+
+
+@given(r=positive_rates)
+def test_mp_slope(r):
+    lam = P.mp_slope_per_mm(r)
+    assert math.isfinite(lam) and lam > 0
+
+
+@given(d=diameters, r=rates)
+def test_marshall_palmer(d, r):
+    n = P.marshall_palmer(d, r)
+    assert math.isfinite(n) and 0 <= n <= P.N0_MP
+
+
+@given(r=rates)
+def test_rain_category_and_rate_functions(r):
+    assert isinstance(P.rain_category(r), str)
+    for fn in (P.effective_n0, P.number_density_per_m3, P.flux_horizontal_per_m2_s, P.liquid_water_content_g_m3,
+               P.rain_extinction_per_km, P.implied_rate_mm_h):
+        out = fn(r)
+        assert math.isfinite(out) and out >= 0, (fn.__name__, r, out)
+    if r >= 1e-6:  # below, exp(−Λ·D) underflows and the renormalisation is 0/0-guarded to 0
+        assert P.implied_rate_mm_h(r, n0=P.effective_n0(r)) == pytest.approx(r, rel=1e-9)
+
+
+@given(rs=st.lists(rates, min_size=1, max_size=6))
+def test_rate_functions_vectorise(rs):
+    arr = np.array(rs)
+    for fn in (P.effective_n0, P.number_density_per_m3, P.flux_horizontal_per_m2_s, P.rain_extinction_per_km):
+        out = fn(arr)
+        assert out.shape == arr.shape and finite(out) and np.all(out >= 0)
+        np.testing.assert_allclose(out, [fn(r) for r in rs], rtol=1e-12)
+
+
+@given(d=diameters)
+def test_terminal_velocities(d):
+    v = P.terminal_velocity(d)
+    assert math.isfinite(v) and 0 <= v <= P.GUNN_KINZER_V_M_S[-1] + 1e-12
+    a = P.atlas_terminal_velocity(d)
+    assert math.isfinite(a) and 0 <= a <= 9.65
+
+
+@given(r=rates, n0=st.floats(0.0, 1e12), lo=st.floats(0.0, P.D_MAX_MM), width=st.floats(0.0, 20.0),
+       open_top=st.booleans())
+def test_implied_rate_moderate_inputs(r, n0, lo, width, open_top):
+    assume(lo > 0 or width > 0 or open_top)  # d_min = d_max = 0: test_implied_rate_at_a_zero_diameter (xfail)
+    out = P.implied_rate_mm_h(r, n0=n0, d_min_mm=lo, d_max_mm=math.inf if open_top else lo + width)
+    assert math.isfinite(out) and out >= 0
+
+
+@given(r=rates, area=moderate, normal=normals, velocity=vectors, wind=vectors)
+def test_flux_on_surface_moderate_inputs(r, area, normal, velocity, wind):
+    out = P.flux_on_surface_per_s(r, area, normal, velocity, wind)
+    assert math.isfinite(out) and out >= 0
+    scaled = P.flux_on_surface_per_s(r, area, tuple(3.0 * c for c in normal), velocity, wind)
+    assert scaled == pytest.approx(out, rel=1e-9, abs=1e-300)  # any length of normal
+
+
+@given(r=st.just(0.0) | st.floats(1e-6, R_MAX), exposure=st.floats(0.0, 1e3), camera=vectors, wind=vectors)
+def test_mean_streak_length_moderate_inputs(r, exposure, camera, wind):
+    out = P.mean_streak_length_m(r, exposure, camera, wind)
+    assert math.isfinite(out) and out >= 0
+
+
+@given(v=st.floats(0.0, 1e100), b=st.floats(0.0, 1e100), h=st.floats(0.0, 1e100))
+def test_splash_water_flux_moderate_inputs(v, b, h):
+    out = P.splash_water_flux(v, b, h)
+    assert math.isfinite(out) and out >= 0
+
+
+@given(d=diameters, r=positive_rates)
+def test_drop_diameter_cdf(d, r):
+    c = P.drop_diameter_cdf(d, r)
+    assert 0.0 <= c <= 1.0
+
+
+@given(r=positive_rates, n=st.integers(0, 200), seed=st.integers(0, 2**32 - 1))
+def test_sampled_diameters_are_in_range(r, n, seed):
+    d = P.sample_drop_diameters(r, n, seed)
+    assert d.shape == (n,) and np.all((d >= P.D_MIN_MM) & (d <= P.D_MAX_MM))
+    if n:
+        assert 0.0 <= P.ks_distance(d, r) <= 1.0
+
+
+# --- invalid inputs: ValueError naming the argument --------------------------------------------------------
+
+VALID_ARGS = {
+    P.mp_slope_per_mm: {"rate_mm_h": 5.0},
+    P.marshall_palmer: {"d_mm": 1.0, "rate_mm_h": 5.0},
+    P.rain_category: {"rate_mm_h": 5.0},
+    P.terminal_velocity: {"d_mm": 1.0},
+    P.atlas_terminal_velocity: {"d_mm": 1.0},
+    P.implied_rate_mm_h: {"rate_mm_h": 5.0, "n0": 8000.0, "d_min_mm": 0.1, "d_max_mm": 6.0},
+    P.effective_n0: {"rate_mm_h": 5.0},
+    P.number_density_per_m3: {"rate_mm_h": 5.0},
+    P.flux_horizontal_per_m2_s: {"rate_mm_h": 5.0},
+    P.flux_on_surface_per_s: {"rate_mm_h": 5.0, "area_m2": 1.0, "normal": (0.0, 1.0, 0.0),
+                              "surface_velocity_m_s": (0.0, 0.0, 10.0), "wind_m_s": (1.0, 0.0, 0.0)},
+    P.liquid_water_content_g_m3: {"rate_mm_h": 5.0},
+    P.mean_streak_length_m: {"rate_mm_h": 5.0, "exposure_s": 0.02, "camera_velocity_m_s": (0.0, 0.0, 10.0),
+                             "wind_m_s": (1.0, 0.0, 0.0)},
+    P.rain_extinction_per_km: {"rate_mm_h": 5.0},
+    P.splash_water_flux: {"speed_m_s": 10.0, "tire_width_m": 0.2, "film_depth_m": 0.001},
+    P.drop_diameter_cdf: {"d_mm": 1.0, "rate_mm_h": 5.0},
+    P.ks_distance: {"samples_mm": [1.0, 2.0], "rate_mm_h": 5.0},
+}
+CASES = [(fn, arg) for fn, kwargs in VALID_ARGS.items() for arg in kwargs]
+VECTOR_ARGS = {"normal", "surface_velocity_m_s", "wind_m_s", "camera_velocity_m_s"}
+
+
+def test_valid_args_table_is_valid_and_complete():
+    public = {name for name in dir(P) if not name.startswith("_") and callable(getattr(P, name))
+              and getattr(getattr(P, name), "__module__", None) == P.__name__}
+    covered = {fn.__name__ for fn in VALID_ARGS} | {"preset_rate", "sample_drop_diameters",
+                                                    "terminal_velocity_leave_one_out"}
+    assert public <= covered, public - covered
+    for fn, kwargs in VALID_ARGS.items():
+        out = fn(**kwargs)
+        assert isinstance(out, str) or finite(out)
+
+
+def bad_values(fn, arg) -> st.SearchStrategy:
+    if arg in VECTOR_ARGS:
+        bad = st.sampled_from([math.nan, math.inf, -math.inf])
+        vectors_with_a_bad_entry = st.tuples(bad, st.floats(-1.0, 1.0), st.floats(-1.0, 1.0)).flatmap(st.permutations)
+        return vectors_with_a_bad_entry | WRONG_TYPES | st.just((1.0, 2.0))  # (None is the default wind)
+    options = [BAD_NUMBERS, WRONG_TYPES, st.none()]
+    if "rate" in arg:
+        options.append(st.floats(min_value=R_MAX, exclude_min=True, allow_infinity=False))
+    return st.one_of(options)
+
+
+@pytest.mark.parametrize("fn, arg", CASES, ids=[f"{fn.__name__}-{arg}" for fn, arg in CASES])
+@given(data=st.data())
+def test_invalid_inputs_raise_value_error_naming_the_argument(fn, arg, data):
+    value = data.draw(bad_values(fn, arg), label=arg)
+    if arg == "d_max_mm" and value == math.inf:
+        return  # d_max_mm = inf is documented as allowed
+    kwargs = dict(VALID_ARGS[fn], **{arg: value})
+    with pytest.raises(ValueError) as exc:
+        fn(**kwargs)
+    assert arg in str(exc.value), str(exc.value)
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -1.0, 0.0, 500.5, "heavy", None])
+def test_sample_drop_diameters_refuses_bad_rates(value):
+    with pytest.raises(ValueError, match="rate_mm_h"):
+        P.sample_drop_diameters(value, 5, 0)
+
+
+@pytest.mark.parametrize("n", [-1, 2.0, True, "3", None])
+def test_sample_drop_diameters_refuses_bad_counts(n):
+    with pytest.raises(ValueError, match="n "):
+        P.sample_drop_diameters(5.0, n, 0)
+
+
+# --- huge finite inputs: known failures, for rain_core/physics.py ----------------------------------------
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: splash_water_flux(1e308, ...) overflows to inf (and inf·0 to "
+                   "NaN); physics.py should bound or reject the inputs")
+@given(v=diameters, b=diameters, h=diameters)
+@example(v=1e308, b=1e308, h=1.0)
+@example(v=1e200, b=1e200, h=0.0)
+def test_splash_water_flux_any_finite_input(v, b, h):
+    finite_or_value_error(P.splash_water_flux, v, b, h)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: flux_on_surface_per_s overflows to inf for a huge area or "
+                   "velocity; physics.py should bound or reject the inputs")
+@given(r=rates, area=diameters, normal=normals, velocity=any_vectors)
+@example(r=500.0, area=F_MAX, normal=(0.0, 1.0, 0.0), velocity=(0.0, 0.0, 0.0))
+@example(r=500.0, area=1.0, normal=(0.0, 1.0, 0.0), velocity=(0.0, F_MAX, 0.0))
+def test_flux_on_surface_any_finite_input(r, area, normal, velocity):
+    finite_or_value_error(P.flux_on_surface_per_s, r, area, normal, velocity)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: flux_on_surface_per_s treats a normal longer than ~1e154 as "
+                   "zero (its norm overflows) and returns 0 instead of the flux through that face")
+@given(normal=any_vectors.filter(lambda n: math.hypot(*n) > 1e-6))
+@example(normal=(0.0, F_MAX, 0.0))
+def test_flux_on_surface_any_normal_length(normal):
+    unit = np.array(normal) / math.hypot(*normal)
+    try:
+        out = P.flux_on_surface_per_s(5.0, 1.0, normal)
+    except ValueError as exc:
+        assert "normal" in str(exc)
+        return
+    assert out == pytest.approx(P.flux_on_surface_per_s(5.0, 1.0, unit), rel=1e-9, abs=1e-300)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: mean_streak_length_m returns inf for a huge exposure or "
+                   "velocity and NaN for exposure 0 with a huge velocity (0·inf)")
+@given(r=rates, exposure=diameters, camera=any_vectors)
+@example(r=500.0, exposure=F_MAX, camera=(0.0, 0.0, 0.0))
+@example(r=5.0, exposure=0.0, camera=(F_MAX, F_MAX, 0.0))
+@example(r=0.0, exposure=1.0, camera=(F_MAX, 0.0, 0.0))
+def test_mean_streak_length_any_finite_input(r, exposure, camera):
+    finite_or_value_error(P.mean_streak_length_m, r, exposure, camera)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: implied_rate_mm_h returns inf for a huge n0 and a negative "
+                   "rate for d_min_mm above 30 mm with d_max_mm = inf (the quadrature's cut at 30 mm)")
+@given(r=rates, n0=diameters, lo=st.floats(0.0, 1e3))
+@example(r=500.0, n0=F_MAX, lo=0.1)
+@example(r=500.0, n0=8000.0, lo=40.0)
+def test_implied_rate_any_finite_input(r, n0, lo):
+    finite_or_value_error(P.implied_rate_mm_h, r, n0, lo, math.inf)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: mean_streak_length_m returns NaN for a tiny positive rate "
+                   "(R ≲ 1e-20 mm/h: exp(−Λ·D) underflows at every node and the mean is 0/0)")
+@given(r=st.floats(0.0, 1e-6, exclude_min=True))
+@example(r=3.172481815796753e-32)
+def test_mean_streak_length_at_tiny_rates(r):
+    finite_or_value_error(P.mean_streak_length_m, r, 0.02)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: implied_rate_mm_h(0, d_min_mm=0, d_max_mm=0) is NaN "
+                   "(exp(−inf·0) at a zero-width panel at D = 0)")
+def test_implied_rate_at_a_zero_diameter():
+    finite_or_value_error(P.implied_rate_mm_h, 0.0, 8000.0, 0.0, 0.0)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18: checks.array accepts numeric strings (\"1\", [\"0\"]) "
+                   "because np.asarray(..., dtype=float64) parses them; strings should be refused")
+@pytest.mark.parametrize("call", [
+    lambda: P.terminal_velocity("1"),
+    lambda: P.rain_extinction_per_km("5"),
+    lambda: P.splash_water_flux(["10"], 0.2, 0.001),
+    lambda: P.flux_on_surface_per_s(5.0, "1", (0.0, 1.0, 0.0)),
+    lambda: P.sample_drop_diameters("5", 3, 0),
+], ids=["terminal_velocity", "rain_extinction_per_km", "splash_water_flux", "flux_on_surface_per_s",
+        "sample_drop_diameters"])
+def test_numeric_strings_are_refused(call):
+    with pytest.raises(ValueError):
+        call()
