@@ -17,6 +17,7 @@ def _rainy_settings() -> Settings:
 def test_scene_release_leaves_no_gl_object_behind(gl_ctx):
     # context_gc: moderngl queues objects whose Python wrapper died unreleased instead of freeing them, so the
     # queue is exactly what a release() forgot.
+    gc.collect()  # what earlier tests dropped is theirs, not this test's: collect it before counting
     old_mode = gl_ctx.gc_mode
     gl_ctx.gc_mode = "context_gc"
     try:
