@@ -1,7 +1,8 @@
 """``python -m app --headless``: the same scene without a window, autopilot driving, frames to PNG.
 
-A long run (more than LONG_RUN_FRAMES frames) prints one line on stderr after its first frame — the frame count
-and an estimate of the time it will take — then a progress line every PROGRESS_EVERY_S seconds. Ctrl-C stops it
+A long run (more than LONG_RUN_FRAMES frames) prints one line on stderr after its first few frames — the frame
+count and an estimate of the time it will take, from the pace of frames 2–5 (the first one compiles shaders) —
+then a progress line every PROGRESS_EVERY_S seconds. Ctrl-C stops it
 cleanly (the frames written so far stay).
 """
 
@@ -17,6 +18,7 @@ from rain_core.scene import MAX_FRAME_DT_S, Scene
 
 LONG_RUN_FRAMES = 300  # above this many frames a run says how long it will take and shows its progress
 PROGRESS_EVERY_S = 30.0  # s of wall time between progress lines
+PACE_FRAMES = 4  # frames after the first one that set the estimate
 
 
 def frame_count(seconds: float, fps: float) -> int:
@@ -68,7 +70,7 @@ def run_headless(args, settings) -> int:
     substeps = max(1, math.ceil(dt / MAX_FRAME_DT_S))  # Scene.step clamps a frame to MAX_FRAME_DT_S
     long_run = frames > LONG_RUN_FRAMES
     status = 0
-    start = last_report = time.perf_counter()
+    start = last_report = first_done = time.perf_counter()
     try:
         for index in range(frames):
             for _ in range(substeps):
@@ -83,8 +85,10 @@ def run_headless(args, settings) -> int:
                 path = save_png(scene.image(), args.screenshot)
                 print(f"rainroad: wrote {path}")
             now = time.perf_counter()
-            if long_run and index == 0:
-                _say(plan_line(frames, args.fps, args.size, now - start))
+            if index == 0:
+                first_done = now
+            elif long_run and index == PACE_FRAMES:
+                _say(plan_line(frames, args.fps, args.size, (now - first_done) / PACE_FRAMES))
             elif long_run and now - last_report >= PROGRESS_EVERY_S:
                 left = (now - start) / (index + 1) * (frames - index - 1)
                 _say(f"rainroad: frame {index + 1}/{frames}, about {describe_duration(left)} left")

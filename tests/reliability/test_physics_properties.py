@@ -106,7 +106,7 @@ def test_terminal_velocities(d):
 @given(r=rates, n0=st.floats(0.0, 1e12), lo=st.floats(0.0, P.D_MAX_MM), width=st.floats(0.0, 20.0),
        open_top=st.booleans())
 def test_implied_rate_moderate_inputs(r, n0, lo, width, open_top):
-    assume(lo > 0 or width > 0 or open_top)  # d_min = d_max = 0: test_implied_rate_at_a_zero_diameter (xfail)
+    assume(r > 0 or lo > 0)  # R = 0 with a node at D = 0: test_implied_rate_at_a_zero_diameter (xfail)
     out = P.implied_rate_mm_h(r, n0=n0, d_min_mm=lo, d_max_mm=math.inf if open_top else lo + width)
     assert math.isfinite(out) and out >= 0
 
@@ -279,10 +279,13 @@ def test_mean_streak_length_at_tiny_rates(r):
     finite_or_value_error(P.mean_streak_length_m, r, 0.02)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: implied_rate_mm_h(0, d_min_mm=0, d_max_mm=0) is NaN "
-                   "(exp(−inf·0) at a zero-width panel at D = 0)")
-def test_implied_rate_at_a_zero_diameter():
-    finite_or_value_error(P.implied_rate_mm_h, 0.0, 8000.0, 0.0, 0.0)
+@pytest.mark.xfail(strict=True, reason="issue 18: implied_rate_mm_h(0, d_min_mm=0, d_max_mm≈0) is NaN "
+                   "(a quadrature node at D = 0 gives exp(−inf·0) for R = 0)")
+@given(width=st.floats(0.0, 1e-300))
+@example(width=0.0)
+@example(width=5e-324)
+def test_implied_rate_at_a_zero_diameter(width):
+    finite_or_value_error(P.implied_rate_mm_h, 0.0, 8000.0, 0.0, width)
 
 
 @pytest.mark.xfail(strict=True, reason="issue 18: checks.array accepts numeric strings (\"1\", [\"0\"]) "

@@ -66,6 +66,8 @@ def invalid_values(info: FieldInfo) -> st.SearchStrategy:
             options += [st.integers(max_value=int(lo) - 1), st.integers(min_value=int(hi) + 1), st.floats()]
         else:
             options += [st.integers(max_value=math.ceil(lo) - 1), st.integers(min_value=math.floor(hi) + 1)]
+    if info.kind == "str":  # a text drawn for the other types may happen to be a valid choice
+        return st.one_of(options).filter(lambda v: not (isinstance(v, str) and v in info.choices))
     return st.one_of(options)
 
 
