@@ -22,6 +22,7 @@ from rain_core.effects.windshield.effect import WindshieldEffect
 from rain_core.effects.windshield.glass import GlassGeometry
 from rain_core.effects.windshield.grid import grid_pairs as _grid_pairs
 from rain_core.effects.windshield.inputs import GlassInputs
+from rain_core.effects.windshield.reference import WindshieldSimReference
 from rain_core.effects.windshield.sim import WindshieldSim
 from rain_core.physics import RHO_WATER as RHO_W
 
@@ -43,6 +44,7 @@ __all__ = [
     "GlassInputs",
     "WindshieldEffect",
     "WindshieldSim",
+    "WindshieldSimReference",
     "_grid_pairs",
     "airflow_onset_speed_m_s",
     "drop_mass",

@@ -8,18 +8,25 @@ times without a GL context:
 ``glass``      ``GlassGeometry``: the glass surface, its coordinates (s, t) / UV, gravity along it
 ``airflow``    the air over the glass and the drag on a drop (``airflow_onset_speed_m_s``)
 ``inputs``     ``GlassInputs``: what the glass sees in a frame
-``grid``       the spatial hash that finds merge candidates (``grid_pairs``)
+``grid``       the spatial hash that finds merge candidates (``grid_pairs``; the fast ``PairFinder``)
 ``wipers``     blade geometry, the stroke motion and the mode controller
-``sim``        ``WindshieldSim``: the water bookkeeping, arrivals and the step, with its parts
-               ``dynamics`` (motion, trails, shedding), ``merging``, ``film`` (drying, beading), ``wiping``
+``reference``  ``WindshieldSimReference``: the float64 NumPy reference — the water bookkeeping, arrivals and
+               the step, with its parts ``dynamics`` (motion, trails, shedding), ``merging``, ``film`` (drying,
+               beading), ``wiping``
+``sim``        ``WindshieldSim``: the fast path the effect runs (the same model and state, far fewer NumPy calls,
+               work bounded per step; compared with the reference in tests/effects/windshield/test_fast_path.py)
 ``splats``     the instance rows the effect draws from the simulation's state
 ``effect``     ``WindshieldEffect``: the GL side (water textures, the glass)
+
+Bad input is refused where ``GlassInputs`` are made (ValueError naming the field and its range); the step
+trusts them.
 """
 
 from rain_core.effects.windshield.airflow import airflow_onset_speed_m_s
 from rain_core.effects.windshield.constants import FILM_CELLS, drop_mass, drop_radius
 from rain_core.effects.windshield.glass import GlassGeometry
 from rain_core.effects.windshield.inputs import GlassInputs
+from rain_core.effects.windshield.reference import WindshieldSimReference
 from rain_core.effects.windshield.sim import WindshieldSim
 from rain_core.effects.windshield.wipers import Blade, StrokeSegment, WiperController, tandem_blades
 
@@ -31,6 +38,7 @@ __all__ = [
     "StrokeSegment",
     "WindshieldEffect",
     "WindshieldSim",
+    "WindshieldSimReference",
     "WiperController",
     "airflow_onset_speed_m_s",
     "drop_mass",

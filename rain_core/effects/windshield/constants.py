@@ -72,6 +72,16 @@ BLADE_HALF_WIDTH_M = 0.006  # the rubber's reach either side of its line
 
 MAX_SUBSTEP_S = 1.0 / 30.0  # the simulation sub-steps a frame at most this long (frames: checks.MAX_FRAME_DT_S)
 
+# --- work bounds per sub-step (issue 18): whatever the valid input, a step does bounded work --------------------
+# Arrivals drawn one by one; more (only far beyond real rain: 500 mm/h at 200 km/h into a gale, ×4 drops) land as
+# mist of the same mean mass, spread over the film. 8 mm/h at 120 km/h brings ~1,800 per sub-step.
+MAX_ARRIVALS_PER_SUBSTEP = 32_768
+# The merge test's spatial hash: grid cells covered by the swept boxes of large or fast drops, and candidate
+# pairs. Over the first, the drops with the longest steps are tested where they end (their sweep is not
+# tested); over the second, the remaining drops wait for the next sub-step. Ordinary rain needs ~1/100 of these.
+MERGE_CELLS_MAX = 1 << 16
+MERGE_PAIRS_MAX = 1 << 18
+
 
 def norm2(v: np.ndarray) -> np.ndarray:
     """Lengths of (n, 2) vectors (np.linalg.norm is ~20× slower on this shape)."""

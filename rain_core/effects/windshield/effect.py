@@ -85,8 +85,14 @@ class WindshieldEffect(Effect):
             index_buffer=self._mesh_ibo,
             index_element_size=4,
         )
-        self._splat_buf = ctx.buffer(reserve=32 * 1024)
-        self._splat_vao = ctx.vertex_array(self.splat_prog, [(self._splat_buf, "4f 4f/i", "in_seg", "in_info")])
+        # One instance buffer per water target (film deposits, drops), each written once a frame with only what
+        # the frame draws, then drawn with one instanced call (so no buffer is rewritten while a draw may read it).
+        self._splat_bufs = [ctx.buffer(reserve=32 * 1024) for _ in range(2)]
+        self._splat_vaos = [
+            ctx.vertex_array(self.splat_prog, [(buf, "4f 4f/i", "in_seg", "in_info")]) for buf in self._splat_bufs
+        ]
+        self.upload_bytes = 0  # bytes written to the GPU by the last frame's water pass
+        self.splat_draws = 0  # instanced splat draws in the last frame
         self.resolution = 0
         self._film: list = []
         self._film_index = 0
@@ -233,25 +239,30 @@ class WindshieldEffect(Effect):
             "arrived_g": 1e3 * sim.arrived,
             "wiped_g": 1e3 * sim.wiped,
             "shed_g": 1e3 * sim.shed,
+            "upload_kb": self.upload_bytes / 1024.0,
         }
 
     # --- the water textures ---------------------------------------------------------------------------------
     def _texel_m(self) -> float:
         return max(self.glass.width_bottom, self.glass.height) / self.resolution
 
-    def _draw_splats(self, splats: np.ndarray, equation) -> None:
-        """Blend splats into the bound target: FUNC_ADD accumulates water, MAX keeps the tallest drop."""
-        data = np.ascontiguousarray(splats, dtype=np.float32)
-        if data.nbytes > self._splat_buf.size:
-            self._splat_buf.orphan(int(data.nbytes * 1.5))
-        if not len(data):
+    def _draw_splats(self, which: int, splats: np.ndarray, equation) -> None:
+        """Blend splats into the bound target with one instanced draw: FUNC_ADD accumulates water, MAX keeps the
+        tallest drop. ``which``: 0 the film deposits, 1 the drops and beads (each has its own buffer)."""
+        if not len(splats):
             return
-        self._splat_buf.write(data.tobytes())
+        data = np.ascontiguousarray(splats, dtype=np.float32)
+        buf = self._splat_bufs[which]
+        if data.nbytes > buf.size:
+            buf.orphan(int(data.nbytes * 1.5))
+        buf.write(data)
+        self.upload_bytes += data.nbytes
+        self.splat_draws += 1
         ctx = self.ctx
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.ONE, moderngl.ONE)
         ctx.blend_equation = equation
-        self._splat_vao.render(moderngl.TRIANGLES, vertices=6, instances=len(data))
+        self._splat_vaos[which].render(moderngl.TRIANGLES, vertices=6, instances=len(data))
         ctx.blend_equation = moderngl.FUNC_ADD
         ctx.disable(moderngl.BLEND)
 
@@ -265,7 +276,10 @@ class WindshieldEffect(Effect):
         ctx.disable(moderngl.CULL_FACE)
         # The CPU film now, as mean thickness (µm) per cell.
         cur = 1 - self._coarse_index
-        self._coarse[cur].write((self.sim.film_thickness_m() * 1e6).astype(np.float32).tobytes())
+        coarse = (self.sim.film_thickness_m() * 1e6).astype(np.float32)
+        self._coarse[cur].write(coarse)
+        self.upload_bytes = coarse.nbytes
+        self.splat_draws = 0
         prev = self._coarse[self._coarse_index]
         src, dst = self._film[self._film_index], self._film[1 - self._film_index]
         # 1. relax last frame's film (rescaled to the CPU film it showed) and wipe what the blades swept.
@@ -295,12 +309,12 @@ class WindshieldEffect(Effect):
         ctx.disable(moderngl.BLEND)
         self._film_vao.render(moderngl.TRIANGLES, vertices=3)
         # 2. deposits: wet trails and splash speckle, added.
-        self._draw_splats(film_splats(self.sim, self._texel_m()), moderngl.FUNC_ADD)
+        self._draw_splats(0, film_splats(self.sim, self._texel_m()), moderngl.FUNC_ADD)
         dst.color.build_mipmaps()
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()
         self._drops.fbo.clear(0.0, 0.0, 0.0, 0.0)
-        self._draw_splats(drop_splats(self.sim, self._texel_m()), moderngl.MAX)
+        self._draw_splats(1, drop_splats(self.sim, self._texel_m()), moderngl.MAX)
         # 4. the water texture: thickness, film, slopes.
         self._drops.color.use(_UNIT_A)
         dst.color.use(_UNIT_B)
@@ -371,9 +385,9 @@ class WindshieldEffect(Effect):
             *self._coarse,
             self._mesh_vbo,
             self._mesh_ibo,
-            self._splat_buf,
+            *self._splat_bufs,
             self._glass_vao,
-            self._splat_vao,
+            *self._splat_vaos,
             self._film_vao,
             self._normals_vao,
         ]

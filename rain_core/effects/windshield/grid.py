@@ -2,8 +2,14 @@
 
 Two uniform grids over 2 m × 1.6 m of glass coordinates (s, t): a fine one (``GRID_CELL_M``) for the many small
 drops, by their centres, and a coarse one (``COARSE_CELL_M``) for the few large or fast ones, in every cell
-their box touches. Cell keys are matched with a sort and two binary searches (``match``); ``components`` then
-joins chains of touching drops.
+their box touches. ``components`` then joins chains of touching drops.
+
+Two implementations of the same candidate search:
+
+* ``grid_pairs`` (the reference): cell keys matched with a sort and two binary searches (``match``);
+* ``PairFinder`` (the fast path): occupied cells written into tables that live as long as the simulation, so a
+  lookup is one gather instead of a binary search, and a work budget per call (``MERGE_CELLS_MAX`` cells of
+  swept boxes, ``MERGE_PAIRS_MAX`` pairs) so that no input, however fast or dense, can ask for unbounded work.
 """
 
 from __future__ import annotations
@@ -11,6 +17,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from rain_core.effects.windshield.constants import MERGE_CELLS_MAX, MERGE_PAIRS_MAX
 
 GRID_CELL_M = 4e-3  # fine merge-test grid; the drop arrays are kept sorted by this grid's cell of their centre
 COARSE_CELL_M = 3.2e-2  # coarse grid for large or fast drops
@@ -110,3 +118,170 @@ def components(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
             break
         labels = new
     return labels
+
+
+_EMPTY_I = np.zeros(0, np.int64)
+NEAR_CELL_M = 1.6e-2  # PairFinder's grid: drops reaching ≤ half of this are found by their centres
+FAR_CELL_M = 6.4e-2  # PairFinder's grid for the few drops that reach further (fast or very large)
+
+
+def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, members: np.ndarray):
+    """Pairs (query id, member) for queries that each meet ``counts`` members stored from ``heads`` on in
+    ``members``."""
+    total = int(counts.sum())
+    if total == len(counts):  # one member each: the common case
+        return query_ids, members[heads]
+    shift = np.repeat(heads - (np.cumsum(counts) - counts), counts)
+    return np.repeat(query_ids, counts), members[shift + np.arange(total)]
+
+
+def _box_cells(lo0, lo1, hi0, hi1, ids: np.ndarray, n1: int) -> tuple[np.ndarray, np.ndarray]:
+    """(cell key, id) for every cell of the boxes lo…hi (inclusive cell indices, per axis)."""
+    w1 = hi1 - lo1 + 1
+    counts = (hi0 - lo0 + 1) * w1
+    total = int(counts.sum())
+    if total == len(ids):
+        return lo0 * n1 + lo1, ids
+    owner = np.repeat(np.arange(len(ids)), counts)
+    within = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
+    d0, d1 = np.divmod(within, w1[owner])
+    return (lo0[owner] + d0) * n1 + lo1[owner] + d1, ids[owner]
+
+
+class PairFinder:
+    """The fast candidate search (see the module docstring); one per simulation.
+
+    Drops that reach ≤ NEAR_CELL_M / 2 (nearly all) sit in a grid of NEAR_CELL_M cells by their centres, in a
+    table of occupied cells (16-bit keys, so the sort is a radix sort, and a lookup is a gather); an active one
+    looks in the 3 × 3 cells around its own. The rest sit in a FAR_CELL_M grid in every cell of their swept box
+    widened by NEAR_CELL_M / 2; every drop looks there by its centre's cell, a far-reaching one by its box.
+
+    ``pairs(s, t, reach, active, end_s, end_t, radius)`` (1-D columns, m) returns (i, j, deferred): candidate
+    pairs i ≠ j, at least one of them active, that include every such pair with |p_i − p_j| ≤ reach_i + reach_j,
+    as ``grid_pairs`` does — unless the work budget ran out: then the drops with the largest swept boxes are
+    looked up around their ``end`` point with their ``radius`` instead, and ``deferred`` (bool, n, or None when
+    nothing was deferred) marks the drops whose lookups were left for the next sub-step.
+    """
+
+    def __init__(self):
+        self._n0, self._n1 = _grid_shape(NEAR_CELL_M)
+        self._p1 = self._n1 + 2  # a border of empty cells: a neighbour never wraps to another row
+        size = (self._n0 + 2) * self._p1
+        assert size < 2**15  # keys fit 16 bits
+        self._head = np.zeros(size, np.int64)
+        self._count = np.zeros(size, np.int64)
+        p1 = self._p1
+        self._around = np.array([di * p1 + dj for di in (-1, 0, 1) for dj in (-1, 0, 1)], np.int16)
+        self._f0, self._f1 = _grid_shape(FAR_CELL_M)
+
+    def pairs(self, s, t, reach, active, end_s, end_t, radius):
+        n = len(s)
+        deferred = None
+        budget = MERGE_PAIRS_MAX
+        near = reach <= 0.5 * NEAR_CELL_M
+        out_i, out_j = [], []
+        near_ids = np.flatnonzero(near)
+        all_near = len(near_ids) == n
+        if len(near_ids):
+            ns, nt = (s, t) if all_near else (s[near_ids], t[near_ids])
+            inv = 1.0 / NEAR_CELL_M
+            k0 = np.minimum(np.maximum(((ns - _GRID_ORIGIN[0]) * inv).astype(np.int16), 0), self._n0 - 1)
+            k1 = np.minimum(np.maximum(((nt - _GRID_ORIGIN[1]) * inv).astype(np.int16), 0), self._n1 - 1)
+            keys = k0 * np.int16(self._p1) + (k1 + np.int16(self._p1 + 1))
+            order = np.argsort(keys, kind="stable")  # 16-bit keys: a radix sort
+            sorted_keys = keys[order]
+            members = order if all_near else near_ids[order]
+            # Runs of equal keys: where each starts and ends in the sorted order.
+            brk = np.flatnonzero(sorted_keys[1:] != sorted_keys[:-1]) + 1
+            starts = np.empty(len(brk) + 1, np.int64)
+            starts[0] = 0
+            starts[1:] = brk
+            ends = np.empty_like(starts)
+            ends[:-1] = brk
+            ends[-1] = len(sorted_keys)
+            run_cells = sorted_keys[starts]
+            self._head[run_cells] = starts
+            self._count[run_cells] = ends - starts
+            q = np.flatnonzero(active & near) if not all_near else np.flatnonzero(active)
+            qk = keys[q] if all_near else keys[np.searchsorted(near_ids, q)]
+            looked = (qk[:, None] + self._around).ravel()
+            c = self._count[looked]
+            hit = np.flatnonzero(c)
+            self._count[run_cells] = 0
+            if len(hit):
+                c = c[hit]
+                qid = q[hit // 9]
+                if int(c.sum()) > budget:
+                    over = np.cumsum(c) > budget
+                    deferred = np.zeros(n, bool)
+                    deferred[qid[over]] = True
+                    keep = ~over
+                    hit, c, qid = hit[keep], c[keep], qid[keep]
+                i, j = _expand(qid, c, self._head[looked[hit]], members)
+                budget -= len(i)
+                out_i.append(i)
+                out_j.append(j)
+
+        if not all_near:
+            far_ids = np.flatnonzero(~near)
+            fs, ft, fr = s[far_ids], t[far_ids], reach[far_ids]
+            c0, c1 = self._f0, self._f1
+            widen = 0.5 * NEAR_CELL_M
+
+            def box(ps, pt, half):
+                """Inclusive cell ranges (lo0, lo1, hi0, hi1) of the boxes (ps, pt) ± half, clipped to the grid."""
+                cs, ct, hc = (ps - _GRID_ORIGIN[0]) / FAR_CELL_M, (pt - _GRID_ORIGIN[1]) / FAR_CELL_M, half / FAR_CELL_M
+                b = np.floor(np.stack([cs - hc, ct - hc, cs + hc, ct + hc]))
+                b = np.minimum(np.maximum(b, 0.0), top).astype(np.int64)
+                return b[0], b[1], b[2], b[3]
+
+            top = np.array([[c0 - 1], [c1 - 1], [c0 - 1], [c1 - 1]], float)
+            lo0, lo1, hi0, hi1 = box(fs, ft, fr + widen)
+            cover = (hi0 - lo0 + 1) * (hi1 - lo1 + 1)
+            if 2 * int(cover.sum()) > MERGE_CELLS_MAX:
+                # Over budget: the drops with the largest boxes are looked up where they end, with their size.
+                order = np.argsort(-cover, kind="stable")
+                left = 2 * (int(cover.sum()) - np.cumsum(cover[order])) + 18 * np.arange(1, len(order) + 1)
+                fits = left <= MERGE_CELLS_MAX
+                shrink = order[: int(np.argmax(fits)) + 1 if fits.any() else len(order)]
+                fs, ft, fr = fs.copy(), ft.copy(), fr.copy()
+                fs[shrink] = end_s[far_ids[shrink]]
+                ft[shrink] = end_t[far_ids[shrink]]
+                fr[shrink] = radius[far_ids[shrink]]
+                lo0, lo1, hi0, hi1 = box(fs, ft, fr + widen)
+            reg_keys, reg_ids = _box_cells(lo0, lo1, hi0, hi1, far_ids, c1)
+            order = np.argsort(reg_keys, kind="stable")
+            reg_keys, reg_ids = reg_keys[order], reg_ids[order]
+            per_cell = np.bincount(reg_keys, minlength=c0 * c1)
+            head = np.cumsum(per_cell) - per_cell
+            # Queries: every near drop by its centre's cell; a far-reaching one by the cells it sits in (its
+            # widened box, a superset of its own box).
+            q_keys, q_ids = reg_keys, reg_ids
+            if len(near_ids):
+                ns, nt = s[near_ids], t[near_ids]
+                kc = (((ns - _GRID_ORIGIN[0]) * (1.0 / FAR_CELL_M)).astype(np.int64) * c1
+                      + ((nt - _GRID_ORIGIN[1]) * (1.0 / FAR_CELL_M)).astype(np.int64))
+                q_keys = np.concatenate([kc, q_keys])
+                q_ids = np.concatenate([near_ids, q_ids])
+            c = per_cell[q_keys]
+            hit = np.flatnonzero(c)
+            if len(hit):
+                c, qid = c[hit], q_ids[hit]
+                if int(c.sum()) > max(budget, 0):
+                    over = np.cumsum(c) > max(budget, 0)
+                    if deferred is None:
+                        deferred = np.zeros(n, bool)
+                    deferred[qid[over]] = True
+                    keep = ~over
+                    hit, c, qid = hit[keep], c[keep], qid[keep]
+                i, j = _expand(qid, c, head[q_keys[hit]], reg_ids)
+                # A far pair is found from both sides: keep one. A pair neither of which is active is not new.
+                keep = (i != j) & ((i < j) | near[i]) & (active[i] | active[j])
+                out_i.append(i[keep])
+                out_j.append(j[keep])
+        if not out_i:
+            return _EMPTY_I, _EMPTY_I, deferred
+        i = np.concatenate(out_i) if len(out_i) > 1 else out_i[0]
+        j = np.concatenate(out_j) if len(out_j) > 1 else out_j[0]
+        keep = i != j
+        return i[keep], j[keep], deferred

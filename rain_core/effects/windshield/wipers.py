@@ -155,6 +155,24 @@ class WiperController:
         if mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
         dt_s = checks.number("dt_s", dt_s, 0.0, unit="s")
+        interval_s = checks.number("interval_s", interval_s, 0.0, unit="s", lo_open=True)
+        low_cpm = checks.number("low_cpm", low_cpm, 0.0, unit="cycles/min", lo_open=True)
+        high_cpm = checks.number("high_cpm", high_cpm, 0.0, unit="cycles/min", lo_open=True)
+        sensitivity = checks.number("sensitivity", sensitivity, 0.0, lo_open=True)
+        sensor_kg_m2 = checks.number("sensor_kg_m2", sensor_kg_m2, 0.0, unit="kg/m²")
+        return self._advance(dt_s, mode, interval_s, low_cpm, high_cpm, sensor_kg_m2, sensitivity)
+
+    def _advance(
+        self,
+        dt_s: float,
+        mode: str,
+        interval_s: float,
+        low_cpm: float,
+        high_cpm: float,
+        sensor_kg_m2: float,
+        sensitivity: float,
+    ) -> list[StrokeSegment]:
+        """``advance`` without its checks, for callers that checked their inputs at their own boundary."""
         segments: list[StrokeSegment] = []
         remaining = float(dt_s)
         t = self.time_s

@@ -53,9 +53,14 @@ class Wiping:
         return np.minimum(np.maximum((x * BEAD_BINS).astype(np.int64), 0), BEAD_BINS - 1)
 
     def _sweep_blade(self, b: int, blade: Blade, ta: float, tb: float, wear: float) -> None:
+        self._sweep_drops(b, blade, ta, tb)
+        self._sweep_film(b, blade, min(ta, tb), max(ta, tb), wear)
+
+    def _sweep_drops(self, b: int, blade: Blade, ta: float, tb: float) -> None:
+        """Drops: everything the rubber passed over (its width and the drop's radius as a margin ahead) joins
+        the bead."""
         lo, hi = min(ta, tb), max(ta, tb)
         bead = self.beads[b]
-        # Drops: everything the rubber passed over (its width and the drop's radius as a margin ahead).
         if self.count:
             rel = self.pos - np.asarray(blade.pivot)
             r = np.hypot(rel[:, 0], rel[:, 1])
@@ -71,11 +76,20 @@ class Wiping:
             if swept.any():
                 np.add.at(bead, self._bin_of(blade, r[swept]), self.mass[swept])
                 self._keep(~swept)
-        # Film: cells whose centres the blade passed over.
+
+    def _swept_cells(self, b: int, blade: Blade, lo: float, hi: float) -> np.ndarray:
+        """Film cells (flat indices, ascending) whose centres lie in the blade's sector between lo and hi (rad)."""
         r_c, phi_c = self._cell_polar[b]
-        cells = np.flatnonzero((r_c >= blade.r_inner_m) & (r_c <= blade.r_outer_m) & (phi_c >= lo) & (phi_c <= hi))
+        return np.flatnonzero((r_c >= blade.r_inner_m) & (r_c <= blade.r_outer_m) & (phi_c >= lo) & (phi_c <= hi))
+
+    def _sweep_film(self, b: int, blade: Blade, lo: float, hi: float, wear: float) -> None:
+        """Film: the cells whose centres the blade passed over go into the bead, which leaves a residue and
+        leaks what it cannot hold."""
+        cells = self._swept_cells(b, blade, lo, hi)
         if len(cells) == 0:
             return
+        bead = self.beads[b]
+        r_c = self._cell_polar[b][0]
         flat = self.film.ravel()
         bins = self._bin_of(blade, r_c[cells])
         np.add.at(bead, bins, flat[cells])

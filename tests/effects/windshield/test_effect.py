@@ -147,3 +147,24 @@ def test_release_frees_every_gl_object_it_made(gl_ctx):
     finally:
         gl_ctx.objects.clear()
         gl_ctx.gc_mode = old_mode
+
+
+def test_splats_are_one_instanced_draw_per_water_target_with_only_what_the_frame_draws(gl_ctx, shaders):
+    from rain_core.effects.windshield.splats import drop_splats, film_splats
+
+    s = Settings()
+    s.rain.rate_mm_h = 8.0
+    s.wipers.mode = "high"
+    s.quality.windshield_resolution = 128
+    effect = WindshieldEffect(gl_ctx, s, seed=6, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+    for _ in range(6):
+        scene.step(1 / 30, _Brake)
+        scene.render()
+    texel = effect._texel_m()
+    sets = [len(film_splats(effect.sim, texel)), len(drop_splats(effect.sim, texel))]
+    rows = sum(sets)
+    assert rows > 0 and effect.splat_draws == sum(k > 0 for k in sets)  # film deposits, drops: ≤ one draw each
+    assert effect.upload_bytes == 32 * rows + 4 * FILM_CELLS * FILM_CELLS  # 8 float32 a splat, the coarse film
+    assert effect.status()["upload_kb"] == effect.upload_bytes / 1024
+    scene.release()
