@@ -11,13 +11,23 @@ budget except for its graininess. Fine spray becomes mist that the vehicle's wak
 Modules
 -------
 ``water`` (the water budget and Horne's hydroplaning risk), ``optics`` (phase function, extinction, the
-constants the shaders share), ``flight`` (the closed-form flight, landing times and the RK4 quadratic-drag
-reference), ``body`` (vehicle bodies with open wheel wells), ``wheels`` (the water model at each vehicle's wheels
-and their geometry), ``launch`` (how each bucket of water leaves the wheel; the wake's mist), ``parcels`` (the
-GPU record layout, the ring buffers, the shader's NumPy twin), ``emitter`` (``SprayEmitter``: the wheels'
-water into parcels, landings in standing water, the line-of-sight optical depth) — all NumPy only, no GL — and
-``probe`` (the GLSL twin evaluated by transform feedback) and ``effect`` (``SprayEffect``), the GL side,
-imported on first use.
+constants the shaders share), ``flight`` (the closed-form flight, landing times by Newton's method and their
+bisection reference, the RK4 quadratic-drag reference), ``body`` (vehicle bodies with open wheel wells; the
+body test and its reference), ``wheels`` (the water model at every wheel of every vehicle in one pass, the
+per-vehicle reference, and the launch geometry; the check of the vehicles' state), ``launch`` (how each bucket
+of water leaves the wheel; the wake's mist), ``parcels`` (the GPU record layout, the ring buffers, the shader's
+NumPy twin), ``emitter`` (``SprayEmitter``: the wheels' water into parcels, landings in standing water, the
+line-of-sight optical depth) — all NumPy only, no GL — and ``probe`` (the GLSL twin evaluated by transform
+feedback) and ``effect`` (``SprayEffect``), the GL side, imported on first use.
+
+Fast path and reference (``python -m rain_core.bench spray``, tests/effects/spray/test_fast_path.py): per frame
+the emitter spawns all wheels of all vehicles in one vectorised pass (counts per wheel and bucket from the
+flux, then ``np.repeat`` into one row per parcel; one film lookup for every wheel and the last frame's
+landings), writes only the new parcels into the rings (one slot range, two where it wraps: all the GPU upload
+is), and spends no work on dead slots. ``SprayEmitter(reference=True)`` runs the float64 reference of each
+step (per vehicle water model, masked launches, bisection landing times, the sampled body test): with the same
+body test the two write the same parcels. The frame is checked where it enters (time, wind, vehicles' state:
+ValueError naming the field), and one step spawns at most about a ring's worth whatever the input.
 
 Shared data: ``SprayEffect.update`` publishes ``rc.shared.droplet_impacts`` ((N, 3) float64: x m, z m world,
 downward momentum kg·m/s of the parcels that landed in standing water this frame), read by the ripples. The
@@ -30,9 +40,12 @@ from __future__ import annotations
 from rain_core.effects.spray.body import (
     BodyBox,
     body_hit_time,
+    body_hit_time_fast,
 )
 from rain_core.effects.spray.emitter import (
+    MAX_BUDGET,
     MAX_INTERVAL_S,
+    MAX_STRENGTH,
     MIN_MIST_CAPACITY,
     MIST_BUDGET_SHARE,
     SpawnStats,
@@ -47,6 +60,7 @@ from rain_core.effects.spray.flight import (
     ground_time,
     quadratic_drag_reference,
     time_to_height,
+    time_to_height_newton,
 )
 from rain_core.effects.spray.launch import (
     MIST_DIFFUSIVITY,
@@ -108,13 +122,20 @@ from rain_core.effects.spray.water import (
     TYRE_PRESSURE_KPA,
     WaterBudget,
     allocate_water,
+    allocate_water_unchecked,
     hydroplaning_risk,
+    hydroplaning_risk_unchecked,
     hydroplaning_speed_m_s,
     release_fraction,
     spray_share_of_tread,
 )
 from rain_core.effects.spray.wheels import (
+    MAX_FILM_DEPTH_MM,
+    MAX_VEHICLE_SPEED_M_S,
+    WheelGeometry,
     WheelWater,
+    check_vehicles,
+    gather_wheels,
     road_film_depth_fn,
     wheel_water,
 )
@@ -122,18 +143,20 @@ from rain_core.effects.spray.wheels import (
 __all__ = [
     "BUCKETS", "BodyBox", "CAPILLARY_MM", "DEPTH_BANDS_MM", "DRAG_TAIL_FIT", "EXTINCTION_EFFICIENCY", "FATE_AIR",
     "FATE_BODY", "FATE_ROAD", "GLINT_CHANCE", "G_DIFFRACTION", "G_REFRACTION", "HORNE_KMH_PER_SQRT_KPA",
-    "HYDRO_DEPTH_MM", "HYDRO_LIFT_ONSET", "KIND_DROPLET", "KIND_FADE", "KIND_MIST", "KMH", "MAX_INTERVAL_S",
-    "MECHANISMS", "MIN_MIST_CAPACITY", "MIST_BUDGET_SHARE", "MIST_DIFFUSIVITY", "MIST_D_MM", "MIST_LIFE_S",
-    "MIST_SHARE", "MIST_SIGMA0_M", "MIST_SIGMA_MAX", "PARTICLE_ATTRIBUTES", "PARTICLE_DTYPE", "PARTICLE_FORMAT",
+    "HYDRO_DEPTH_MM", "HYDRO_LIFT_ONSET", "KIND_DROPLET", "KIND_FADE", "KIND_MIST", "KMH", "MAX_BUDGET",
+    "MAX_FILM_DEPTH_MM", "MAX_INTERVAL_S", "MAX_STRENGTH", "MAX_VEHICLE_SPEED_M_S", "MECHANISMS",
+    "MIN_MIST_CAPACITY", "MIST_BUDGET_SHARE", "MIST_DIFFUSIVITY", "MIST_D_MM", "MIST_LIFE_S", "MIST_SHARE",
+    "MIST_SIGMA0_M", "MIST_SIGMA_MAX", "PARTICLE_ATTRIBUTES", "PARTICLE_DTYPE", "PARTICLE_FORMAT",
     "REFLECTION_SHARE", "RELEASE_KMH", "SIDE_MM", "SPLASH_MIN_MM", "SPRAY_AIR_SHARE", "SPRAY_KMH", "SPRAY_MAX_MM",
     "SPRAY_UPDRAUGHT", "STANDING_WATER_MM", "SpawnStats", "SprayEffect", "SprayEmitter", "TREAD_MM",
     "TREAD_SPRAY_SHARE", "TYRE_PRESSURE_KPA", "WAKE_LIFT", "WAKE_LIFT_HEIGHT_M", "WAKE_SHARE", "WAKE_TAU_S",
-    "WATER_IOR", "WaterBudget", "WheelWater", "allocate_water", "body_hit_time", "drag_time_constant",
-    "extinction_area_m2", "flight_position", "flight_velocity", "fresnel_reflection", "glsl_probe", "ground_time",
-    "henyey_greenstein", "hydroplaning_risk", "hydroplaning_speed_m_s", "line_of_sight_optical_depth",
-    "parcel_state", "phase_function", "probe_program", "quadratic_drag_reference", "reflection_lobe",
-    "release_fraction", "road_film_depth_fn", "shader_defines", "spray_share_of_tread", "time_to_height",
-    "wheel_water",
+    "WATER_IOR", "WaterBudget", "WheelGeometry", "WheelWater", "allocate_water", "allocate_water_unchecked",
+    "body_hit_time", "body_hit_time_fast", "check_vehicles", "drag_time_constant", "extinction_area_m2",
+    "flight_position", "flight_velocity", "fresnel_reflection", "gather_wheels", "glsl_probe", "ground_time",
+    "henyey_greenstein", "hydroplaning_risk", "hydroplaning_risk_unchecked", "hydroplaning_speed_m_s",
+    "line_of_sight_optical_depth", "parcel_state", "phase_function", "probe_program", "quadratic_drag_reference",
+    "reflection_lobe", "release_fraction", "road_film_depth_fn", "shader_defines", "spray_share_of_tread",
+    "time_to_height", "time_to_height_newton", "wheel_water",
 ]
 
 

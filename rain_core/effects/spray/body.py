@@ -99,3 +99,92 @@ def body_hit_time(p0, v0, u, tau, t_max, body_origin, body_velocity, right, forw
     result[rows] = lo
     return result
 
+
+
+def _inside(x, y, z, box):
+    """``BodyBox.contains`` for local coordinates (n, k) and per-row box fields ``box`` (8 arrays of (n, 1))."""
+    hw, hl, floor, height, hwb, well_hl, well_top, well_x = box
+    ax, az = np.abs(x), np.abs(z)
+    in_box = (ax < hw) & (y > floor) & (y < height) & (az < hl)
+    in_well = (np.abs(az - hwb) < well_hl) & (y < well_top) & (ax > well_x)
+    return in_box & ~in_well
+
+
+def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right, forward, box_params,
+                       samples: int = 12, zoom: int = 16, rounds: int = 2) -> np.ndarray:
+    """First age (s, ≤ t_max) at which each drop is inside its thrower's body, else t_max: what
+    :func:`body_hit_time` (the reference) finds, in fewer and narrower NumPy passes.
+
+    The flight is written once in the body's moving frame, local(t) = P + U·t + D·τ(1 − e^(−t/τ)) (P the start,
+    U the drift relative to the body, D the launch excess, projected on its axes); since 0 ≤ τ(1 − e^(−t/τ)) ≤ τ,
+    each coordinate has linear bounds, which give the time after which the drop is for good beyond the body's
+    length, width or below its floor. Only that window is searched: ``samples`` equal steps find the first
+    entry, then ``rounds`` passes of ``zoom`` ages narrow it (16² = 256×); the returned age is the last one found
+    outside. All vehicles' boxes are tested together (``box_params`` (n, 8): the BodyBox fields per drop), in
+    float32 (positions to a few µm). Drops that never come near the body skip the search."""
+    n = len(tau)
+    result = np.asarray(t_max, dtype=np.float64).copy()
+    if n == 0:
+        return result
+    # Local coordinates (right, up, back) of the start, the relative drift and the excess: (3, n) each. The
+    # bodies turn about +Y only, so right and forward lie in the x–z plane.
+    vecs = np.stack([p0 - body_origin, u - body_velocity, v0 - u])  # (3 vectors, n, 3)
+    rx, rz, fx, fz = right[:, 0], right[:, 2], forward[:, 0], forward[:, 2]
+    local = np.stack([vecs[..., 0] * rx + vecs[..., 2] * rz, vecs[..., 1],
+                      -(vecs[..., 0] * fx + vecs[..., 2] * fz)], axis=1)  # (3 vectors, 3 axes, n)
+    P, U, D = local
+    box = box_params.T  # (8, n)
+    half = np.stack([box[0], box[3], box[1]])  # |x| < half width, y < height, |z| < half length
+    tau_ = np.asarray(tau, dtype=np.float64)
+    # Beyond the body for good: |x| > half width (x), y < floor (y, settling), |z| > half length (z), from
+    # t_out on, where the coordinate's linear bound crosses the face it moves away from.
+    lo_b = P + np.minimum(D, 0.0) * tau_  # coordinate ≥ lo_b + U·t when U ≥ 0
+    hi_b = P + np.maximum(D, 0.0) * tau_  # ≤ hi_b + U·t when U ≤ 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out_pos = np.where(U > 0.0, (half - lo_b) / U, np.inf)  # beyond +face
+        out_neg = np.where(U < 0.0, (-half - hi_b) / U, np.inf)  # beyond −face
+        out_floor = np.where(U[1] < 0.0, (box[2] - hi_b[1]) / U[1], np.inf)  # under the floor
+    t_out = np.minimum.reduce([out_pos[0], out_neg[0], out_pos[2], out_neg[2], out_pos[1], out_floor])
+    t_end = np.minimum(np.maximum(t_out, 0.0), t_max)
+    # Never near: the whole flight's bounds miss the box.
+    span_lo = lo_b + np.minimum(U, 0.0) * t_end
+    span_hi = hi_b + np.maximum(U, 0.0) * t_end
+    near = ((span_lo[0] < box[0]) & (span_hi[0] > -box[0]) & (span_lo[2] < box[1]) & (span_hi[2] > -box[1])
+            & (span_lo[1] < box[3]) & (span_hi[1] > box[2]) & (t_end > 0.0))
+    rows = np.nonzero(near)[0]
+    if len(rows) == 0:
+        return result
+    f32 = np.float32
+    P, U, D = (a[:, rows, None].astype(f32) for a in (P, U, D))
+    tau_r = tau_[rows, None].astype(f32)
+    rate = -1.0 / tau_r
+    bx = box[:, rows, None].astype(f32)
+
+    def inside(t):  # (k, m) ages → (k, m) inside the body
+        rel = tau_r * -np.expm1(t * rate)
+        return _inside(P[0] + U[0] * t + D[0] * rel, P[1] + U[1] * t + D[1] * rel, P[2] + U[2] * t + D[2] * rel,
+                       bx)
+
+    steps = (np.arange(1, samples + 1, dtype=f32) / f32(samples))[None, :]
+    end = t_end[rows, None].astype(f32)
+    ts = end * steps
+    hit = inside(ts)
+    any_hit = hit.any(axis=1)
+    if not any_hit.any():
+        return result
+    keep = np.nonzero(any_hit)[0]
+    first = np.argmax(hit[keep], axis=1)
+    hi = ts[keep, first]
+    lo = np.where(first > 0, ts[keep, np.maximum(first - 1, 0)], f32(0.0))
+    P, U, D, bx = (a[:, keep] for a in (P, U, D, bx))
+    tau_r, rate = tau_r[keep], rate[keep]
+    zsteps = (np.arange(1, zoom + 1, dtype=f32) / f32(zoom))[None, :]
+    idx = np.arange(len(keep))
+    for _ in range(rounds):
+        ts = lo[:, None] + (hi - lo)[:, None] * zsteps
+        ts[:, -1] = hi  # exactly the previous ``hi``, known inside
+        first = np.argmax(inside(ts), axis=1)
+        hi = ts[idx, first]
+        lo = np.where(first > 0, ts[idx, np.maximum(first - 1, 0)], lo)
+    result[rows[keep]] = lo
+    return result

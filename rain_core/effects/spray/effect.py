@@ -118,8 +118,9 @@ class SprayEffect(Effect):
                 self._capacity[ring] = cap
                 continue
             buf = self._buffers[ring]
+            # Only the slots written since the last frame (one range, two where the ring wrapped): the new parcels.
             for start, count in dirty[ring]:
-                buf.write(data[start:start + count].tobytes(), offset=start * PARTICLE_DTYPE.itemsize)
+                buf.write(memoryview(data[start:start + count]).cast("B"), offset=start * PARTICLE_DTYPE.itemsize)
 
     def _prog(self, rc) -> moderngl.Program:
         if self._program is None:

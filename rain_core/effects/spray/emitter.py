@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rain_core import layout, physics
-from rain_core.effects.spray.body import body_hit_time
+from rain_core import checks, layout, physics
+from rain_core.effects.spray.body import body_hit_time, body_hit_time_fast
 from rain_core.effects.spray.flight import drag_time_constant, flight_position, flight_velocity, ground_time
 from rain_core.effects.spray.launch import (
     MIST_LIFE_S,
@@ -17,6 +17,7 @@ from rain_core.effects.spray.launch import (
     WAKE_TAU_S,
     WheelGeometry,
     launch_droplets,
+    launch_droplets_reference,
     launch_mist,
 )
 from rain_core.effects.spray.optics import extinction_area_m2
@@ -27,17 +28,28 @@ from rain_core.effects.spray.parcels import (
     KIND_DROPLET,
     KIND_FADE,
     KIND_MIST,
-    PARTICLE_DTYPE,
     ParcelRing,
     parcel_state,
 )
-from rain_core.effects.spray.water import BUCKETS, SPLASH_MIN_MM, STANDING_WATER_MM
-from rain_core.effects.spray.wheels import WheelWater, road_film_depth_fn, wheel_water
+from rain_core.effects.spray.water import BUCKETS, MIST_D_MM, SPLASH_MIN_MM, STANDING_WATER_MM
+from rain_core.effects.spray.wheels import (
+    MAX_FILM_DEPTH_MM,
+    MAX_VEHICLE_SPEED_M_S,
+    WheelWater,
+    check_vehicles,
+    gather_wheels,
+    road_film_depth_fn,
+    wheel_water,
+)
 from rain_core.water_film import WET_FILM_MM
 
 MAX_INTERVAL_S = 0.25  # s; a longer gap between frames emits only this much (no backlog bursts)
 MIST_BUDGET_SHARE = 32  # mist ring = budget // this (at least MIN_MIST_CAPACITY): puffs are big and overlap
 MIN_MIST_CAPACITY = 64
+MAX_BUDGET = 200_000  # droplet parcels (settings.spray.budget's range): the rings' size, so the work per step
+MAX_STRENGTH = 100.0  # × the physical flux (settings allow 4)
+_MIST_VT_M_S = physics.terminal_velocity(MIST_D_MM)  # m/s, every mist puff's drops are MIST_D_MM
+REBASE_S = 1000.0  # s of effect clock: then the clock restarts at 0 so float32 births keep 0.1 ms resolution
 
 
 @dataclass
@@ -52,6 +64,32 @@ class SpawnStats:
     fates: np.ndarray = field(default_factory=lambda: np.zeros(3))  # kg by fate: road, body, air
     last_parcels: int = 0
     last_mist: int = 0
+    # Per vehicle (id(vehicle) → (4,) kg, wheels FL, FR, RL, RR): ∫ thrown dt and Σ parcel masses spawned.
+    wheel_thrown_kg: dict = field(default_factory=dict)
+    wheel_emitted_kg: dict = field(default_factory=dict)
+
+
+def _frame_wind(frame) -> np.ndarray:
+    """The frame's wind (m/s, (3,)), checked: ValueError naming it if not finite or beyond
+    ±MAX_VEHICLE_SPEED_M_S per component."""
+    wind = getattr(getattr(getattr(frame, "weather", None), "wind", None), "velocity_m_s", None)
+    if wind is None:
+        return np.zeros(3)
+    w = np.asarray(wind, dtype=np.float64).reshape(-1)
+    if w.shape != (3,) or not (np.isfinite(w).all() and np.abs(w).max() <= MAX_VEHICLE_SPEED_M_S):
+        raise ValueError(f"spray: frame.weather.wind.velocity_m_s must be 3 finite components within "
+                         f"±{MAX_VEHICLE_SPEED_M_S:g} m/s, got {checks.quote(wind)}")
+    return w
+
+
+def _quantile_90(x: np.ndarray) -> float:
+    """np.quantile(x, 0.9) (linear interpolation) from a partial sort."""
+    n = len(x)
+    pos = 0.9 * (n - 1)
+    lo = int(pos)
+    hi = min(lo + 1, n - 1)
+    part = np.partition(x, (lo, hi))
+    return float(part[lo] + (pos - lo) * (part[hi] - part[lo]))
 
 
 class SprayEmitter:
@@ -63,27 +101,43 @@ class SprayEmitter:
     (tests use analytic fields); then the weather's wetness film is still added on the asphalt.
     """
 
-    def __init__(self, seed: int = 0, budget: int = 12_000, film_depth_fn=None):
+    def __init__(self, seed: int = 0, budget: int = 12_000, film_depth_fn=None, reference: bool = False):
         self.rng = np.random.default_rng(seed)
         self.film_depth_fn = film_depth_fn
+        self.reference = bool(reference)  # the float64 reference path (per vehicle, bisection, per box)
         self.strength = 1.0
         self.epoch: float | None = None
         self._last_time: float | None = None
         self._acc: dict[int, np.ndarray] = {}  # id(vehicle) → (4, 6) kg not yet emitted
         self._life_q90 = [1.0, MIST_LIFE_S[1]]  # s, running 90th percentile of parcel lives per ring
-        self._pending = np.zeros((0, 4))  # landings still in flight: (time, x, z, momentum)
+        self._pending = np.zeros((0, 4))  # landings in standing water still in flight: (time, x, z, momentum)
+        # Fast path: the last frame's road landings (same columns) whose water depth the next frame's one film
+        # lookup (with the wheels', in observe) decides.
+        self._candidates = np.zeros((0, 4))
         self._landed = np.zeros((0, 3))
         self.wheels: list[WheelWater] = []
+        self.geometry: WheelGeometry | None = None
         self._wheels_time: float | None = None
         self.stats = SpawnStats()
         self._depth_key: tuple | None = None
         self._depth_fn = None
         self.set_budget(budget)
 
+    @property
+    def strength(self) -> float:
+        """Thrown water relative to the physical flux (×, in [0, MAX_STRENGTH])."""
+        return self._strength
+
+    @strength.setter
+    def strength(self, value) -> None:
+        self._strength = checks.number("spray strength", value, 0.0, MAX_STRENGTH, "×")
+
     # --- configuration ------------------------------------------------------------------------------------
     def set_budget(self, budget: int) -> None:
-        """Resize the rings (clears them) when the budget (droplet parcels) changes."""
-        budget = int(budget)
+        """Resize the rings (clears them) when the budget (droplet parcels, 0…MAX_BUDGET) changes."""
+        if getattr(self, "budget", None) == budget:
+            return
+        budget = int(checks.number("spray budget", budget, 0, MAX_BUDGET, "parcels"))
         if getattr(self, "budget", None) == budget:
             return
         self.budget = budget
@@ -96,6 +150,7 @@ class SprayEmitter:
         budget, self.budget = self.budget, -1
         self.set_budget(budget)
         self._pending = np.zeros((0, 4))
+        self._candidates = np.zeros((0, 4))
         self._last_time = None
 
     def pause(self) -> None:
@@ -116,15 +171,29 @@ class SprayEmitter:
         def depth(x, z):
             x, z = np.broadcast_arrays(np.asarray(x, np.float64), np.asarray(z, np.float64))
             film = np.where(np.abs(x) <= layout.ROAD_HALF_WIDTH_M, WET_FILM_MM * wetness, 0.0)
-            return np.maximum(np.asarray(fn(x, z), dtype=np.float64), film)
+            # A user's override may return anything: NaN counts as dry, depths are capped.
+            own = np.nan_to_num(np.asarray(fn(x, z), dtype=np.float64), nan=0.0, posinf=MAX_FILM_DEPTH_MM)
+            return np.clip(np.maximum(own, film), 0.0, MAX_FILM_DEPTH_MM)
 
         return depth
 
     def observe(self, frame) -> list[WheelWater]:
-        """Evaluate the water model at every vehicle's wheels (cached per frame time)."""
+        """Evaluate the water model at every vehicle's wheels (cached per frame time). The vehicles' state is
+        checked here, the frame's boundary: ValueError naming the vehicle and field if it is not finite."""
         if self._wheels_time != frame.time_s or len(self.wheels) != len(frame.vehicles):
             fn = self.depth_function(frame)
-            self.wheels = [wheel_water(v, fn) for v in frame.vehicles]
+            vehicles = list(frame.vehicles)
+            state = check_vehicles(vehicles)
+            if self.reference:
+                self.wheels = [wheel_water(v, fn) for v in vehicles]
+                self.geometry = WheelGeometry(self.wheels) if vehicles else None
+            else:
+                # One film lookup for the wheels and the last frame's road landings (see _spawn_parcels).
+                cand, self._candidates = self._candidates, np.zeros((0, 4))
+                self.wheels, self.geometry = gather_wheels(vehicles, fn, state, extra_xz=cand[:, 1:3])
+                wet = self.geometry.extra_depth_mm >= STANDING_WATER_MM
+                if wet.any():
+                    self._pending = np.concatenate([self._pending, cand[wet]])
             self._wheels_time = frame.time_s
         return self.wheels
 
@@ -155,23 +224,53 @@ class SprayEmitter:
         return np.array(self._landed, dtype=np.float64).reshape(-1, 3)
 
     def emit(self, frame) -> None:
-        """Spawn the parcels thrown since the last call (at most MAX_INTERVAL_S of them) into the rings."""
-        t = float(frame.time_s)
+        """Spawn the parcels thrown since the last call (at most MAX_INTERVAL_S of them) into the rings.
+
+        The frame is checked here (ValueError naming the field): its time and wind must be finite (|wind| ≤
+        MAX_VEHICLE_SPEED_M_S per component), its vehicles' state too (:meth:`observe`)."""
+        t = checks.number("frame.time_s", frame.time_s, unit="s")
+        wind = _frame_wind(frame)
         if self.epoch is None:
             self.epoch = t
         if self._last_time is None or t < self._last_time:
             self._last_time = t
         elapsed = min(t - self._last_time, MAX_INTERVAL_S)
         self._last_time = t
+        if self.clock(t) > REBASE_S:
+            self._rebase(t)
         now = self.clock(t)
         self._landed = np.zeros((0, 3))
         wheels = self.observe(frame)
         live_ids = {id(w.vehicle) for w in wheels}
-        self._acc = {k: a for k, a in self._acc.items() if k in live_ids}
+        if len(self._acc) != len(live_ids) or not live_ids.issuperset(self._acc):
+            self._acc = {k: a for k, a in self._acc.items() if k in live_ids}
+            st = self.stats  # vehicles gone: their wheels' totals go too (ids are reused)
+            st.wheel_thrown_kg = {k: a for k, a in st.wheel_thrown_kg.items() if k in live_ids}
+            st.wheel_emitted_kg = {k: a for k, a in st.wheel_emitted_kg.items() if k in live_ids}
         self.stats.last_parcels = self.stats.last_mist = 0
         if elapsed > 0.0 and self.budget > 0 and wheels:
-            self._spawn(frame, wheels, elapsed, now)
+            self._spawn(frame, wheels, elapsed, now, wind)
         self._pop_landings(now)
+
+    def _rebase(self, t: float) -> None:
+        """Restart the effect clock at 0 (shift every birth and death back by the clock's value), so the float32
+        births stay precise however long the app runs or however far time jumps. Parcels already dead are
+        emptied; the rings are uploaded whole once."""
+        shift = self.clock(t)
+        self.epoch = t
+        for ring in self.rings:
+            if ring.capacity == 0:
+                continue
+            dead = ring.death <= shift
+            ring.birth -= shift
+            ring.death -= shift
+            ring.birth[dead], ring.death[dead] = np.inf, -np.inf
+            ring.data["birth"] = np.where(dead, 0.0, ring.birth)
+            ring.data["life"][dead] = -1.0  # never drawn
+            ring.reset_last_death()
+        self._pending[:, 0] -= shift
+        self._candidates[:, 0] -= shift
+        self.dirty = [[(0, r.capacity)] if r.capacity else [] for r in self.rings]
 
     def _pop_landings(self, now: float) -> None:
         if len(self._pending):
@@ -180,125 +279,177 @@ class SprayEmitter:
             self._pending = self._pending[~done]
 
     # --- spawning -----------------------------------------------------------------------------------------
-    def _spawn(self, frame, wheels: list[WheelWater], elapsed: float, now: float) -> None:
+    def _spawn(self, frame, wheels: list[WheelWater], elapsed: float, now: float, wind: np.ndarray) -> None:
         rng = self.rng
-        rates = np.stack([w.budget.buckets for w in wheels]) * self.strength  # (V, 4, 6) kg/s
-        self.stats.available_kg += float(sum(w.budget.available.sum() for w in wheels)) * elapsed
+        budgets = [w.budget for w in wheels]
+        rates = np.stack([b.buckets for b in budgets]) * self.strength  # (V, 4, 6) kg/s
+        self.stats.available_kg += float(sum(b.available.sum() for b in budgets)) * elapsed
         self.stats.thrown_kg += float(rates.sum()) * elapsed
-        acc = np.stack([self._acc.get(id(w.vehicle), np.zeros((4, len(BUCKETS)))) for w in wheels])
+        zero = np.zeros((4, len(BUCKETS)))
+        acc = np.stack([self._acc.get(id(w.vehicle), zero) for w in wheels])
         acc = acc + rates * elapsed
         counts = np.zeros(acc.shape, dtype=np.int64)
         for ring, buckets in ((0, slice(0, 5)), (1, slice(5, 6))):
             mass = acc[..., buckets]
             total = float(mass.sum())
-            if total <= 0.0 or self.rings[ring].capacity == 0:
+            capacity = self.rings[ring].capacity
+            if total <= 0.0 or capacity == 0:
                 continue
-            rate = self.rings[ring].capacity / max(self._life_q90[ring], 0.05)  # parcels per second
-            expected = rate * elapsed * mass / total
+            rate = capacity / max(self._life_q90[ring], 0.05)  # parcels per second
+            # At most one ring's worth per step, whatever the interval (bounds the work; never hit at 30 Hz).
+            expected = min(rate * elapsed, float(capacity)) * (mass / total)
             whole = np.floor(expected)
             counts[..., buckets] = (whole + (rng.random(expected.shape) < expected - whole)).astype(np.int64)
         emitted = counts > 0
         parcel_mass = np.where(emitted, acc / np.maximum(counts, 1), 0.0)
+        wheel_emitted = np.where(emitted, acc, 0.0).sum(axis=-1)  # (V, 4) kg
+        wheel_thrown = rates.sum(axis=-1) * elapsed
         acc = np.where(emitted, 0.0, acc)
-        for w, a in zip(wheels, acc, strict=True):
-            self._acc[id(w.vehicle)] = a
+        st = self.stats
+        for i, (w, a) in enumerate(zip(wheels, acc, strict=True)):
+            key = id(w.vehicle)
+            self._acc[key] = a
+            st.wheel_thrown_kg[key] = st.wheel_thrown_kg.get(key, 0.0) + wheel_thrown[i]
+            st.wheel_emitted_kg[key] = st.wheel_emitted_kg.get(key, 0.0) + wheel_emitted[i]
         if not emitted.any():
             return
-        # One row per parcel: which vehicle, wheel and bucket, and its mass.
-        vi, wi, bi = np.nonzero(counts)
+        # One row per parcel: which vehicle, wheel and bucket, and its mass (repeat over the counts: no loop).
+        # Bucket-major order: the droplets (buckets 0–4) first, the mist puffs (bucket 5) after them.
+        bi, vi, wi = np.nonzero(counts.transpose(2, 0, 1))
         reps = counts[vi, wi, bi]
+        mass_per = parcel_mass[vi, wi, bi]
+        n_drop = int(reps[bi < 5].sum())
         vi, wi, bi = np.repeat(vi, reps), np.repeat(wi, reps), np.repeat(bi, reps)
-        mass = parcel_mass[vi, wi, bi]
-        self.stats.emitted_kg += float(mass.sum())
-        geo = WheelGeometry(wheels)
+        mass = np.repeat(mass_per, reps)
+        self.stats.emitted_kg += float(mass_per @ reps)
         age_now = elapsed * rng.random(len(vi))  # how long before now each parcel left the tyre
-        birth = now - age_now
-        mist = bi == 5
-        for ring, sel in ((0, ~mist), (1, mist)):
-            if sel.any():
-                self._spawn_ring(frame, ring, geo, vi[sel], wi[sel], bi[sel], mass[sel], birth[sel],
-                                 age_now[sel], now)
+        self._spawn_parcels(frame, self.geometry, n_drop, vi, wi, bi, mass, now - age_now, age_now, now, wind)
 
-    def _spawn_ring(self, frame, ring: int, geo, vi, wi, bi, mass, birth, age_now, now) -> None:
+    def _spawn_parcels(self, frame, geo, nd: int, vi, wi, bi, mass, birth, age_now, now, wind) -> None:
+        """Launch, fly and file the frame's parcels: rows [:nd] droplets (ring 0), [nd:] mist puffs (ring 1),
+        in one pass (each parcel's fate — road, kerb, body or the air — and so its lifetime, decided here)."""
         rng = self.rng
+        ref = self.reference
         n = len(vi)
+        nm = n - nd
         w = vi * 4 + wi  # flat wheel index
-        wind = np.asarray(getattr(getattr(getattr(frame, "weather", None), "wind", None), "velocity_m_s",
-                                  (0.0, 0.0, 0.0)), dtype=np.float64)
-        launch = launch_mist if ring == 1 else launch_droplets
-        p0, v0, d_mm, sigma0, growth_k, air, updraught = launch(rng, geo, w, bi, age_now)
-        sigma_max = MIST_SIGMA_MAX * geo.height[vi]
-        vt = np.asarray(physics.terminal_velocity(d_mm), dtype=np.float64)
+        launch = launch_droplets_reference if ref else launch_droplets
+        out = launch(rng, geo, w[:nd], bi[:nd], age_now[:nd]) if nd else None
+        if nm:
+            mist_out = launch_mist(rng, geo, w[nd:], bi[nd:], age_now[nd:])
+            out = mist_out if out is None else [np.concatenate(pair) for pair in zip(out, mist_out, strict=True)]
+        p0, v0, d_mm, sigma0, growth_k, air, updraught = out
+        vt = np.empty(n)
+        vt[:nd] = physics.terminal_velocity(d_mm[:nd]) if nd else 0.0
+        vt[nd:] = _MIST_VT_M_S
         u = wind + air
         u[:, 1] -= vt * (1.0 - updraught)
-        if ring == 1:
-            tau = np.full(n, WAKE_TAU_S)
-        else:
-            tau = drag_time_constant(d_mm, np.linalg.norm(v0 - u, axis=1))
-        t_ground = ground_time(p0, v0, u, tau)
+        excess = v0 - u
+        speed = np.sqrt(np.einsum("nc,nc->n", excess, excess))
+        tau = np.empty(n)
+        tau[:nd] = drag_time_constant(d_mm[:nd], speed[:nd], vt[:nd])
+        tau[nd:] = WAKE_TAU_S
+        t_ground = ground_time(p0, v0, u, tau, reference=ref)
         fate = np.full(n, FATE_ROAD)
-        if ring == 0:
-            veh_origin = geo.position[vi] - geo.velocity[vi] * age_now[:, None]
-            t_body = body_hit_time(p0, v0, u, tau, t_ground, veh_origin, geo.velocity[vi], geo.right[vi],
-                                   geo.forward[vi], geo.boxes, geo.box_index[vi])
-            fate = np.where(t_body < t_ground, FATE_BODY, FATE_ROAD)
-            life = np.minimum(t_body, t_ground)
-            growth = growth_k * np.linalg.norm(v0 - u, axis=1)
-        else:
-            cap = rng.uniform(*MIST_LIFE_S, n)
-            fate = np.where(cap < t_ground, FATE_AIR, FATE_ROAD)
-            life = np.minimum(cap, t_ground)
-            growth = growth_k
+        life = np.empty(n)
+        growth = growth_k.copy()
+        if nd:
+            d = slice(0, nd)
+            veh_origin = geo.position[vi[d]] - geo.velocity[vi[d]] * age_now[d, None]
+            args = (p0[d], v0[d], u[d], tau[d], t_ground[d], veh_origin, geo.velocity[vi[d]], geo.right[vi[d]],
+                    geo.forward[vi[d]])
+            if ref:
+                t_body = body_hit_time(*args, geo.boxes, geo.box_index[vi[d]])
+            else:
+                t_body = body_hit_time_fast(*args, geo.box_params[vi[d]])
+            fate[d] = np.where(t_body < t_ground[d], FATE_BODY, FATE_ROAD)
+            life[d] = np.minimum(t_body, t_ground[d])
+            growth[d] *= speed[d]
+        if nm:
+            cap = rng.uniform(*MIST_LIFE_S, nm)
+            fate[nd:] = np.where(cap < t_ground[nd:], FATE_AIR, FATE_ROAD)
+            life[nd:] = np.minimum(cap, t_ground[nd:])
         # Drawn up to 1 ms before the surface so float32 never shows it past the road or the body.
         life = np.maximum(life - 1e-3, 0.0)
-        q90 = float(np.quantile(life, 0.9))
-        self._life_q90[ring] = 0.9 * self._life_q90[ring] + 0.1 * max(q90, 0.05)
+        horizon = np.empty(n)
+        for ring, sl in ((0, slice(0, nd)), (1, slice(nd, n))):
+            if sl.stop > sl.start:
+                part = life[sl]
+                q90 = float(np.quantile(part, 0.9)) if ref else _quantile_90(part)
+                self._life_q90[ring] = 0.9 * self._life_q90[ring] + 0.1 * max(q90, 0.05)
+                horizon[sl] = max(self._life_q90[ring], 0.05)
         # The ring is refilled every q90 seconds (that is how the emission rate was set): a parcel living longer
         # would be overwritten in flight, so it fades out at that age instead.
-        horizon = max(self._life_q90[ring], 0.05)
-        cut = life > horizon
-        fate = np.where(cut, FATE_AIR, fate)
+        fate = np.where(life > horizon, FATE_AIR, fate)
         life = np.minimum(life, horizon)
-        for f in range(3):
-            self.stats.fates[f] += float(mass[fate == f].sum())
+        self.stats.fates += np.bincount(fate, weights=mass, minlength=3)
         # Landings in standing water, for the ripples.
-        road = fate == FATE_ROAD
-        if road.any() and ring == 0:
-            land_p = flight_position(p0[road], v0[road], u[road], tau[road], life[road])
-            depth = np.asarray(self._depth_fn_cache(frame)(land_p[:, 0], land_p[:, 2]), dtype=np.float64)
-            wet = depth >= STANDING_WATER_MM
-            if wet.any():
-                vel = flight_velocity(v0[road][wet], u[road][wet], tau[road][wet], life[road][wet])
-                momentum = mass[road][wet] * np.maximum(-vel[:, 1], 0.0)
-                rows = np.column_stack([birth[road][wet] + life[road][wet], land_p[wet][:, 0], land_p[wet][:, 2],
-                                        momentum])
-                self._pending = np.concatenate([self._pending, rows])
+        road = fate[:nd] == FATE_ROAD
+        if nd and road.any() and self._standing_water_possible(frame):
+            p0r, v0r, ur, taur, lifer = p0[:nd][road], v0[:nd][road], u[:nd][road], tau[:nd][road], life[:nd][road]
+            land_p = flight_position(p0r, v0r, ur, taur, lifer)
+            vel_y = flight_velocity(v0r, ur, taur, lifer)[:, 1]
+            rows = np.column_stack([birth[:nd][road] + lifer, land_p[:, 0], land_p[:, 2],
+                                    mass[:nd][road] * np.maximum(-vel_y, 0.0)])
+            if ref:
+                depth = np.asarray(self._depth_fn_cache(frame)(land_p[:, 0], land_p[:, 2]), dtype=np.float64)
+                self._pending = np.concatenate([self._pending, rows[depth >= STANDING_WATER_MM]])
+            else:
+                # The depth under them is looked up with the next frame's wheels (one film lookup per frame);
+                # a parcel that lands within this frame reaches the ripples one frame later.
+                self._candidates = np.concatenate([self._candidates, rows])
         area = extinction_area_m2(mass, d_mm)
-        keep = birth + life > now  # parcels that already died within this frame are not drawn
-        rec = np.zeros(int(keep.sum()), PARTICLE_DTYPE)
-        if len(rec):
-            period = np.floor(p0[keep, 2] / layout.PERIOD_M)
-            p = p0[keep].copy()
-            p[:, 2] -= period * layout.PERIOD_M
-            rec["p0"], rec["period"] = p, period
-            rec["v0"], rec["tau"] = v0[keep], tau[keep]
-            rec["u"], rec["birth"] = u[keep], birth[keep]
-            rec["life"], rec["sigma0"], rec["growth"], rec["area"] = life[keep], sigma0[keep], growth[keep], \
-                area[keep]
-            kind = np.full(len(rec), KIND_MIST if ring == 1 else KIND_DROPLET, np.float32)
-            kind += np.where(fate[keep] == FATE_AIR, KIND_FADE, 0)
-            rec["kind"], rec["d_mm"] = kind, d_mm[keep]
-            rec["rand"] = rng.random(len(rec))
-            splash = d_mm[keep] >= SPLASH_MIN_MM
-            rec["glint"] = sigma_max[keep] if ring == 1 else np.where(splash, 1.0, 0.5)
-            ranges = self.rings[ring].push(rec, birth[keep], (birth + life)[keep])
-            self.dirty[ring].extend(ranges)
-        if ring == 0:
-            self.stats.parcels += n
-            self.stats.last_parcels += n
+        death = birth + life
+        period = np.floor(p0[:, 2] / layout.PERIOD_M)
+        p0[:, 2] -= period * layout.PERIOD_M  # z within its period, so float32 keeps mm
+        kind = np.where(fate == FATE_AIR, KIND_DROPLET + KIND_FADE, KIND_DROPLET)
+        kind[nd:] += KIND_MIST - KIND_DROPLET
+        glint = np.where(d_mm >= SPLASH_MIN_MM, 1.0, 0.5)
+        glint[nd:] = MIST_SIGMA_MAX * geo.height[vi[nd:]]  # mist puffs hold σ_max (m)
+        for ring, sl in ((0, slice(0, nd)), (1, slice(nd, n))):
+            if sl.stop > sl.start:
+                self._file(ring, sl, now, p0, period, v0, tau, u, birth, life, death, sigma0, growth, area, kind,
+                           d_mm, glint)
+        self.stats.parcels += nd
+        self.stats.last_parcels += nd
+        self.stats.mist_puffs += nm
+        self.stats.last_mist += nm
+
+    def _file(self, ring, sl, now, p0, period, v0, tau, u, birth, life, death, sigma0, growth, area, kind, d_mm,
+              glint) -> None:
+        """Write ring ``ring``'s new records (rows ``sl``) into it: only those still alive at ``now`` (parcels
+        that already died within this frame are not drawn), through the ring's reusable scratch records."""
+        keep = death[sl] > now
+        k = int(np.count_nonzero(keep))
+        if k == 0:
+            return
+        if k == sl.stop - sl.start:
+            def pick(a):
+                return a[sl]
         else:
-            self.stats.mist_puffs += n
-            self.stats.last_mist += n
+            idx = np.nonzero(keep)[0] + sl.start
+
+            def pick(a):
+                return a[idx]
+        rec = self.rings[ring].scratch(k)
+        rec["p0"], rec["period"] = pick(p0), pick(period)
+        rec["v0"], rec["tau"] = pick(v0), pick(tau)
+        rec["u"], rec["birth"] = pick(u), pick(birth)
+        rec["life"], rec["sigma0"], rec["growth"], rec["area"] = pick(life), pick(sigma0), pick(growth), pick(area)
+        rec["kind"], rec["d_mm"], rec["glint"] = pick(kind), pick(d_mm), pick(glint)
+        rec["rand"] = self.rng.random(k)
+        ranges = self.rings[ring].push(rec, pick(birth), pick(death))
+        self.dirty[ring].extend(ranges)
+
+    def _standing_water_possible(self, frame) -> bool:
+        """Whether any road point can hold STANDING_WATER_MM: with the road's own film only when the weather's
+        cracks or puddles hold water (the wet film alone is WET_FILM_MM deep); an override may hold any."""
+        if self.film_depth_fn is not None or self.reference:
+            return True
+        weather = getattr(frame, "weather", None)
+        if WET_FILM_MM >= STANDING_WATER_MM:
+            return True
+        return bool(getattr(weather, "cracks", 0.0) or getattr(weather, "puddles", 0.0))
 
     def _depth_fn_cache(self, frame):
         key = (frame.time_s, id(frame))

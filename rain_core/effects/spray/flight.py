@@ -23,12 +23,14 @@ from rain_core.physics import G_M_S2
 DRAG_TAIL_FIT = 1.4  # fitted: drops 0.2–5 mm launched at 5–30 m/s, 10–45° up (python -m rain_core.bench spray)
 
 
-def drag_time_constant(d_mm, launch_speed_m_s) -> np.ndarray:
+def drag_time_constant(d_mm, launch_speed_m_s, terminal_m_s=None) -> np.ndarray:
     """Time constant τ (s) of the linear-drag flight model for drops of d_mm (mm) launched at launch_speed_m_s
     (m/s) relative to their drift velocity: quadratic drag's distance from s0 down to v_t, v_t²·ln(s0/v_t) /
-    (g·(s0 − v_t)), divided by (s0 − v_t) — stretched for fast launches by up to DRAG_TAIL_FIT."""
-    vt = np.maximum(np.asarray(physics.terminal_velocity(np.asarray(d_mm, dtype=np.float64)), dtype=np.float64),
-                    1e-3)
+    (g·(s0 − v_t)), divided by (s0 − v_t) — stretched for fast launches by up to DRAG_TAIL_FIT.
+    ``terminal_m_s``: physics.terminal_velocity(d_mm) if the caller has it already."""
+    if terminal_m_s is None:
+        terminal_m_s = physics.terminal_velocity(np.asarray(d_mm, dtype=np.float64))
+    vt = np.maximum(np.asarray(terminal_m_s, dtype=np.float64), 1e-3)
     s0 = np.asarray(launch_speed_m_s, dtype=np.float64)
     ratio = np.maximum(s0 / vt, 1.0)
     fast = ratio > 1.0 + 1e-6
@@ -66,7 +68,8 @@ def _height(y0, w0, uy, tau, t):
 
 def time_to_height(y0, w0, uy, tau, level) -> np.ndarray:
     """First time (s) at which the height y0 + u_y·t + (w0 − u_y)·τ·(1 − e^(−t/τ)) comes down to ``level``
-    (arrays, m and m/s; u_y < 0). 0 where the start is already at or below it. Bisection after the apex."""
+    (arrays, m and m/s; u_y < 0). 0 where the start is already at or below it. Bisection after the apex: the
+    float64 reference of :func:`time_to_height_newton`, which the emitter uses."""
     y0, w0, uy, tau, level = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in
                                                    (y0, w0, uy, tau, level)))
     uy = np.minimum(uy, -1e-6)
@@ -87,16 +90,54 @@ def time_to_height(y0, w0, uy, tau, level) -> np.ndarray:
     return np.where(y0 <= level, 0.0, lo)
 
 
-def ground_time(p0, v0, u, tau) -> np.ndarray:
+def time_to_height_newton(y0, w0, uy, tau, level, tol_s: float = 1e-5, max_steps: int = 40) -> np.ndarray:
+    """The same root as :func:`time_to_height` (s; 0 where the start is at or below ``level``) by Newton's
+    method, a handful of steps instead of a hundred bisections.
+
+    With a = w0 − u_y the height is y0 + u_y·t + a·τ·(1 − e^(−t/τ)). For a > 0 it is concave: its asymptote
+    y0 + u_y·t + a·τ lies above it, so the asymptote's crossing of ``level`` is at or past the root and Newton
+    steps from there approach the root from the right, never overshooting. For a < 0 (thrown down faster than
+    the drift) it is convex and decreasing: Newton from t = 0 approaches from the left. Either way every step
+    stays on one side and the error falls quadratically: it stops once a step is under ``tol_s`` (s), which
+    leaves an error of the order of step²/τ (≪ 1 µs at the default)."""
+    y0, w0, uy, tau, level = (np.asarray(x, dtype=np.float64) for x in (y0, w0, uy, tau, level))
+    uy = np.minimum(uy, -1e-6)
+    a = w0 - uy
+    w0 = uy + a  # the clamped u_y's slope at t = 0
+    below = y0 <= level
+    drop = np.maximum(y0 - level, 0.0)  # rows already at or below the level: f(0) = 0, and they answer 0
+    t = np.where(a > 0.0, (drop + a * tau) / -uy, 0.0)
+    a_tau, rate = a * tau, -1.0 / tau
+    for i in range(max_steps):
+        em1 = np.expm1(t * rate)  # e^(−t/τ) − 1
+        # f = height − level; its slope u_y + a·e^(−t/τ) = w0 + a·em1 is < 0 at every iterate (see above).
+        step = (drop + uy * t - a_tau * em1) / (w0 + a * em1)
+        t -= step
+        if i >= 2 and not np.abs(step).max(initial=0.0) > tol_s:
+            break
+    return np.where(below, 0.0, t)
+
+
+def ground_time(p0, v0, u, tau, reference: bool = False) -> np.ndarray:
     """Age (s) at which a drop meets the ground: the road (y = 0), or the kerb-top (KERB_HEIGHT_M) where it is
     beyond the kerb (|x| ≥ ROAD_HALF_WIDTH_M). A drop crossing the kerb line below the kerb-top is stopped at
-    the time it was last at kerb-top height (so it never passes below either surface)."""
+    the time it was last at kerb-top height (so it never passes below either surface). Both crossings are
+    found in one Newton solve (:func:`time_to_height_newton`); ``reference=True`` uses the bisection
+    (:func:`time_to_height`), the float64 reference the tests compare with."""
     p0, v0, u = (np.asarray(a, dtype=np.float64) for a in (p0, v0, u))
     tau = np.asarray(tau, dtype=np.float64)
-    t_road = time_to_height(p0[..., 1], v0[..., 1], u[..., 1], tau, 0.0)
-    t_kerb = time_to_height(p0[..., 1], v0[..., 1], u[..., 1], tau, layout.KERB_HEIGHT_M)
-    x_kerb = flight_position(p0, v0, u, tau, t_kerb)[..., 0]
-    x_road = flight_position(p0, v0, u, tau, t_road)[..., 0]
+    if reference:
+        t_road = time_to_height(p0[..., 1], v0[..., 1], u[..., 1], tau, 0.0)
+        t_kerb = time_to_height(p0[..., 1], v0[..., 1], u[..., 1], tau, layout.KERB_HEIGHT_M)
+        x_kerb = flight_position(p0, v0, u, tau, t_kerb)[..., 0]
+        x_road = flight_position(p0, v0, u, tau, t_road)[..., 0]
+    else:
+        # Road and kerb-top crossings solved together (one pass over twice the rows), x from the closed form.
+        levels = np.array([0.0, layout.KERB_HEIGHT_M]).reshape((2,) + (1,) * tau.ndim)
+        t_both = time_to_height_newton(p0[..., 1], v0[..., 1], u[..., 1], tau, levels)
+        t_road, t_kerb = t_both[0], t_both[1]
+        x_both = p0[..., 0] + u[..., 0] * t_both - (v0[..., 0] - u[..., 0]) * tau * np.expm1(-t_both / tau)
+        x_road, x_kerb = x_both[0], x_both[1]
     beyond_kerb = np.abs(x_kerb) >= layout.ROAD_HALF_WIDTH_M
     beyond_road = np.abs(x_road) >= layout.ROAD_HALF_WIDTH_M
     return np.where(beyond_kerb | beyond_road, t_kerb, t_road)

@@ -26,7 +26,7 @@ _UP = np.array([0.0, 1.0, 0.0])
 
 
 def _lognormal(rng, median: float, sigma: float, lo: float, hi: float, n: int) -> np.ndarray:
-    return np.clip(median * np.exp(sigma * rng.standard_normal(n)), lo, hi)
+    return np.minimum(np.maximum(median * np.exp(sigma * rng.standard_normal(n)), lo), hi)
 
 
 # Per droplet bucket: drop diameter (median mm, log-σ, min, max), parcel start size (m), spread per m/s.
@@ -42,9 +42,10 @@ _DROPLET_SIGMA0_M = {0: 0.075, 1: 0.075, 2: 0.05, 3: 0.06, 4: 0.06}
 _DROPLET_SPREAD = {0: 0.05, 1: 0.05, 2: 0.04, 3: 0.04, 4: 0.04}
 
 
-def launch_droplets(rng, geo: WheelGeometry, w, bucket, age_now):
+def launch_droplets_reference(rng, geo: WheelGeometry, w, bucket, age_now):
     """Start points (m), ground velocities (m/s), drop sizes (mm), parcel sizes (m) and spread rates of the
-    droplet parcels leaving wheels ``w`` (flat index) from buckets 0–4 (see ``BUCKETS``)."""
+    droplet parcels leaving wheels ``w`` (flat index) from buckets 0–4 (see ``BUCKETS``). The reference, bucket
+    by bucket through masks; :func:`launch_droplets` draws the same numbers and gives the same parcels."""
     n = len(w)
     c = geo.contacts[w] - geo.wheel_velocity[w] * age_now[:, None]  # where the contact patch was at birth
     f, o = geo.travel[w], geo.outward[w]
@@ -102,6 +103,84 @@ def launch_droplets(rng, geo: WheelGeometry, w, bucket, age_now):
                             + _UP * (0.08 + 0.35 * rng.random((m, 1)) ** 2))
     growth = np.array([_DROPLET_SPREAD[k] for k in range(5)])[bucket]
     return p0, v0, d_mm, sigma0, growth, air, updraught
+
+
+_GROWTH = np.array([_DROPLET_SPREAD[k] for k in range(5)])
+_SIGMA0 = np.array([_DROPLET_SIGMA0_M[k] for k in range(5)])
+
+
+def launch_droplets(rng, geo: WheelGeometry, w, bucket, age_now):
+    """:func:`launch_droplets_reference` with the parcels sorted by bucket (a stable sort keeps each bucket's
+    order, so the same random numbers go to the same parcels): every bucket is a contiguous slice, the per-wheel
+    quantities are gathered once for all parcels, and the results are put back in the callers' order."""
+    n = len(w)
+    across = rng.random(n) - 0.5  # where on the tread width (× b below)
+    order = np.argsort(bucket, kind="stable")
+    bounds = np.searchsorted(bucket[order], np.arange(6))
+    ws = w[order]
+    vel = geo.wheel_velocity[ws]
+    c = geo.contacts[ws] - vel * age_now[order][:, None]  # where the contact patch was at birth
+    f, o = geo.travel[ws], geo.outward[ws]
+    r, b, v = geo.radius[ws][:, None], geo.width[ws][:, None], geo.speed[ws][:, None]
+    across = across[order][:, None] * b
+    p0 = np.empty((n, 3))
+    v0 = np.empty((n, 3))
+    d_mm = np.empty(n)
+    sigma0 = np.empty(n)
+    air = np.zeros((n, 3))
+    updraught = np.zeros(n)
+    for k in range(5):
+        lo_i, hi_i = int(bounds[k]), int(bounds[k + 1])
+        m = hi_i - lo_i
+        if m == 0:
+            continue
+        sl = slice(lo_i, hi_i)
+        d_mm[sl] = _lognormal(rng, *_DROPLET_SIZES[k], m)
+        sigma0[sl] = _SIGMA0[k] * rng.uniform(0.8, 1.25, m)
+        cs, fs, os_, vs, rs, vels = c[sl], f[sl], o[sl], v[sl], r[sl], vel[sl]
+        if k < 2:  # spray (see the reference for the physics of each bucket)
+            lo, hi = (0.8, 1.8) if k == 0 else (0.2, 1.0)
+            back = rs * rng.uniform(1.0, 1.3, (m, 1))
+            up = rs * rng.uniform(lo, hi, (m, 1))
+            out = b[sl] * rng.uniform(0.4, 1.0, (m, 1))
+            p0[sl] = cs - fs * back + os_ * out
+            p0[sl, 1] += up[:, 0]
+            share = rng.uniform(*SPRAY_AIR_SHARE, (m, 1))
+            lift = rng.uniform(0.0, 0.05, (m, 1))
+            side = rng.uniform(0.0, 0.08, (m, 1))
+            air[sl] = vels * share
+            v0[sl] = air[sl] + vs * (os_ * side)
+            v0[sl, 1] += (vs * lift)[:, 0]
+            updraught[sl] = rng.uniform(0.0, SPRAY_UPDRAUGHT, m)
+        elif k == 2:  # tread pickup
+            alpha = np.radians(5.0 + 45.0 * rng.random(m) ** 1.6)[:, None]
+            speed = vs * rng.uniform(0.6, 1.0, (m, 1))
+            lateral = vs * rng.normal(0.1, 0.12, (m, 1))
+            ca, sa = np.cos(alpha), np.sin(alpha)
+            p0[sl] = cs - fs * (rs * sa) + os_ * across[sl]
+            p0[sl, 1] += (rs * (1.0 - ca))[:, 0]
+            v0[sl] = vels - fs * (speed * ca) + os_ * lateral
+            v0[sl, 1] += (speed * sa)[:, 0]
+        elif k == 3:  # side waves
+            p0[sl] = cs + fs * (0.3 * rs) + os_ * (b[sl] / 2.0)
+            p0[sl, 1] += 0.005
+            fwd = rng.uniform(0.2, 0.5, (m, 1))
+            aside = rng.uniform(0.3, 0.7, (m, 1))
+            lift = 0.04 + 0.3 * rng.random((m, 1)) ** 2
+            v0[sl] = vs * (fs * fwd + os_ * aside)
+            v0[sl, 1] += (vs * lift)[:, 0]
+        else:  # bow waves
+            p0[sl] = cs + fs * (0.9 * rs) + os_ * across[sl]
+            p0[sl, 1] += 0.01
+            fwd = rng.uniform(0.8, 1.15, (m, 1))
+            aside = rng.uniform(-0.1, 0.5, (m, 1))
+            lift = 0.08 + 0.35 * rng.random((m, 1)) ** 2
+            v0[sl] = vs * (fs * fwd + os_ * aside)
+            v0[sl, 1] += (vs * lift)[:, 0]
+    back_to = np.empty(n, dtype=np.int64)
+    back_to[order] = np.arange(n)
+    growth = _GROWTH[bucket]
+    return p0[back_to], v0[back_to], d_mm[back_to], sigma0[back_to], growth, air[back_to], updraught[back_to]
 
 
 def launch_mist(rng, geo: WheelGeometry, w, bucket, age_now):

@@ -35,7 +35,11 @@ PARTICLE_ATTRIBUTES = ("in_p0", "in_v0", "in_u", "in_life", "in_misc")
 
 @dataclass
 class ParcelRing:
-    """A fixed ring of parcels (GPU layout) with their birth/death times (float64, effect clock)."""
+    """A fixed ring of parcels (GPU layout) with their birth/death times (float64, effect clock).
+
+    Only what is new is touched: :meth:`push` writes the newest records over the oldest (one or two slot
+    ranges, the GPU upload list); dead slots cost nothing (the shader skips a slot whose age is past its life).
+    """
 
     capacity: int
     data: np.ndarray = field(init=False)
@@ -48,15 +52,26 @@ class ParcelRing:
         self.data["life"] = -1.0  # never drawn
         self.death = np.full(self.capacity, -np.inf)
         self.birth = np.full(self.capacity, np.inf)
+        self._scratch = np.zeros(0, PARTICLE_DTYPE)
+        self._last_death = -math.inf
+
+    def scratch(self, n: int) -> np.ndarray:
+        """A reusable record array of length n (grown when needed, never shrunk): where a frame's new records
+        are assembled before :meth:`push`, without allocating one per frame. Every field must be written."""
+        if len(self._scratch) < n:
+            self._scratch = np.zeros(max(n, 2 * len(self._scratch)), PARTICLE_DTYPE)
+        return self._scratch[:n]
 
     def push(self, records: np.ndarray, birth: np.ndarray, death: np.ndarray) -> list[tuple[int, int]]:
-        """Write the newest records over the oldest; returns the (start, count) slot ranges written."""
+        """Write the newest records over the oldest; returns the (start, count) slot ranges written (one, or two
+        where the ring wraps)."""
         n = len(records)
         if n == 0 or self.capacity == 0:
             return []
         if n > self.capacity:
             records, birth, death = records[-self.capacity:], birth[-self.capacity:], death[-self.capacity:]
             n = self.capacity
+        self._last_death = max(self._last_death, float(death.max()))
         ranges = []
         start, done = self.head, 0
         while done < n:
@@ -74,7 +89,13 @@ class ParcelRing:
         return int(np.count_nonzero((self.birth <= now) & (self.death > now)))
 
     def last_death(self) -> float:
-        return float(self.death.max()) if self.capacity else -math.inf
+        """When the last parcel written dies (effect clock, s; −inf if none): a running maximum, O(1) per frame.
+        It may be a parcel already overwritten — then the effect just runs (and draws nothing) a little longer."""
+        return self._last_death if self.capacity else -math.inf
+
+    def reset_last_death(self) -> None:
+        """Recompute :meth:`last_death` from the slots (after times were shifted)."""
+        self._last_death = float(self.death.max()) if self.capacity else -math.inf
 
 
 def parcel_state(records: np.ndarray, clock_s: float, shift_periods: float = 0.0):

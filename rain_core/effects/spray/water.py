@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rain_core import physics
+from rain_core import checks, physics
 
 KMH = 1.0 / 3.6  # m/s per km/h
 
@@ -126,20 +126,37 @@ def allocate_water(speed_m_s, tire_width_m, film_depth_m) -> WaterBudget:
     """Spend M_w = v·b·WFD·ρ_w (kg/s) on capillary adhesion, tread pickup, side and bow waves, in that order.
 
     speed_m_s: wheel ground speed (m/s; the sign, reversing, is ignored); tire_width_m: b (m); film_depth_m:
-    WFD (m). Vectorised (inputs broadcast). See the module docstring for the bands and ramps."""
+    WFD (m). Vectorised (inputs broadcast). See the module docstring for the bands and ramps. The inputs are
+    checked (``physics.splash_water_flux``: ValueError naming the argument); the emitter, which checks its
+    own inputs once per frame, calls :func:`allocate_water_unchecked`."""
     v = np.abs(np.asarray(speed_m_s, dtype=np.float64))
     b = np.asarray(tire_width_m, dtype=np.float64)
     h = np.asarray(film_depth_m, dtype=np.float64)
     available = np.asarray(physics.splash_water_flux(v, b, h), dtype=np.float64)
+    return allocate_water_unchecked(v, b, h, available)
+
+
+_BAND_LO_MM = np.array([DEPTH_BANDS_MM[m][0] for m in MECHANISMS])
+_BAND_MM = np.array([DEPTH_BANDS_MM[m][1] - DEPTH_BANDS_MM[m][0] for m in MECHANISMS])
+_RAMP_LO = np.array([RELEASE_KMH[m][0] for m in MECHANISMS]) * KMH
+_RAMP_SPAN = np.array([RELEASE_KMH[m][1] - RELEASE_KMH[m][0] for m in MECHANISMS]) * KMH
+
+
+def allocate_water_unchecked(speed_m_s, tire_width_m, film_depth_m, available=None) -> WaterBudget:
+    """:func:`allocate_water` for inputs already known finite and in range (no checks: the per-frame path), all
+    four mechanisms in one pass. ``available``: M_w if already computed (kg/s), else v·b·WFD·ρ_w here."""
+    v = np.abs(np.asarray(speed_m_s, dtype=np.float64))
+    b = np.asarray(tire_width_m, dtype=np.float64)
+    h = np.asarray(film_depth_m, dtype=np.float64)
+    flux_per_mm = v * b * (physics.RHO_WATER * 1e-3)  # kg/s per mm of film
     h_mm = h * 1e3
-    shape = np.broadcast(v, b, h).shape
-    allocated = np.zeros(shape + (4,))
-    thrown = np.zeros(shape + (4,))
-    flux_per_mm = v * b * physics.RHO_WATER * 1e-3  # kg/s per mm of film
-    for k, name in enumerate(MECHANISMS):
-        lo, hi = DEPTH_BANDS_MM[name]
-        allocated[..., k] = flux_per_mm * np.clip(h_mm - lo, 0.0, hi - lo)
-        thrown[..., k] = allocated[..., k] * release_fraction(name, v)
+    if available is None:
+        available = flux_per_mm * h_mm  # M_w = v·b·WFD·ρ_w
+    flux_per_mm, h_mm, v = np.broadcast_arrays(flux_per_mm, h_mm, v)
+    # Each mechanism takes its band of the depth, and throws the share its speed ramp releases.
+    allocated = flux_per_mm[..., None] * np.minimum(np.maximum(h_mm[..., None] - _BAND_LO_MM, 0.0), _BAND_MM)
+    release = np.minimum(np.maximum((v[..., None] - _RAMP_LO) / _RAMP_SPAN, 0.0), 1.0)
+    thrown = allocated * release
     # The bands tile [0, ∞), so the allocation is M_w; rounding aside, make the sum exact.
     total = allocated.sum(axis=-1)
     scale = np.divide(available, total, out=np.ones_like(total), where=total > 0)
@@ -149,7 +166,7 @@ def allocate_water(speed_m_s, tire_width_m, film_depth_m) -> WaterBudget:
     buckets = np.stack([thrown[..., 0] * (1.0 - MIST_SHARE), tread_spray * (1.0 - MIST_SHARE),
                         thrown[..., 1] - tread_spray, thrown[..., 2], thrown[..., 3],
                         (thrown[..., 0] + tread_spray) * MIST_SHARE], axis=-1)
-    return WaterBudget(available, allocated, thrown, buckets)
+    return WaterBudget(np.asarray(available, dtype=np.float64), allocated, thrown, buckets)
 
 
 def hydroplaning_speed_m_s(tyre_pressure_kpa) -> np.ndarray:
@@ -159,10 +176,21 @@ def hydroplaning_speed_m_s(tyre_pressure_kpa) -> np.ndarray:
 
 def hydroplaning_risk(speed_m_s, film_depth_m, tyre_pressure_kpa=TYRE_PRESSURE_KPA["car"]) -> np.ndarray:
     """0 (full grip) … 1 (the tyre rides on water): the wedge's share of the load (v/v_p)² past
-    HYDRO_LIFT_ONSET, times how far the film (m) exceeds what the tread drains (1 → 3 mm). Vectorised."""
+    HYDRO_LIFT_ONSET, times how far the film (m) exceeds what the tread drains (1 → 3 mm). Vectorised.
+
+    speed_m_s finite (m/s, either sign), film_depth_m finite ≥ 0 (m), tyre_pressure_kpa finite > 0 (kPa);
+    anything else is a ValueError naming the argument."""
+    v = checks.array("speed_m_s", speed_m_s, -math.inf, math.inf, "m/s")
+    h = checks.array("film_depth_m", film_depth_m, 0.0, math.inf, "m")
+    p = checks.array("tyre_pressure_kpa", tyre_pressure_kpa, 0.0, math.inf, "kPa", lo_open=True)
+    return hydroplaning_risk_unchecked(v, h, p)
+
+
+def hydroplaning_risk_unchecked(speed_m_s, film_depth_m, tyre_pressure_kpa) -> np.ndarray:
+    """:func:`hydroplaning_risk` without the argument checks (the emitter's per-frame path; its inputs are
+    checked once at the frame's boundary)."""
     v = np.abs(np.asarray(speed_m_s, dtype=np.float64))
     lift = (v / hydroplaning_speed_m_s(tyre_pressure_kpa)) ** 2
     speed_part = np.clip((lift - HYDRO_LIFT_ONSET) / (1.0 - HYDRO_LIFT_ONSET), 0.0, 1.0)
     depth_part = _ramp(np.asarray(film_depth_m, dtype=np.float64) * 1e3, *HYDRO_DEPTH_MM)
     return speed_part * depth_part
-

@@ -3,12 +3,19 @@ the per-wheel geometry the launches use."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 
 import numpy as np
 
 from rain_core.effects.spray.body import BodyBox
-from rain_core.effects.spray.water import TYRE_PRESSURE_KPA, WaterBudget, allocate_water, hydroplaning_risk
+from rain_core.effects.spray.water import (
+    TYRE_PRESSURE_KPA,
+    WaterBudget,
+    allocate_water,
+    allocate_water_unchecked,
+    hydroplaning_risk,
+    hydroplaning_risk_unchecked,
+)
 from rain_core.water_film import film_depth_mm
 
 
@@ -63,10 +70,39 @@ def wheel_water(vehicle, depth_fn) -> WheelWater:
     return WheelWater(vehicle, contacts, speeds, widths, depth_mm, budget, risk)
 
 
-class WheelGeometry:
-    """Per-vehicle and per-wheel arrays gathered for vectorised launches."""
+MAX_VEHICLE_SPEED_M_S = 1000.0  # m/s; a vehicle (or a wind) faster than this is refused at the frame boundary
+MAX_FILM_DEPTH_MM = 1000.0  # mm; a depth override deeper than this counts as this deep
+MAX_POSITION_M = 1e7  # m; farther out the parcels' float32 period index (z / PERIOD_M) would lose whole periods
+# |x|, |z|, |yaw|, |speed|, |yaw rate|, |y| allowed (yaw: any finite angle)
+_STATE_LIMITS = np.array([MAX_POSITION_M, MAX_POSITION_M, np.finfo(np.float64).max, MAX_VEHICLE_SPEED_M_S,
+                          MAX_VEHICLE_SPEED_M_S / 10.0, MAX_POSITION_M])
 
-    def __init__(self, wheels: list[WheelWater]):
+
+class WheelGeometry:
+    """Per-vehicle (V) and per-wheel (W = 4·V, order FL, FR, RL, RR per vehicle) arrays for vectorised
+    launches: built from per-vehicle ``WheelWater`` (the reference path) or by :func:`gather_wheels`."""
+
+    position: np.ndarray  # (V, 3) m
+    velocity: np.ndarray  # (V, 3) m/s of the body centre
+    forward: np.ndarray  # (V, 3) unit
+    right: np.ndarray  # (V, 3) unit
+    height: np.ndarray  # (V,) m
+    half_length: np.ndarray  # (V,) m
+    box_index: np.ndarray  # (V,) into ``boxes``
+    boxes: list  # BodyBox per distinct spec
+    box_params: np.ndarray  # (V, 8) the BodyBox fields of each vehicle, in field order
+    contacts: np.ndarray  # (W, 3) m
+    speed: np.ndarray  # (W,) m/s, |ground speed|
+    travel: np.ndarray  # (W, 3) unit, the direction the wheel rolls
+    outward: np.ndarray  # (W, 3) unit, away from the vehicle's centre line
+    radius: np.ndarray  # (W,) m
+    width: np.ndarray  # (W,) m
+    wheel_velocity: np.ndarray  # (W, 3) m/s, the body centre's velocity per wheel
+    extra_depth_mm: np.ndarray  # film depth (mm) at the extra points looked up with the wheels (gather_wheels)
+
+    def __init__(self, wheels: list[WheelWater] | None = None):
+        if wheels is None:
+            return
         vehicles = [w.vehicle for w in wheels]
         self.position = np.array([v.position for v in vehicles], dtype=np.float64)
         self.velocity = np.array([v.velocity() for v in vehicles], dtype=np.float64)
@@ -81,6 +117,7 @@ class WheelGeometry:
                 specs.append(v.spec)
             self.box_index[i] = specs.index(v.spec)
         self.boxes = [BodyBox.of(s) for s in specs]
+        self.box_params = np.array([astuple(self.boxes[k]) for k in self.box_index], dtype=np.float64).reshape(-1, 8)
         self.contacts = np.concatenate([w.contacts for w in wheels])  # (W, 3)
         self.speed = np.abs(np.concatenate([w.speed_m_s for w in wheels]))
         sign = np.concatenate([np.where(w.speed_m_s < 0, -1.0, 1.0) for w in wheels])
@@ -89,3 +126,133 @@ class WheelGeometry:
         self.radius = np.repeat([v.spec.wheel_radius_m for v in vehicles], 4)
         self.width = np.concatenate([w.width_m for w in wheels])
         self.wheel_velocity = np.repeat(self.velocity, 4, axis=0)
+
+
+class _Fleet:
+    """Per-spec constants of a list of vehicles, stacked (cached while the vehicles' specs stay the same)."""
+
+    def __init__(self, specs):
+        from rain_core.vehicles import wheel_contacts_local
+
+        n = len(specs)
+        kinds = [getattr(sp, "kind", "car") for sp in specs]
+        self.local = np.array([wheel_contacts_local(sp) for sp in specs], dtype=np.float64).reshape(n, 4, 3)
+        widths = np.array([[sp.tire_width_m] * 4 for sp in specs], dtype=np.float64).reshape(n, 4)
+        widths[:, 2:] *= np.array([2.0 if k == "truck" else 1.0 for k in kinds])[:, None]  # lorries: twin rears
+        self.widths = widths.reshape(-1)
+        self.pressure = np.repeat([TYRE_PRESSURE_KPA.get(k, TYRE_PRESSURE_KPA["car"]) for k in kinds], 4)
+        self.consts = np.array([(sp.height_m, sp.length_m / 2.0, sp.wheel_radius_m, sp.wheelbase_m / 2.0)
+                                for sp in specs], dtype=np.float64).reshape(n, 4)
+        self.radius = np.repeat(self.consts[:, 2], 4)
+        self.outward_sign = np.tile(_SIDE, n)[:, None]
+        unique = []
+        self.box_index = np.zeros(n, dtype=np.int64)
+        for i, sp in enumerate(specs):
+            if sp not in unique:
+                unique.append(sp)
+            self.box_index[i] = unique.index(sp)
+        self.boxes = [BodyBox.of(sp) for sp in unique]
+        table = np.array([astuple(b) for b in self.boxes], dtype=np.float64).reshape(-1, 8)
+        self.box_params = table[self.box_index]
+
+
+_FLEETS: dict[tuple, tuple[list, _Fleet]] = {}
+_SIDE = np.array([-1.0, 1.0, -1.0, 1.0])
+
+
+def _fleet(vehicles) -> _Fleet:
+    specs = [v.spec for v in vehicles]
+    key = tuple(id(sp) for sp in specs)
+    hit = _FLEETS.get(key)
+    if hit is None or any(a is not b for a, b in zip(hit[0], specs, strict=True)):
+        if len(_FLEETS) > 64:
+            _FLEETS.clear()
+        hit = (specs, _Fleet(specs))
+        _FLEETS[key] = hit
+    return hit[1]
+
+
+def check_vehicles(vehicles) -> np.ndarray:
+    """(V, 6) float64 of each vehicle's x, z (m), yaw (rad), speed (m/s), yaw rate (rad/s) and y (m): the spray's
+    boundary check of what the frame feeds it. ValueError naming the vehicle and field if any is not finite,
+    a coordinate is beyond ±MAX_POSITION_M, or a speed (or the speed a yaw rate gives a wheel 10 m away) is
+    beyond ±MAX_VEHICLE_SPEED_M_S."""
+    state = np.array([(v.position[0], v.position[2], v.yaw, v.speed_m_s, getattr(v, "yaw_rate_rad_s", 0.0),
+                       v.position[1]) for v in vehicles], dtype=np.float64).reshape(-1, 6)
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(state) <= _STATE_LIMITS)  # NaN compares False: caught here too
+    if bad.any():
+        i, j = (int(k) for k in np.argwhere(bad)[0])
+        name = ("position[0]", "position[2]", "yaw", "speed_m_s", "yaw_rate_rad_s", "position[1]")[j]
+        limit = {0: f"within ±{MAX_POSITION_M:g} m", 1: f"within ±{MAX_POSITION_M:g} m",
+                 3: f"within ±{MAX_VEHICLE_SPEED_M_S:g} m/s", 4: f"within ±{MAX_VEHICLE_SPEED_M_S / 10:g} rad/s",
+                 5: f"within ±{MAX_POSITION_M:g} m"}
+        raise ValueError(f"spray: vehicles[{i}].{name} must be finite{' and ' + limit[j] if j in limit else ''}, "
+                         f"got {state[i, j]!r}")
+    return state
+
+
+def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None) -> tuple[list[WheelWater], WheelGeometry]:
+    """The water model at every wheel of every vehicle in one pass (one film lookup for all wheels), and the
+    launch geometry: what :func:`wheel_water` and ``WheelGeometry(wheels)`` give vehicle by vehicle (the
+    reference; tests compare them). The rigid-body kinematics are ``Vehicle``'s (position, yaw, speed, yaw rate
+    about the rear axle), evaluated for all vehicles at once. ``state``: :func:`check_vehicles`' array, if
+    already made. depth_fn(x, z) → mm; a NaN depth counts as dry, a negative one as 0. ``extra_xz`` (k, 2) m:
+    more points looked up in the same call, their depths (mm, unsanitised) in ``geo.extra_depth_mm``."""
+    n = len(vehicles)
+    state = check_vehicles(vehicles) if state is None else state
+    fleet = _fleet(vehicles)
+    geo = WheelGeometry()
+    px, pz, yaw, speed, omega, py = state.T
+    c, s = np.cos(yaw), np.sin(yaw)
+    zero = np.zeros(n)
+    geo.forward = np.column_stack([-s, zero, -c])
+    geo.right = np.column_stack([c, zero, -s])
+    geo.position = np.column_stack([px, py, pz])
+    consts = fleet.consts
+    geo.height, geo.half_length = consts[:, 0], consts[:, 1]
+    local = fleet.local
+    # Vehicle.to_world: rotation about +Y by yaw, then the translation.
+    contacts = np.empty((n, 4, 3))
+    contacts[..., 0] = c[:, None] * local[..., 0] + s[:, None] * local[..., 2] + px[:, None]
+    contacts[..., 1] = local[..., 1] + py[:, None]
+    contacts[..., 2] = c[:, None] * local[..., 2] - s[:, None] * local[..., 0] + pz[:, None]
+    contacts = contacts.reshape(-1, 3)
+    geo.contacts = contacts
+    # Vehicle._point_velocity: v·forward + ω ŷ × (p − rear axle), the rear axle wheelbase/2 behind the centre;
+    # ŷ × (a, 0, c) = (c, 0, −a).
+    ax = px + s * consts[:, 3]
+    az = pz + c * consts[:, 3]
+    base = geo.forward * speed[:, None]
+    geo.velocity = base + np.column_stack([omega * (pz - az), zero, omega * (ax - px)])
+    wv = np.repeat(base, 4, axis=0)
+    om4 = np.repeat(omega, 4)
+    wv[:, 0] += om4 * (contacts[:, 2] - np.repeat(az, 4))
+    wv[:, 2] -= om4 * (contacts[:, 0] - np.repeat(ax, 4))
+    sign = np.repeat(np.where(speed < 0.0, -1.0, 1.0), 4)
+    geo.speed = np.sqrt(np.einsum("wc,wc->w", wv, wv))
+    signed = geo.speed * sign
+    geo.travel = np.repeat(geo.forward * np.where(speed < 0.0, -1.0, 1.0)[:, None], 4, axis=0)
+    geo.outward = np.repeat(geo.right, 4, axis=0) * fleet.outward_sign
+    geo.radius = fleet.radius
+    geo.width = fleet.widths
+    geo.wheel_velocity = np.repeat(geo.velocity, 4, axis=0)
+    geo.boxes, geo.box_index, geo.box_params = fleet.boxes, fleet.box_index, fleet.box_params
+    extra = np.zeros((0, 2)) if extra_xz is None else np.asarray(extra_xz, dtype=np.float64).reshape(-1, 2)
+    if n + len(extra):
+        xs, zs = contacts[:, 0], contacts[:, 2]
+        if len(extra):
+            xs, zs = np.concatenate([xs, extra[:, 0]]), np.concatenate([zs, extra[:, 1]])
+        depth = np.asarray(depth_fn(xs, zs), dtype=np.float64)
+    else:
+        depth = np.zeros(0)
+    depth, geo.extra_depth_mm = depth[:4 * n], depth[4 * n:]
+    depth = np.clip(np.nan_to_num(depth, nan=0.0, posinf=MAX_FILM_DEPTH_MM), 0.0, MAX_FILM_DEPTH_MM)
+    budget = allocate_water_unchecked(signed, geo.width, depth * 1e-3)
+    risk = hydroplaning_risk_unchecked(signed, depth * 1e-3, fleet.pressure)
+    wheels = []
+    for i, v in enumerate(vehicles):
+        k = slice(4 * i, 4 * i + 4)
+        b = WaterBudget(budget.available[k], budget.allocated[k], budget.thrown[k], budget.buckets[k])
+        wheels.append(WheelWater(v, contacts[k], signed[k], geo.width[k], depth[k], b, risk[k]))
+    return wheels, geo
