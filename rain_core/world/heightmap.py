@@ -29,9 +29,9 @@ def sample_heightmap(hmap: np.ndarray, extent_m: tuple[float, float], x, z) -> n
     ib = np.clip(i0 + 1, 0, nx - 1)
     ja = np.mod(j0, nz)
     jb = np.mod(j0 + 1, nz)
-    h = hmap.astype(np.float64)
-    top = h[ja, ia] * (1 - tx) + h[ja, ib] * tx
-    bot = h[jb, ia] * (1 - tx) + h[jb, ib] * tx
+    # Convert only the four picked texels, not the whole map (a per-frame lookup must not cost the map's size).
+    top = hmap[ja, ia].astype(np.float64) * (1 - tx) + hmap[ja, ib].astype(np.float64) * tx
+    bot = hmap[jb, ia].astype(np.float64) * (1 - tx) + hmap[jb, ib].astype(np.float64) * tx
     return top * (1 - tz) + bot * tz
 
 
