@@ -18,9 +18,12 @@ ROAD_MAPS = 5
 ROAD_REFLECTION = 6
 ROAD_RIPPLES = 7
 
-# Rainfall.
-RAINFALL_STATE = 8
+# Rainfall (vertex-shader inputs of the streak and splash passes: the drop table, the roof maps, the road heights).
+RAINFALL_DROPS = 8
 RAINFALL_ENV = 9
+RAINFALL_OCCLUDER = 17
+RAINFALL_OCCLUDER_COARSE = 18
+RAINFALL_ROAD_HEIGHT = 19
 
 # Atmosphere.
 ATMOSPHERE_GLOW = 10

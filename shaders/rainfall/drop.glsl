@@ -1,4 +1,4 @@
-// Rainfall (rain_core/effects/rainfall/): what a falling drop looks like, and where the drops of the container are.
+// Rainfall (rain_core/effects/rainfall/): what a falling drop looks like.
 // A drop is a tiny fish-eye lens: it shows ~94 % of the radiance of a ~165° field of view behind it (Garg &
 // Nayar 2004), so it is usually brighter than what it covers. On top of that it scatters the sun, street lamps
 // and headlights towards the eye; for a drop of radius r lit with illuminance E the scattered intensity is
@@ -13,9 +13,6 @@ const float RAIN_PHASE_G = 0.7;
 const float RAIN_PHASE_BACK_G = -0.5;
 const float RAIN_PHASE_BACK_WEIGHT = 0.0957;
 
-uniform float u_period_z;     // m, the world's period along z
-uniform float u_time_mod;     // s, frame time modulo u_time_period
-uniform float u_time_period;  // s
 uniform vec2 u_viewport;      // px
 uniform float u_focal_px;     // px per unit of tan(angle) vertically
 uniform float u_brightness;   // streak_brightness setting
@@ -56,16 +53,4 @@ vec3 rain_drop_radiance(vec3 p, vec3 to_eye) {
         L += E * rain_phase(dot(-Ld, to_eye)) * RAIN_INV_4PI;
     }
     return L;
-}
-
-// World z stored modulo the period → the wrapped frame, the image nearest the camera.
-float rain_wrap_z(float z_mod) {
-    return z_mod - u_period_z * floor((z_mod - u_camera_pos.z) / u_period_z + 0.5);
-}
-
-// Age (s) of something spawned at t0_mod (s, modulo u_time_period). Every lifetime is far below half the
-// period, so an age in the upper half is a spawn time rounded a hair past now: age 0.
-float rain_age(float t0_mod) {
-    float age = mod(u_time_mod - t0_mod, u_time_period);
-    return age > 0.5 * u_time_period ? 0.0 : age;
 }

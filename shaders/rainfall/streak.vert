@@ -1,20 +1,16 @@
 #version 330 core
-// Rain streaks (rain_core/effects/rainfall/): one instance per drop slot, a screen-aligned quad around the drop's path
-// relative to the camera during the exposure. Keep in step with the NumPy twin streaks.streak_geometry.
+// Rain streaks (rain_core/effects/rainfall/): one instance per drop, a screen-aligned quad around the drop's path
+// relative to the camera during the exposure; the drop itself (rainfall/drops.glsl) has no stored state. Keep in
+// step with the NumPy twin streaks.streak_geometry.
 #include "rainfall/drop.glsl"
+#include "rainfall/drops.glsl"
 
-#ifndef LAYERS
-#define LAYERS 3  // rainfall.LAYER_SCALES (the effect passes the count)
-#endif
-uniform sampler2D u_state;          // RGBA32F, 3 texels per drop (see RainfallSim.texels)
-uniform int u_drops_per_row;
 uniform vec3 u_cam_vel;             // m/s, world
 uniform float u_exposure_s;         // s
 uniform float u_near;               // m
-uniform vec3 u_box_lo[LAYERS];      // m, wrapped frame
-uniform vec3 u_box_hi[LAYERS];
 uniform vec3 u_box_fade[LAYERS];    // m
-uniform float u_layer_nu[LAYERS];
+uniform float u_box_fade_bottom[LAYERS];  // m (0: a hard floor below the ground)
+uniform float u_layer_rho[LAYERS];  // instances per m³
 uniform float u_shape_area[10];     // side-view area factor at D = 1, 2, 2.5, … 6 mm
 uniform float u_shape_width[10];
 uniform float u_width_floor_px;
@@ -27,8 +23,9 @@ flat out vec4 v_color;  // pre-exposed radiance, opacity
 
 float rain_membership(int k, vec3 p) {
     vec3 a = clamp((p - u_box_lo[k]) / u_box_fade[k], 0.0, 1.0);
-    vec3 b = clamp((u_box_hi[k] - p) / u_box_fade[k], 0.0, 1.0);
-    a.y = p.y >= u_box_lo[k].y ? 1.0 : 0.0;
+    vec3 b = clamp((u_box_lo[k] + u_box_ext[k] - p) / u_box_fade[k], 0.0, 1.0);
+    float fb = u_box_fade_bottom[k];
+    a.y = fb > 0.0 ? clamp((p.y - u_box_lo[k].y) / fb, 0.0, 1.0) : (p.y >= u_box_lo[k].y ? 1.0 : 0.0);
     return a.x * a.y * a.z * b.x * b.y * b.z;
 }
 
@@ -47,29 +44,19 @@ void cull() {
 }
 
 void main() {
-    int id = gl_InstanceID;
-    int row = id / u_drops_per_row;
-    int col = 3 * (id - row * u_drops_per_row);
-    vec4 s0 = texelFetch(u_state, ivec2(col, row), 0);
-    vec4 s1 = texelFetch(u_state, ivec2(col + 1, row), 0);
-    vec4 s2 = texelFetch(u_state, ivec2(col + 2, row), 0);
-    float life = s1.w;
-    float age = rain_age(s0.w);
-    if (life <= 0.0 || age - u_exposure_s > life) { cull(); return; }
-    vec3 p0 = vec3(s0.x, s0.y, rain_wrap_z(s0.z));
-    vec3 u = s1.xyz;
-    float age_head = min(age, life);
-    vec3 head = p0 + u * age_head;
-    int layer = int(s2.z + 0.5);
-    float m_own = rain_membership(layer, head);
+    RainDrop drop = rain_drop(gl_InstanceID);
+    if (!drop.drawn) { cull(); return; }
+    vec3 head = drop.pos;
+    float m_own = rain_membership(drop.layer, head);
     float density = 0.0;
-    for (int k = 0; k < LAYERS; ++k) density += u_layer_nu[k] * rain_membership(k, head);
-    density = max(density, u_layer_nu[LAYERS - 1]);
-    float weight = s2.y * m_own / density;  // real drops this one stands for, faded at its box's edge
+    for (int k = 0; k < LAYERS; ++k) density += u_layer_rho[k] * rain_membership(k, head);
+    density = max(density, u_layer_rho[LAYERS - 1]);
+    float weight = max(drop.r, u_thin.z) * m_own / density;  // real drops this one stands for
     if (weight <= 0.0) { cull(); return; }
+    vec3 u = drop.vel;
     // The streak: where the drop is now, and where it was relative to the camera when the shutter opened.
-    vec3 a_w = head + u_cam_vel * (age - age_head);
-    vec3 b_w = p0 + u * (age - u_exposure_s) + u_cam_vel * u_exposure_s;
+    vec3 a_w = head;
+    vec3 b_w = head + (u_cam_vel - u) * u_exposure_s;
     vec4 ca = u_view_proj * vec4(a_w, 1.0);
     vec4 cb = u_view_proj * vec4(b_w, 1.0);
     float wmin = u_near * 1.01;
@@ -80,6 +67,7 @@ void main() {
     float m = 1.0 + (u_width_max_px + 2.0) / (0.5 * min(u_viewport.x, u_viewport.y));
     if ((ca.x > m * ca.w && cb.x > m * cb.w) || (ca.x < -m * ca.w && cb.x < -m * cb.w) ||
         (ca.y > m * ca.w && cb.y > m * cb.w) || (ca.y < -m * ca.w && cb.y < -m * cb.w)) { cull(); return; }
+    if (rain_occluded(head)) { cull(); return; }  // after the view test: it reads textures
     vec2 sa = ca.xy / ca.w * 0.5 * u_viewport;
     vec2 sb = cb.xy / cb.w * 0.5 * u_viewport;
     vec2 dir = sb - sa;
@@ -87,10 +75,10 @@ void main() {
     vec2 t = len > 1e-4 ? dir / len : vec2(0.0, 1.0);
     vec2 n = vec2(-t.y, t.x);
     // Light budget in px² of full coverage: the drop's projected area times its weight.
-    float d_m = s2.x * 1e-3;
+    float d_m = drop.d_mm * 1e-3;
     float d_px = d_m * u_focal_px / ca.w;
-    float area_px = 0.78539816 * d_px * d_px * shape_lookup(u_shape_area, s2.x) * weight * u_brightness;
-    float w_px = max(d_px * shape_lookup(u_shape_width, s2.x), u_width_floor_px);
+    float area_px = 0.78539816 * d_px * d_px * shape_lookup(u_shape_area, drop.d_mm) * weight * u_brightness;
+    float w_px = max(d_px * shape_lookup(u_shape_width, drop.d_mm), u_width_floor_px);
     float alpha = area_px / (w_px * (len + w_px));
     if (alpha > u_alpha_max) {  // compensation: brighter up to u_alpha_max, then wider up to u_width_max_px
         float wide = 0.5 * (-len + sqrt(len * len + 4.0 * area_px / u_alpha_max));

@@ -9,6 +9,7 @@ import numpy as np
 
 from rain_core.effects.rainfall.constants import (
     BOX_BOTTOM_Y_M,
+    EYE_ALLOWANCE_M,
     FADE_FRACTION,
     FORWARD_OFFSET,
     GROUND_Y_M,
@@ -22,16 +23,39 @@ from rain_core.effects.rainfall.constants import (
 
 @dataclass
 class Boxes:
-    """The layers' boxes: lo, hi (L, 3) in world coordinates (m), fade (L, 3) widths (m), profile ν (L,)."""
+    """The layers' boxes: lo, hi (L, 3) in world coordinates (m), fade (L, 3) widths (m) at the sides and the top,
+    profile ν (L,), fade_bottom (L,) width (m) of the bottom's fade (0: a hard floor below the ground)."""
 
     lo: np.ndarray
     hi: np.ndarray
     fade: np.ndarray
     nu: np.ndarray
+    fade_bottom: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.fade_bottom is None:
+            self.fade_bottom = np.zeros(len(self.nu))
+
+    @property
+    def ext(self) -> np.ndarray:
+        """(L, 3) box sizes (m): the periods of the drops' wrap."""
+        return self.hi - self.lo
+
+    def shifted_z(self, dz: float) -> Boxes:
+        """The same boxes moved by dz (m) along z (e.g. into the renderer's wrapped frame)."""
+        d = np.array([0.0, 0.0, dz])
+        return Boxes(self.lo + d, self.hi + d, self.fade, self.nu, self.fade_bottom)
 
     @property
     def volumes(self) -> np.ndarray:
         return np.prod(self.hi - self.lo, axis=1)
+
+
+def box_heights(container_m: float) -> np.ndarray:
+    """(L,) fixed heights (m) of the layers' boxes: from BOX_BOTTOM_Y_M to TOP_SLOPE × half-size + TOP_PAD_M above
+    an eye EYE_ALLOWANCE_M high. Fixed, since a box's height is its drops' vertical period."""
+    h = 0.5 * float(container_m) * np.asarray(LAYER_SCALES)
+    return EYE_ALLOWANCE_M + TOP_SLOPE * h + TOP_PAD_M - BOX_BOTTOM_Y_M
 
 
 def layer_boxes(camera_position, camera_forward, container_m: float) -> Boxes:
@@ -39,19 +63,23 @@ def layer_boxes(camera_position, camera_forward, container_m: float) -> Boxes:
 
     container_m: horizontal size (m) of the outer box. Each box is centred FORWARD_OFFSET half-sizes ahead of the
     camera along the horizontal view direction (scaled by its horizontal share, so a camera looking straight
-    down sits at the centre)."""
+    down sits at the centre). Heights are fixed (``box_heights``): a box reaches from just below the ground
+    unless the eye is higher than EYE_ALLOWANCE_M, when it slides up and its bottom fades in."""
     cam = np.asarray(camera_position, dtype=np.float64)
     f = np.asarray(camera_forward, dtype=np.float64)
     fh = np.array([f[0], f[2]])
     n = float(np.hypot(*fh))
     fh = fh / n if n > 1e-9 else np.zeros(2)
     h = 0.5 * float(container_m) * np.asarray(LAYER_SCALES)
+    height = box_heights(container_m)
     centre = cam[[0, 2]][None, :] + fh[None, :] * (FORWARD_OFFSET * h * min(n, 1.0))[:, None]
-    top = max(float(cam[1]), GROUND_Y_M) + TOP_SLOPE * h + TOP_PAD_M
-    lo = np.stack([centre[:, 0] - h, np.full_like(h, BOX_BOTTOM_Y_M), centre[:, 1] - h], axis=1)
+    top = np.maximum(BOX_BOTTOM_Y_M + height, max(float(cam[1]), GROUND_Y_M) + TOP_SLOPE * h + TOP_PAD_M)
+    bottom = top - height
+    lo = np.stack([centre[:, 0] - h, bottom, centre[:, 1] - h], axis=1)
     hi = np.stack([centre[:, 0] + h, top, centre[:, 1] + h], axis=1)
-    fade = np.stack([FADE_FRACTION * h, FADE_FRACTION * (top - BOX_BOTTOM_Y_M), FADE_FRACTION * h], axis=1)
-    return Boxes(lo, hi, fade, np.asarray(LAYER_PROFILE, dtype=np.float64))
+    fade = np.stack([FADE_FRACTION * h, FADE_FRACTION * height, FADE_FRACTION * h], axis=1)
+    fade_bottom = np.minimum(bottom - BOX_BOTTOM_Y_M, FADE_FRACTION * height)
+    return Boxes(lo, hi, fade, np.asarray(LAYER_PROFILE, dtype=np.float64), fade_bottom)
 
 
 def wrap_near(z, around_z):
@@ -61,22 +89,28 @@ def wrap_near(z, around_z):
 
 def membership(p, boxes: Boxes, layer) -> np.ndarray:
     """Fade-in factor in [0, 1] of points p (n, 3) in the boxes of their layers (n,): linear ramps over the fade
-    widths at the sides and the top, none at the bottom (the ground ends the drops). Mirrors the shader."""
+    widths at the sides and the top; at the bottom a hard floor below the ground (the ground ends the drops), or
+    a ramp over ``fade_bottom`` when the box has slid up. Mirrors the shader (``rain_membership``)."""
+    layer = np.asarray(layer)
     lo, hi, fade = boxes.lo[layer], boxes.hi[layer], boxes.fade[layer]
     a = np.clip((p - lo) / fade, 0.0, 1.0)
     b = np.clip((hi - p) / fade, 0.0, 1.0)
-    a[:, 1] = (p[:, 1] >= lo[:, 1]).astype(np.float64)
+    fb = boxes.fade_bottom[layer]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ramp = np.clip((p[:, 1] - lo[:, 1]) / np.where(fb > 0, fb, 1.0), 0.0, 1.0)
+    a[:, 1] = np.where(fb > 0, ramp, (p[:, 1] >= lo[:, 1]).astype(np.float64))
     return np.prod(a, axis=1) * np.prod(b, axis=1)
 
 
-def drawn_density_factor(p, boxes: Boxes) -> np.ndarray:
-    """max(Σ_k ν_k·m_k(p), ν_outer) at points p (n, 3): the drawn density ÷ κ that a weight divides by."""
+def drawn_density_factor(p, boxes: Boxes, density=None) -> np.ndarray:
+    """max(Σ_k ρ_k·m_k(p), ρ_outer) at points p (n, 3), with ρ = density (L,) (default the profile ν): the drawn
+    density a weight divides by."""
     p = np.atleast_2d(p)
+    rho = boxes.nu if density is None else np.asarray(density, dtype=np.float64)
     total = np.zeros(len(p))
-    for k in range(len(boxes.nu)):
-        total += boxes.nu[k] * membership(p, boxes, np.full(len(p), k))
-    return np.maximum(total, boxes.nu[-1])
-
+    for k in range(len(rho)):
+        total += rho[k] * membership(p, boxes, np.full(len(p), k))
+    return np.maximum(total, rho[-1])
 
 
 def full_region(boxes: Boxes, layer: int = -1) -> tuple[np.ndarray, np.ndarray]:

@@ -1,4 +1,4 @@
-"""Rainfall constants: the container's layers, the budget, the drop calendar, streak drawing, the occlusion march
+"""Rainfall constants: the container's layers, the budget, the stateless drops, streak drawing
 and the splashes (the package docstring explains each). Units: m, s, m/s; D in mm; R in mm/h."""
 
 from __future__ import annotations
@@ -9,7 +9,6 @@ from rain_core import layout
 
 # --- the container ---
 PERIOD_M = layout.PERIOD_M  # m, the world repeats along z
-TIME_PERIOD_S = 1024.0  # s, spawn times are stored modulo this on the GPU (every lifetime is far shorter)
 GROUND_Y_M = 0.0  # m, drops end at the road plane (kerbs and sidewalks hide the last 15 cm by depth test)
 BOX_BOTTOM_Y_M = -0.5  # m, the boxes reach just below the ground
 LAYER_SCALES = (0.125, 0.25, 0.5, 1.0)  # half-size of each layer relative to the outer one
@@ -27,36 +26,29 @@ LAYER_PROFILE = _profile(LAYER_SCALES, PROFILE_EXPONENT)  # ν_k
 FORWARD_OFFSET = 0.8  # box centre this many half-sizes ahead: the back face fades out just behind the eye
 TOP_SLOPE = 0.8  # box top = eye height + TOP_SLOPE × half-size + TOP_PAD_M
 TOP_PAD_M = 1.0
+# m: a box's height is fixed (it is the vertical period of its drops, which must not change while the camera
+# moves): from BOX_BOTTOM_Y_M to the top of the box for an eye this high (the chase camera is at 2.6 m). A
+# higher eye slides the box up (its bottom then fades in).
+EYE_ALLOWANCE_M = 3.0
 FADE_FRACTION = 0.2  # membership ramps over this share of each half-size (sides) and of the height (top)
-HEADROOM = 0.8  # expected live drops = this share of the budget (room for Poisson fluctuations)
 BUDGET_FULL_AT_MM_H = 8.0  # mm/h from which the whole budget is used (heavy rain)
 RATE_RAMP_S = 1.5  # s, time constant with which the effect's rate follows the set rate
-RATE_OFF_MM_H = 0.002  # mm/h, below this (with the set rate 0) no more drops spawn
-MIN_RECHECK_S = 0.05  # s, shortest delay before a due drop that is still inside is looked at again
-CALENDAR_BUCKET_S = 1.0 / 32.0  # s; a check may come up to this late (it only delays the reuse of a slot)
-CALENDAR_BUCKETS = 4096  # 128 s ahead; later checks are clamped to the end
-TURBULENCE = 0.15  # per-drop horizontal velocity jitter, × wind speed (m/s)
-OPEN_PROBES_FIRST, OPEN_PROBES = 4096, 512  # probe points per box for the open share (first frame, later)
-OPEN_PROBE_EVERY = 8  # frames between probes
-OPEN_PROBE_BLEND = 0.3  # weight of a new probe in the open share's running average
+RATE_OFF_MM_H = 0.002  # mm/h, below this (with the set rate 0) the rain is off
+TURBULENCE = 0.15  # per-drop horizontal velocity jitter, × wind (standard deviation of the factor)
+TURBULENCE_STEPS = 3  # the wind factor is 1 + j·TURBULENCE/2 with an integer j in [−3, 3] (std 2): exact mod a box
+
+# --- stateless drops (the package docstring, "Drops without state") ---
+TIME_PERIOD_S = 16384  # s (2^14): the GPU gets t mod this as whole seconds + a fraction, and the epoch
+TABLE_BITS = 12  # the drop table has 2^12 quantile bins of the instance size distribution per layer
+TABLE_SIZE = 1 << TABLE_BITS
+INSTANCE_RATE_MM_H = 28.0  # mm/h: instance diameters follow Marshall–Palmer's shape at this rate (see rates)
+MAX_VEHICLES = 8  # vehicles (nearest first) whose bodies cull drops in the shader
+SPLASH_PERIOD_S = 0.3125  # s, each splash slot has one impact per period (≥ the longest splash life)
 
 # --- streak drawing --- (keep the NumPy twin, ``streaks.streak_geometry``, in step with shaders/rainfall/streak.vert).
 WIDTH_FLOOR_PX = 1.0  # px, narrowest streak; thinner drops get less opacity instead
 ALPHA_MAX = 0.7  # a compensated streak gets brighter up to this opacity …
 WIDTH_MAX_PX = 4.0  # … then wider up to this width; beyond, light is lost
-
-# --- occlusion march ---
-MARCH_STEP_M = 0.25  # m, horizontal spacing of the fine march (the height map's cell)
-MARCH_MAX_SAMPLES = 128
-REFINE_STEPS = 4  # bisections of the step in which a path meets a roof
-FATE_CHUNK = 131072  # drops per batch of the fate tests (bounds the march's memory)
-SKIP_BLOCK_M = 4.0  # m, cells of the max-pooled map used to skip paths far from any roof
-FINE_BLOCK_M = 1.0  # m, cells of the second, finer pooled map
-# m, how far above a drop its past path is checked for roofs. Wind inside a street canyon is far weaker than
-# above the roofs, so a long ballistic rain shadow (small drops drift 2 m per m of fall in a 2 m/s wind) would put
-# whole streets in the dry; a short reach keeps the dry strip under eaves, decks and canopies.
-BACKWARD_MAX_M = 3.0
-VEHICLE_WAKE_S = 0.05  # s, a drop that was inside a vehicle this recently is not spawned (see vehicle_fate)
 
 # --- splashes ---
 SPLASH_D_MIN_MM = 1.5  # mm, smaller drops make no visible splash

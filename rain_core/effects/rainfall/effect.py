@@ -1,38 +1,53 @@
-"""The GL side of the rainfall: ``RainfallEffect`` uploads what ``RainfallSim`` spawned and retired into a drop
-state texture (``units.RAINFALL_STATE``), draws the environment a drop shows (``units.RAINFALL_ENV``), then one
-instanced streak quad per drop slot and one billboard per splash slot (package docstring)."""
+"""The GL side of the rainfall: ``RainfallEffect`` sets the few uniforms ``RainfallSim`` computes per frame, draws
+the environment a drop shows (``units.RAINFALL_ENV``), then one instanced streak quad per drop instance and one
+billboard per splash slot; nothing per drop is uploaded (package docstring). Static inputs, uploaded once: the
+drop table (``units.RAINFALL_DROPS``), the roof maps (``units.RAINFALL_OCCLUDER``, ``RAINFALL_OCCLUDER_COARSE``)
+and the road's height map for the splash kinds (``units.RAINFALL_ROAD_HEIGHT``)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import moderngl
 import numpy as np
 
+from rain_core import layout
 from rain_core.effects.rainfall.boxes import Boxes, wrap_near
 from rain_core.effects.rainfall.constants import (
     ALPHA_MAX,
+    GROUND_Y_M,
     LAYER_SCALES,
     PERIOD_M,
     SPLASH_CROWN_HEIGHT_PER_D,
-    TIME_PERIOD_S,
+    SPLASH_LAYER,
+    SPLASH_PERIOD_S,
     WIDTH_FLOOR_PX,
     WIDTH_MAX_PX,
 )
+from rain_core.effects.rainfall.drops import TURB_EPS, time_split
 from rain_core.effects.rainfall.shape import SHAPE_DIAMETERS_MM, drop_shape_factors
-from rain_core.effects.rainfall.sim import RainfallSim, RainInput, RainUpdate
+from rain_core.effects.rainfall.sim import SPLASH_V_M_S, RainfallSim, RainInput, RainUpdate, box_offsets, splash_clock
 from rain_core.effects.rainfall.streaks import StreakCamera
+from rain_core.effects.rainfall.vehicle_fate import vehicle_uniforms
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.uniforms import set_uniform, set_uniforms
 
-# GPU layout: three RGBA32F texels per drop, DROPS_PER_ROW drops per texture row.
-DROPS_PER_ROW = 1024
-TEXELS_PER_DROP = 3
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
-
-_SCATTER_DTYPE = np.dtype([("texel", "<i4"), ("value", "<f4", (4,))])
+OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
+PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
+# Uniforms only this effect writes: written when their value changed (most are constant, or constant while the
+# rate is). Others (lights, wetness, …) may also be written by rc.set_frame_uniforms, so they are always written.
+_OWN_UNIFORMS = ("u_box_", "u_veh_", "u_occ_", "u_splash_", "u_shape_", "u_thin", "u_layer_", "u_seed_key",
+                 "u_drop_table", "u_road_", "u_time_", "u_epoch", "u_wind", "u_turb_eps", "u_period_world",
+                 "u_ground_y", "u_width_", "u_alpha_max", "u_crown_per_d", "u_cam_vel", "u_exposure_s", "u_near",
+                 "u_rain_env", "u_brightness", "u_focal_px")
+# Per program (programs may be shared by effects through a ShaderLibrary): (the effect that wrote last, its
+# last written values).
+_WRITTEN: dict[int, tuple[int, dict]] = {}
+_TOKENS = itertools.count()  # a unique token per effect (an id() can be reused once an effect is collected)
 
 
 class RainfallEffect(Effect):
@@ -40,8 +55,8 @@ class RainfallEffect(Effect):
 
     ctx: moderngl context; settings: the Settings used when a frame carries none; seed: seeds the drops; shaders:
     a ShaderLibrary (default: a new one, whose programs this effect then owns and releases). Draws in the
-    ``transparent`` stage; the drop state is bound to ``units.RAINFALL_STATE``, the environment to
-    ``units.RAINFALL_ENV``.
+    ``transparent`` stage; binds the drop table, the roof maps and the road heights to their ``units.RAINFALL_*``
+    units (module docstring), the environment to ``units.RAINFALL_ENV``.
     Reads frame.settings.rainfall (enabled, density_scale, streak_brightness, splashes, container_m),
     quality.particle_budget, camera.exposure_s and camera.mode (driver/chase: the camera moves with the ego car;
     free: its velocity is the finite difference of its positions)."""
@@ -59,8 +74,7 @@ class RainfallEffect(Effect):
         self.seed = int(seed)
         layers = {"LAYERS": len(LAYER_SCALES)}
         self.streak_prog = self.shaders.program("rainfall/streak.vert", "rainfall/streak.frag", defines=layers)
-        self.splash_prog = self.shaders.program("rainfall/splash.vert", "rainfall/splash.frag")
-        self.scatter_prog = self.shaders.program("rainfall/scatter.vert", "rainfall/scatter.frag")
+        self.splash_prog = self.shaders.program("rainfall/splash.vert", "rainfall/splash.frag", defines=layers)
         self.env_prog = self.shaders.program("common/fullscreen.vert", "rainfall/env.frag")
         self._streak_vao = ctx.vertex_array(self.streak_prog, [])
         self._env_vao = ctx.vertex_array(self.env_prog, [])
@@ -68,12 +82,16 @@ class RainfallEffect(Effect):
         self._env_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._env_tex.repeat_x, self._env_tex.repeat_y = True, False
         self._env_fbo = ctx.framebuffer(color_attachments=[self._env_tex])
+        self._splash_vao = ctx.vertex_array(self.splash_prog, [])
         self.sim: RainfallSim | None = None
         self._world = None
-        self._generation = None
-        self._state_tex = self._state_fbo = None
-        self._scatter_buf = self._scatter_vao = None
-        self._splash_buf = self._splash_vao = None
+        self._table_tex = None
+        self._table_version = None
+        self._static_tex: dict[str, moderngl.Texture] = {}
+        self._occ_geom: dict[str, tuple] = {}
+        self._road_extent = (1.0, 1.0)
+        self._probe = None
+        self._token = next(_TOKENS)
         self._prev_cam: tuple[np.ndarray, float] | None = None
         self.camera_velocity_m_s = np.zeros(3)
         self.last_update: RainUpdate | None = None
@@ -87,36 +105,57 @@ class RainfallEffect(Effect):
         upd = self.last_update
         if upd is None:
             return ""
-        return f"{self.sim.live} drops alive, {len(upd.spawn_slots)} spawned, {upd.rejected} under roofs"
+        return f"{upd.drawn_expected:,.0f} of {self.sim.capacity:,} streaks drawn, {upd.rate_mm_h:.2f} mm/h"
 
     def _settings(self, frame):
         return frame.settings if frame.settings is not None else self.settings
 
     def _ensure(self, capacity: int, world) -> None:
-        if self.sim is not None and self.sim.capacity == capacity and self._world is world:
+        if self.sim is None or self.sim.capacity != capacity or self._world is not world:
+            self.sim = RainfallSim(capacity, seed=self.seed, world=world)
+            self._table_version = None
+        if self._world is not world or not self._static_tex:
+            self._world = world
+            self._upload_world(world)
+
+    def _texture(self, name: str, grid: np.ndarray, linear: bool = False) -> None:
+        old = self._static_tex.pop(name, None)
+        if old is not None:
+            old.release()
+        data = np.ascontiguousarray(grid, dtype=np.float32)
+        tex = self.ctx.texture((data.shape[1], data.shape[0]), 1, data.tobytes(), dtype="f4")
+        tex.filter = (moderngl.LINEAR, moderngl.LINEAR) if linear else (moderngl.NEAREST, moderngl.NEAREST)
+        tex.repeat_x, tex.repeat_y = False, True
+        self._static_tex[name] = tex
+
+    def _upload_world(self, world) -> None:
+        """The roof maps and the road's height map, once per world (a 1×1 open map without one)."""
+        if world is not None and hasattr(world, "occluder_map"):
+            for name, occ in (("fine", world.occluder_map), ("coarse", world.occluder_map_coarse)):
+                self._texture(name, np.where(np.isfinite(occ.grid), occ.grid, OPEN_M))
+                nz, nx = occ.grid.shape
+                self._occ_geom[name] = (float(occ.x0_m), float(occ.cell_m), float(nx), float(nz))
+        else:
+            for name in ("fine", "coarse"):
+                self._texture(name, np.full((1, 1), OPEN_M))
+                self._occ_geom[name] = (0.0, PERIOD_M, 0.0, 1.0)  # no columns: open everywhere
+        if world is not None and hasattr(world, "road_heightmap"):
+            self._texture("road", world.road_heightmap, linear=True)
+            self._road_extent = tuple(float(v) for v in world.heightmap_extent_m)
+        else:
+            self._texture("road", np.ones((1, 1)), linear=True)
+            self._road_extent = (1.0, 1.0)
+
+    def _sync_table(self) -> None:
+        if self._table_version == self.sim.table_version:
             return
-        self._release_buffers()
-        self.sim = RainfallSim(capacity, seed=self.seed, world=world)
-        self._world = world
-        rows = max(1, -(-capacity // DROPS_PER_ROW))
-        self._state_tex = self.ctx.texture((DROPS_PER_ROW * TEXELS_PER_DROP, rows), 4, dtype="f4")
-        self._state_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        self._state_fbo = self.ctx.framebuffer(color_attachments=[self._state_tex])
-        self._splash_buf = self.ctx.buffer(reserve=self.sim.splash_capacity * 32)
-        self._splash_vao = self.ctx.vertex_array(self.splash_prog, [(self._splash_buf, "4f 4f/i", "in_a", "in_b")])
-        self._generation = None
-
-    def _release_buffers(self) -> None:
-        for obj in (self._state_fbo, self._state_tex, self._scatter_vao, self._scatter_buf, self._splash_vao,
-                    self._splash_buf):
-            if obj is not None:
-                obj.release()
-        self._state_tex = self._state_fbo = self._scatter_buf = self._scatter_vao = None
-        self._splash_buf = self._splash_vao = None
-
-    def _clear_gpu(self) -> None:
-        self._state_fbo.clear(0.0, 0.0, 0.0, 0.0)
-        self._splash_buf.write(bytes(self._splash_buf.size))
+        table = self.sim.table
+        if self._table_tex is not None:
+            self._table_tex.release()
+        self._table_tex = self.ctx.texture((table.shape[1], table.shape[0]), 4,
+                                           np.ascontiguousarray(table, np.float32).tobytes(), dtype="f4")
+        self._table_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self._table_version = self.sim.table_version
 
     # --- Effect API ---
 
@@ -130,6 +169,7 @@ class RainfallEffect(Effect):
         if not self._enabled(frame):
             if self.sim is not None and self.sim.t_prev is not None:
                 self.sim.reset()
+                self.last_update = None
             self._prev_cam = None
 
     def active(self, frame) -> bool:
@@ -138,7 +178,7 @@ class RainfallEffect(Effect):
         if frame.rain_rate_mm_h > 0.0:
             return True
         sim = self.sim
-        return sim is not None and (sim.rate_eff > 0.0 or sim.live > 0 or sim.splashes_live(frame.time_s) > 0)
+        return sim is not None and sim.rate_eff > 0.0  # stateless: no drop outlives the rate ramp
 
     def camera_velocity(self, frame) -> np.ndarray:
         """Velocity (m/s, world) of the camera: the ego car's at the camera point (with its yaw rate) for the
@@ -175,52 +215,11 @@ class RainfallEffect(Effect):
                         wetness=getattr(weather, "wetness", 0.0), puddles=getattr(weather, "puddles", 0.0),
                         vehicles=tuple(frame.vehicles))
         upd = self.sim.advance(inp)
-        if self._generation != self.sim.generation:
-            self._clear_gpu()
-            self._generation = self.sim.generation
-        self._upload(upd)
+        self._sync_table()
         self.camera_velocity_m_s = v_cam
         if frame.time_s > (self._prev_cam[1] if self._prev_cam is not None else -math.inf):
             self._prev_cam = (np.asarray(frame.camera.position, dtype=np.float64).copy(), frame.time_s)
         self.last_update = upd
-
-    def _upload(self, upd: RainUpdate) -> None:
-        n_kill, n_new = upd.kill_slots.size, upd.spawn_slots.size
-        if n_kill + n_new:
-            rec = np.zeros(n_kill + 3 * n_new, dtype=_SCATTER_DTYPE)
-            kill = upd.kill_slots
-            rec["texel"][:n_kill] = self._texel(kill, 1)  # lifetime 0: culled (and never revived by the wrap)
-            new = upd.spawn_slots
-            for j in range(TEXELS_PER_DROP):
-                part = rec[n_kill + j * n_new: n_kill + (j + 1) * n_new]
-                part["texel"] = self._texel(new, j)
-                part["value"] = upd.spawn_texels[:, j, :]
-            data = rec.tobytes()
-            if self._scatter_buf is None or self._scatter_buf.size < len(data):
-                if self._scatter_vao is not None:
-                    self._scatter_vao.release()
-                    self._scatter_buf.release()
-                self._scatter_buf = self.ctx.buffer(reserve=max(len(data), 1 << 16) * 2)
-                self._scatter_vao = self.ctx.vertex_array(
-                    self.scatter_prog, [(self._scatter_buf, "1i 4f", "in_texel", "in_value")])
-            self._scatter_buf.write(data)
-            self.ctx.disable(moderngl.BLEND)
-            self.ctx.disable(moderngl.DEPTH_TEST)
-            self._state_fbo.use()
-            set_uniform(self.scatter_prog, "u_size", self._state_tex.size)
-            self._scatter_vao.render(moderngl.POINTS, vertices=len(rec))
-        if upd.splash_slots.size:
-            slots, data = upd.splash_slots, upd.splash_data
-            cut = int(np.flatnonzero(np.diff(slots) != 1)[0]) + 1 if np.any(np.diff(slots) != 1) else slots.size
-            for part_s, part_d in ((slots[:cut], data[:cut]), (slots[cut:], data[cut:])):
-                if part_s.size:
-                    self._splash_buf.write(np.ascontiguousarray(part_d).tobytes(), offset=int(part_s[0]) * 32)
-
-    @staticmethod
-    def _texel(slots: np.ndarray, j: int) -> np.ndarray:
-        row = slots // DROPS_PER_ROW
-        return (row * DROPS_PER_ROW * TEXELS_PER_DROP + TEXELS_PER_DROP * (slots - row * DROPS_PER_ROW) + j
-                ).astype(np.int32)
 
     def streak_camera(self, rc) -> StreakCamera:
         """The camera as the streak shader sees it this frame (for the NumPy twin)."""
@@ -252,61 +251,155 @@ class RainfallEffect(Effect):
         self._env_vao.render(moderngl.TRIANGLES, vertices=3)
         rc.hdr.fbo.use()
 
+    def drop_uniforms(self, upd: RainUpdate, shift_z: float, around_z: float) -> dict:
+        """The uniforms of rainfall/drops.glsl for one frame (boxes in the frame shifted by shift_z; vehicles
+        wrapped near around_z). Everything is a small number: time and offsets are reduced in float64 here."""
+        sim = self.sim
+        boxes = upd.boxes
+        whole, frac, epoch = time_split(upd.time_s)
+        off, turb, yoff = box_offsets(boxes, upd.wind_integral_m)
+        off[:, 1] = yoff
+        lo = boxes.lo - [0.0, 0.0, shift_z]
+        out = {
+            "u_seed_key": int(sim.key), "u_layer_start": np.asarray(upd.starts[:-1], np.int32).tobytes(),
+            "u_drop_table": units.RAINFALL_DROPS, "u_time_whole": whole, "u_time_frac": frac, "u_epoch": epoch,
+            "u_box_lo": lo, "u_box_ext": boxes.ext, "u_box_off": off, "u_box_turb": turb,
+            "u_box_fade": boxes.fade, "u_box_fade_bottom": boxes.fade_bottom, "u_layer_rho": upd.density,
+            "u_wind": tuple(float(v) for v in upd.wind_m_s), "u_turb_eps": TURB_EPS,
+            "u_thin": (upd.thin_a, upd.thin_b, upd.thin_c),
+            "u_occ_fine": units.RAINFALL_OCCLUDER, "u_occ_coarse": units.RAINFALL_OCCLUDER_COARSE,
+            "u_occ_fine_geom": self._occ_geom["fine"], "u_occ_coarse_geom": self._occ_geom["coarse"],
+            "u_period_world": PERIOD_M, "u_ground_y": GROUND_Y_M,
+        }
+        out.update(vehicle_uniforms(list(upd.vehicles), shift_z, around_z))
+        return out
+
+    def _bind_static(self) -> None:
+        self._table_tex.use(units.RAINFALL_DROPS)
+        self._static_tex["fine"].use(units.RAINFALL_OCCLUDER)
+        self._static_tex["coarse"].use(units.RAINFALL_OCCLUDER_COARSE)
+        self._static_tex["road"].use(units.RAINFALL_ROAD_HEIGHT)
+
+    def splash_uniforms(self, upd: RainUpdate, shift_z: float) -> dict:
+        boxes = upd.boxes
+        lo_w, ext = boxes.lo[SPLASH_LAYER], boxes.ext[SPLASH_LAYER]
+        count, tau = splash_clock(upd.time_s)
+        return {
+            "u_splash_key": int(self.sim.splash_key), "u_splash_count": count, "u_splash_tau": tau,
+            "u_splash_period": SPLASH_PERIOD_S, "u_splash_accept": upd.splash_accept,
+            "u_splash_weight": upd.splash_weight, "u_splash_lam": upd.splash_lam,
+            "u_splash_lo": tuple(lo_w - [0.0, 0.0, shift_z]), "u_splash_ext": tuple(ext),
+            "u_splash_off": tuple(np.mod(-lo_w, ext)), "u_splash_v": SPLASH_V_M_S.astype(np.float32),
+            "u_wetness": upd.wetness, "u_puddles": upd.puddles, "u_road_height": units.RAINFALL_ROAD_HEIGHT,
+            "u_road_extent": self._road_extent,
+            "u_road_geom": (layout.ROAD_HALF_WIDTH_M, layout.ROAD_HALF_WIDTH_M + layout.KERB_WIDTH_M
+                            + layout.SIDEWALK_WIDTH_M, layout.KERB_HEIGHT_M),
+            "u_crown_per_d": SPLASH_CROWN_HEIGHT_PER_D, "u_splash_alpha_max": ALPHA_MAX,
+        }
+
+    def _set(self, prog, values: dict) -> None:
+        """set_uniforms, skipping own uniforms whose value is the one last written to this program."""
+        owner, cache = _WRITTEN.get(id(prog), (None, None))
+        if owner != self._token:
+            cache = {}
+            _WRITTEN[id(prog)] = (self._token, cache)
+        for name, value in values.items():
+            if not name.startswith(_OWN_UNIFORMS):
+                set_uniform(prog, name, value)
+                continue
+            if isinstance(value, np.ndarray):
+                value = np.ascontiguousarray(value, dtype=np.float32).tobytes()
+            if cache.get(name) == value:
+                continue
+            set_uniform(prog, name, value)
+            cache[name] = value
+
     def render(self, stage: str, rc) -> None:
-        if stage != "transparent" or self.sim is None or self.sim.boxes is None:
+        upd = self.last_update
+        if stage != "transparent" or self.sim is None or upd is None or upd.rate_mm_h <= 0.0:
             return
         s = self._settings(rc.frame)
         ctx = rc.ctx
-        boxes = self.sim.boxes
-        shift = np.array([0.0, 0.0, rc.shift_z])
+        boxes = upd.boxes
         self._draw_environment(rc)
         lights = self._lights(rc, boxes)
         common = {
-            "u_period_z": PERIOD_M, "u_time_mod": float(np.mod(rc.frame.time_s, TIME_PERIOD_S)),
-            "u_time_period": TIME_PERIOD_S, "u_viewport": tuple(float(v) for v in rc.size),
+            "u_viewport": tuple(float(v) for v in rc.size),
             "u_focal_px": float(rc.projection[1, 1]) * rc.size[1] / 2.0,
             "u_brightness": float(s.rainfall.streak_brightness), "u_rain_env": units.RAINFALL_ENV,
             "u_light_pos": lights[0], "u_light_dir": lights[1], "u_light_color": lights[2],
             "u_light_count": lights[3],
         }
+        common.update(self.drop_uniforms(upd, rc.shift_z, float(rc.camera_position[2])))
         self._env_tex.use(units.RAINFALL_ENV)
+        self._bind_static()
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE)
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
         rc.hdr.fbo.depth_mask = False
         try:
-            count = self.sim.pool.high_water
-            if count:
+            if self.sim.capacity and upd.drawn_expected > 0.0:
                 prog = self.streak_prog
                 rc.set_frame_uniforms(prog)
-                set_uniforms(prog, common)
-                set_uniforms(prog, {
-                    "u_state": units.RAINFALL_STATE, "u_drops_per_row": DROPS_PER_ROW,
+                self._set(prog, common)
+                self._set(prog, {
                     "u_cam_vel": tuple(self.camera_velocity_m_s), "u_exposure_s": float(s.camera.exposure_s),
-                    "u_near": float(rc.frame.camera.near_m), "u_box_lo": boxes.lo - shift,
-                    "u_box_hi": boxes.hi - shift, "u_box_fade": boxes.fade, "u_layer_nu": boxes.nu,
+                    "u_near": float(rc.frame.camera.near_m),
                     "u_shape_area": self._shape_area, "u_shape_width": self._shape_width,
                     "u_width_floor_px": WIDTH_FLOOR_PX, "u_width_max_px": WIDTH_MAX_PX, "u_alpha_max": ALPHA_MAX,
                 })
-                self._state_tex.use(units.RAINFALL_STATE)
-                self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=count)
-            if s.rainfall.splashes and self.sim.splashes_live(rc.frame.time_s):
+                self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
+            if s.rainfall.splashes and upd.splashes and upd.splash_accept > 0.0:
                 prog = self.splash_prog
                 rc.set_frame_uniforms(prog)
-                set_uniforms(prog, common, u_crown_per_d=SPLASH_CROWN_HEIGHT_PER_D, u_splash_alpha_max=ALPHA_MAX)
+                self._set(prog, common)
+                self._set(prog, self.splash_uniforms(upd, rc.shift_z))
                 self._splash_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.splash_capacity)
         finally:
             rc.hdr.fbo.depth_mask = True
             ctx.disable(moderngl.BLEND)
             ctx.blend_func = moderngl.DEFAULT_BLENDING
 
+    def read_drops(self, shift_z: float = 0.0, around_z: float = 0.0) -> np.ndarray:
+        """Test probe: every instance's (x, y, z in the frame shifted by shift_z, flags) as the GPU computes it
+        for the last update (flags: 1 drawn by the thinning, 2 occluded), (capacity, 4) float32."""
+        upd = self.last_update
+        n = self.sim.capacity
+        rows = max(1, -(-n // PROBE_WIDTH))
+        if self._probe is None:
+            self._probe = self.shaders.program("rainfall/debug_drops.vert", "rainfall/debug_drops.frag",
+                                               defines={"LAYERS": len(LAYER_SCALES)})
+        tex = self.ctx.texture((PROBE_WIDTH, rows), 4, dtype="f4")
+        fbo = self.ctx.framebuffer(color_attachments=[tex])
+        vao = self.ctx.vertex_array(self._probe, [])
+        try:
+            fbo.use()
+            fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self.ctx.disable(moderngl.BLEND)
+            self.ctx.disable(moderngl.DEPTH_TEST)
+            set_uniforms(self._probe, self.drop_uniforms(upd, shift_z, around_z))
+            set_uniforms(self._probe, u_probe_width=PROBE_WIDTH, u_probe_size=(float(PROBE_WIDTH), float(rows)))
+            self._bind_static()
+            vao.render(moderngl.POINTS, vertices=n)
+            data = np.frombuffer(fbo.read(components=4, dtype="f4"), np.float32).reshape(rows * PROBE_WIDTH, 4)
+        finally:
+            vao.release()
+            fbo.release()
+            tex.release()
+        return data[:n].copy()
+
     def release(self) -> None:
-        """Free the buffers, textures and vertex arrays, and the programs when the shader library is our own (a
-        shared library's owner releases it: its programs serve every effect that asks for them)."""
-        self._release_buffers()
-        for obj in (self._streak_vao, self._env_vao, self._env_fbo, self._env_tex):
+        """Free the textures and vertex arrays, and the programs when the shader library is our own (a shared
+        library's owner releases it: its programs serve every effect that asks for them)."""
+        for prog in (self.streak_prog, self.splash_prog):
+            _WRITTEN.pop(id(prog), None)
+        for obj in (self._table_tex, *self._static_tex.values()):
+            if obj is not None:
+                obj.release()
+        self._static_tex = {}
+        self._table_tex = None
+        for obj in (self._streak_vao, self._splash_vao, self._env_vao, self._env_fbo, self._env_tex):
             obj.release()
         if self._owns_shaders:
             self.shaders.release()
-

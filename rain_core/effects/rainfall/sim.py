@@ -1,5 +1,7 @@
-"""The rainfall simulation (CPU, NumPy only): keeps the container filled with drops whose fate is settled when they
-spawn, retires them when due, and spawns splashes. ``RainfallSim.advance(RainInput) -> RainUpdate``."""
+"""The rainfall simulation (CPU, NumPy only). Drops have no state: ``RainfallSim.advance(RainInput) ->
+RainUpdate`` computes, once per frame, the few numbers the shaders need (the boxes, the wind's integral, the
+thinning, the splash rate), whatever the budget; ``drops`` and ``splashes`` are the float64 twins of the
+shaders (``shaders/rainfall/drops.glsl``, ``splash.vert``) for the tests and the benchmark."""
 
 from __future__ import annotations
 
@@ -9,41 +11,63 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rain_core import layout, physics
-from rain_core.effects.rainfall.boxes import Boxes, layer_boxes, wrap_near
+from rain_core import checks, layout, physics
+from rain_core.effects.rainfall.boxes import Boxes, box_heights, drawn_density_factor, layer_boxes, membership
 from rain_core.effects.rainfall.constants import (
+    BOX_BOTTOM_Y_M,
     BUDGET_FULL_AT_MM_H,
-    FATE_CHUNK,
     GROUND_Y_M,
-    HEADROOM,
-    MIN_RECHECK_S,
-    OPEN_PROBE_BLEND,
-    OPEN_PROBE_EVERY,
-    OPEN_PROBES,
-    OPEN_PROBES_FIRST,
-    PERIOD_M,
+    LAYER_PROFILE,
+    LAYER_SCALES,
     RATE_OFF_MM_H,
     RATE_RAMP_S,
     SPLASH_CAPACITY_MAX,
     SPLASH_CAPACITY_MIN,
     SPLASH_D_MIN_MM,
     SPLASH_LAYER,
-    SPLASH_LIFE_S,
-    TIME_PERIOD_S,
-    TURBULENCE,
+    SPLASH_PERIOD_S,
     TYPE_FILM_CROWN,
     TYPE_PROMPT,
     TYPE_PUDDLE_CROWN,
 )
-from rain_core.effects.rainfall.occluders import OccluderField
-from rain_core.effects.rainfall.pool import DropPool
-from rain_core.effects.rainfall.rates import drawn_share, sample_truncated_exp, splash_flux_per_m2_s, splash_life_s
-from rain_core.effects.rainfall.vehicle_fate import near_boxes, vehicle_fate
+from rain_core.effects.rainfall.drops import (
+    SALT_D,
+    SALT_KEEP,
+    SALT_KIND,
+    SALT_PHASE,
+    SALT_SPLASH,
+    SALT_TURB_X,
+    SALT_TURB_Z,
+    SALT_V,
+    SALT_X,
+    SALT_Z,
+    TURB_EPS,
+    cycle_hash,
+    cycles,
+    drop_table,
+    hash32,
+    instance_keys,
+    seed_key,
+    table_bin,
+    truncated_exp_quantile,
+    turbulence_steps,
+    u01,
+)
+from rain_core.effects.rainfall.rates import LAM_INSTANCES, splash_flux_per_m2_s, splash_life_s, thinning
+from rain_core.effects.rainfall.vehicle_fate import cull_vehicles, inside_vehicles
+
+CAPACITY_MAX = 4_000_000  # instances; the settings allow 1M (quality.particle_budget)
+CONTAINER_RANGE_M = (10.0, 120.0)  # m, as the settings' rainfall.container_m
+DENSITY_SCALE_MAX = 4.0  # as the settings' rainfall.density_scale
+# Splash fall speeds for the shader's table (u_splash_v): D = SPLASH_D_MIN_MM … D_MAX_MM in 15 steps.
+SPLASH_V_D_MM = np.linspace(SPLASH_D_MIN_MM, physics.D_MAX_MM, 16)
+SPLASH_V_M_S = np.asarray(physics.terminal_velocity(SPLASH_V_D_MM)).astype(np.float32).astype(np.float64)
 
 
 @dataclass
 class RainInput:
-    """What the rain simulation needs from one frame. Positions and velocities in the world frame (m, m/s)."""
+    """What the rain simulation needs from one frame. Positions and velocities in the world frame (m, m/s).
+    Validated on construction: ValueError naming the field and its range."""
 
     time_s: float
     camera_position: np.ndarray
@@ -58,385 +82,305 @@ class RainInput:
     puddles: float = 0.0
     vehicles: tuple = ()
 
+    def __post_init__(self):
+        self.time_s = checks.number("time_s", self.time_s, unit="s")
+        self.camera_position = checks.vec3("camera_position", self.camera_position, "m")
+        self.camera_forward = checks.vec3("camera_forward", self.camera_forward, "any length")
+        self.camera_velocity = checks.vec3("camera_velocity", self.camera_velocity, "m/s", physics.MAX_SPEED_M_S)
+        self.rate_mm_h = checks.number("rate_mm_h", self.rate_mm_h, 0.0, physics.R_MAX_MM_H, "mm/h")
+        self.wind_m_s = checks.vec3("wind_m_s", self.wind_m_s, "m/s", physics.MAX_SPEED_M_S)
+        self.container_m = checks.number("container_m", self.container_m, *CONTAINER_RANGE_M, "m")
+        self.density_scale = checks.number("density_scale", self.density_scale, 0.0, DENSITY_SCALE_MAX, "×")
+        self.wetness = checks.number("wetness", self.wetness, 0.0, 1.0)
+        self.puddles = checks.number("puddles", self.puddles, 0.0, 1.0)
+
 
 @dataclass
 class RainUpdate:
-    """What changed in one ``advance``: GPU writes and statistics."""
+    """One frame's state of the rain, all the GPU needs (uniforms; nothing per drop). Units: m, s, m/s, mm/h."""
 
-    spawn_slots: np.ndarray
-    spawn_texels: np.ndarray  # (n, 3, 4) float32, the GPU layout of the new drops
-    kill_slots: np.ndarray  # slots freed this frame (cleared on the GPU)
-    splash_slots: np.ndarray
-    splash_data: np.ndarray  # (m, 8) float32
-    candidates: int = 0  # drops sampled in the new region (before occlusion and the budget)
-    rejected: int = 0  # of those, under a roof, in a rain shadow or inside a vehicle
-    overflow: int = 0  # refused because the buffer was full
+    time_s: float
+    boxes: Boxes  # world frame
+    rate_mm_h: float  # the effect's rate (ramped)
+    wind_m_s: np.ndarray
+    wind_integral_m: np.ndarray  # ∫ wind dt (float64; the shader gets it modulo each box)
+    thin_a: float  # r(D) = thin_a·exp(−thin_b·D): real drops per m³ per unit instance density (rates.thinning)
+    thin_b: float
+    thin_c: float
+    density: np.ndarray  # (L,) instances per m³ of each layer's box
+    starts: np.ndarray  # (L + 1,) first instance index of each layer
+    drawn_expected: float  # instances expected to pass the thinning
+    splash_accept: float  # share of the splash slots' impacts drawn
+    splash_weight: float  # real impacts per drawn splash
+    splash_lam: float  # 1/mm, Marshall–Palmer slope of the splashing drops
+    wetness: float
+    puddles: float
+    splashes: bool
+    vehicles: tuple  # the vehicles that cull drops (nearest first, at most MAX_VEHICLES)
     cpu_ms: float = 0.0
 
 
-def _empty_update() -> RainUpdate:
-    return RainUpdate(np.zeros(0, np.int64), np.zeros((0, 3, 4), np.float32), np.zeros(0, np.int64),
-                      np.zeros(0, np.int64), np.zeros((0, 8), np.float32))
-
-
 class RainfallSim:
-    """The CPU side of the rainfall: the drop pool, the container, spawning with settled fates, and splashes.
+    """The CPU side of the rainfall: per frame a handful of numbers, and the float64 twin of every drop.
 
-    capacity: the particle budget (drops); seed: seeds every random draw (same seed and inputs → same drops);
-    world: a rain_core.world.World (its roof map) or None for open ground everywhere.
-    ``advance(RainInput) -> RainUpdate``; the per-slot arrays (``pos0``, ``vel``, ``t0``, ``t_hit``,
-    ``diameter``, ``weight``, ``layer``) describe the live drops (``pool.alive``)."""
+    capacity: the particle budget (instances, [0, CAPACITY_MAX]); seed: mixed into every hash (same seed and
+    inputs → same drops); world: a rain_core.world.World (its roof map and road height map) or None for open
+    ground everywhere. ``advance(RainInput) -> RainUpdate``; ``drops()`` and ``splashes()`` evaluate the
+    instances as the shaders do."""
 
     def __init__(self, capacity: int, seed: int = 0, world=None):
+        if isinstance(capacity, bool) or not isinstance(capacity, int | np.integer) or not (
+                0 <= capacity <= CAPACITY_MAX):
+            raise ValueError(f"capacity must be an integer in [0, {CAPACITY_MAX}] drops, got {checks.quote(capacity)}")
         self.capacity = int(capacity)
         self.seed = int(seed)
+        self.key = seed_key(self.seed)
+        self.splash_key = self.key ^ SALT_SPLASH
         self.world = world
-        self.occluders = OccluderField(world) if world is not None and hasattr(world, "occluder_map") else None
         self.splash_capacity = int(np.clip(self.capacity // 16, SPLASH_CAPACITY_MIN, SPLASH_CAPACITY_MAX))
+        self.container_m: float | None = None
+        self.table = np.zeros((len(LAYER_SCALES), 1, 4), np.float32)
+        self.table_version = 0
+        self._thin_key = None
+        self._thin = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
         self.reset()
 
     def reset(self) -> None:
-        """Forget every drop and splash (the next ``advance`` fills the container at once)."""
-        c = self.capacity
-        self.rng = np.random.default_rng(self.seed)
-        self.pool = DropPool(c)
-        self.pos0 = np.zeros((c, 3))
-        self.vel = np.zeros((c, 3))
-        self.t0 = np.zeros(c)
-        self.t_hit = np.zeros(c)
-        self.diameter = np.zeros(c)
-        self.weight = np.zeros(c)
-        self.layer = np.zeros(c, dtype=np.int64)
+        """Forget the frame history (the next ``advance`` starts at the set rate, with no wind travelled)."""
         self.rate_eff = 0.0
-        self.kappa = 0.0
-        self.boxes: Boxes | None = None
-        self.open_fraction: np.ndarray | None = None
-        self._probe_frames = 0
+        self.fade = 0.0  # the air's drops while the rain stops: → 0 with the rate, → 1 while it rains
         self.t_prev: float | None = None
-        self.splash_head = 0
-        self.splash_t0 = np.full(self.splash_capacity, -np.inf)
-        self.splash_life = np.zeros(self.splash_capacity)
-        self.splash_pos = np.zeros((self.splash_capacity, 3))
-        self.splash_weight = np.zeros(self.splash_capacity)
-        self.generation = getattr(self, "generation", -1) + 1  # tells the GPU side to clear its copy
+        self.wind_integral = np.zeros(3)
+        self.last: RainUpdate | None = None
 
     @property
-    def live(self) -> int:
-        return self.pool.live
+    def boxes(self) -> Boxes | None:
+        return None if self.last is None else self.last.boxes
 
-    def splashes_live(self, time_s: float) -> int:
-        return int(np.count_nonzero(self.splash_t0 + self.splash_life > time_s))
+    # --- layout: instances per layer, the drop table ---
 
-    def target_count(self, rate_mm_h: float, density_scale: float) -> float:
-        """Expected live drops at rate R (mm/h): HEADROOM × budget × drawn_share(density_scale·…)."""
-        return HEADROOM * self.capacity * min(1.0, density_scale * drawn_share(rate_mm_h))
-
-    def positions(self, slots, time_s: float) -> np.ndarray:
-        """World positions (m) of drops at time_s (no z wrap)."""
-        slots = np.asarray(slots)
-        return self.pos0[slots] + self.vel[slots] * (time_s - self.t0[slots])[:, None]
+    def _layout(self, container_m: float) -> None:
+        if container_m == self.container_m:
+            return
+        self.container_m = container_m
+        heights = box_heights(container_m)
+        h = 0.5 * container_m * np.asarray(LAYER_SCALES)
+        volumes = (2.0 * h) ** 2 * heights
+        share = np.asarray(LAYER_PROFILE) * volumes
+        counts = np.floor(self.capacity * share / share.sum()).astype(np.int64)
+        counts[-1] = self.capacity - counts[:-1].sum()
+        self.counts = counts
+        self.starts = np.concatenate([[0], np.cumsum(counts)])
+        self.density = counts / volumes
+        self.table = drop_table(heights, LAM_INSTANCES)
+        self.table_version += 1
+        self._thin_key = None
 
     # --- one frame ---
 
     def advance(self, inp: RainInput) -> RainUpdate:
-        """Advance to inp.time_s: retire due drops, spawn into the new region, spawn splashes."""
+        """Advance to inp.time_s: the rate ramp, the wind's integral, the boxes, the thinning, the splash rate."""
         t_start = time.perf_counter()
-        t = float(inp.time_s)
+        t = inp.time_s
         if self.t_prev is not None and t < self.t_prev - 1e-9:
             self.reset()
         first = self.t_prev is None
         dt = 0.0 if first else t - self.t_prev
-        target = max(float(inp.rate_mm_h), 0.0)
+        target = inp.rate_mm_h
+        fade_target = 1.0 if target > 0.0 else 0.0
         if first:
-            self.rate_eff = target
+            self.rate_eff, self.fade = target, fade_target
         else:
-            self.rate_eff = target + (self.rate_eff - target) * math.exp(-dt / RATE_RAMP_S)
+            # The rate follows the set rate; the fade empties the air when it stops: Marshall–Palmer's count
+            # falls only as R^0.21, so without it the last drops would vanish at once at RATE_OFF_MM_H.
+            k = math.exp(-dt / RATE_RAMP_S)
+            self.rate_eff = target + (self.rate_eff - target) * k
+            self.fade = fade_target + (self.fade - fade_target) * k
+            if abs(self.rate_eff - target) < 1e-9 * max(target, 1.0):
+                self.rate_eff = target
+            if abs(self.fade - fade_target) < 1e-9:
+                self.fade = fade_target
             if target == 0.0 and self.rate_eff < RATE_OFF_MM_H:
-                self.rate_eff = 0.0
+                self.rate_eff = self.fade = 0.0
+        wind = np.asarray(inp.wind_m_s, dtype=np.float64)
+        self.wind_integral = self.wind_integral + wind * dt
+        self._layout(inp.container_m)
         boxes = layer_boxes(inp.camera_position, inp.camera_forward, inp.container_m)
-        upd = _empty_update()
-        v_cam = np.asarray(inp.camera_velocity, dtype=np.float64)
-        kills = self._retire(t, boxes, v_cam)
-        if self.capacity > 0 and self.rate_eff > 0.0:
-            self._spawn(t, dt, boxes, None if first else self.boxes, inp, v_cam, upd)
-        upd.kill_slots = kills
-        if inp.splashes and (first or dt > 0):
-            self._spawn_splashes(t, SPLASH_LIFE_S[1] if first else dt, boxes, inp, upd)
-        self.boxes = boxes
+        scale = inp.density_scale * self.fade
+        lo, hi = boxes.lo[SPLASH_LAYER], boxes.hi[SPLASH_LAYER]
+        area = float((hi[0] - lo[0]) * (hi[2] - lo[2]))
+        key = (self.rate_eff, scale, area)
+        if key != self._thin_key:  # the rate settles after the ramp: then nothing here is recomputed
+            a, b, c = thinning(self.rate_eff, scale, float(self.density.sum()))
+            drawn = drawn_fraction_of_table(self.table, a, b, c) * self.capacity
+            self._thin = (a, b, c, drawn, *self.splash_rate_per_s(self.rate_eff, area, scale))
+            self._thin_key = key
+        a, b, c, drawn, per_s, weight = self._thin
+        outer = 0.5 * inp.container_m
+        near = cull_vehicles(inp.vehicles, inp.camera_position[[0, 2]], 2.0 * outer) if inp.vehicles else []
+        upd = RainUpdate(
+            time_s=t, boxes=boxes, rate_mm_h=self.rate_eff, wind_m_s=wind, wind_integral_m=self.wind_integral.copy(),
+            thin_a=a, thin_b=b, thin_c=c, density=self.density, starts=self.starts, drawn_expected=drawn,
+            splash_accept=min(1.0, per_s * SPLASH_PERIOD_S / self.splash_capacity), splash_weight=weight,
+            splash_lam=float(physics.mp_slope_per_mm(self.rate_eff)) if self.rate_eff > 0 else 1e3,
+            wetness=inp.wetness, puddles=inp.puddles, splashes=bool(inp.splashes), vehicles=tuple(near))
+        self.last = upd
         self.t_prev = t
         upd.cpu_ms = (time.perf_counter() - t_start) * 1e3
         return upd
 
-    def _retire(self, t: float, boxes: Boxes, v_cam: np.ndarray) -> np.ndarray:
-        due = self.pool.pop_due(t)
-        if due.size == 0:
-            return due
-        p = self.positions(due, t)
-        lay = self.layer[due]
-        p[:, 2] = wrap_near(p[:, 2], 0.5 * (boxes.lo[lay, 2] + boxes.hi[lay, 2]))
-        inside = np.all((p >= boxes.lo[lay]) & (p <= boxes.hi[lay]), axis=1)
-        dead = (t >= self.t_hit[due] - 1e-9) | ~inside
-        self.pool.release(due[dead])
-        keep = due[~dead]
-        self._schedule(keep, p[~dead], t, boxes, v_cam)
-        return due[dead]
+    def target_count(self, rate_mm_h: float, density_scale: float = 1.0) -> float:
+        """Instances expected to be drawn at rate R (mm/h), by the current layout (after a first ``advance``)."""
+        a, b, c = thinning(rate_mm_h, density_scale, float(self.density.sum()))
+        return drawn_fraction_of_table(self.table, a, b, c) * self.capacity
 
-    def _schedule(self, slots, p, t, boxes: Boxes, v_cam) -> None:
-        """File slots under min(hit time, when they would leave their box at the current relative velocity)."""
-        if slots.size == 0:
-            return
-        lay = self.layer[slots]
-        w = self.vel[slots] - v_cam
-        lo, hi = boxes.lo[lay], boxes.hi[lay]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_axis = np.where(w > 1e-6, (hi - p) / w, np.where(w < -1e-6, (lo - p) / w, np.inf))
-        t_exit = np.min(t_axis, axis=1)
-        due = np.minimum(self.t_hit[slots], t + np.maximum(t_exit, MIN_RECHECK_S))
-        self.pool.schedule(slots, due, t)
+    # --- the twin of the shaders ---
 
-    def fate(self, pos: np.ndarray, u: np.ndarray, boxes: Boxes, vehicles=()) -> tuple[np.ndarray, np.ndarray]:
-        """(keep, lifetime s) of drops at pos (m) moving at u (m/s): the ground, the roofs, the nearby vehicles
-        (those within FATE_CHUNK-sized batches, to bound memory)."""
-        near = [v for v in vehicles if near_boxes(v, boxes)]
-        keep = np.empty(len(pos), dtype=bool)
-        life = np.empty(len(pos))
-        for a in range(0, len(pos), FATE_CHUNK):
-            p, w = pos[a: a + FATE_CHUNK], u[a: a + FATE_CHUNK]
-            t = (p[:, 1] - GROUND_Y_M) / -w[:, 1]
-            k = p[:, 1] > GROUND_Y_M
-            if self.occluders is not None:
-                k2, t = self.occluders.fate(p, w, t)
-                k &= k2
-            if near:
-                k3, t = vehicle_fate(p, w, t, near)
-                k &= k3
-            keep[a: a + FATE_CHUNK] = k & (t > 0.0)
-            life[a: a + FATE_CHUNK] = t
-        return keep, life
+    def _frame(self, time_s):
+        upd = self.last
+        if upd is None:
+            raise RuntimeError("RainfallSim: call advance() first")
+        t = upd.time_s if time_s is None else float(time_s)
+        return upd, t, upd.wind_integral_m + upd.wind_m_s * (t - upd.time_s)
 
-    def _probe_open(self, boxes: Boxes, wind, rate: float, vehicles, first: bool) -> None:
-        """Track the share of each box that rain can reach (not under roofs, not inside vehicles), so that the
-        budget goes to the open air: an exponential average over random probe drops put through the same fate
-        tests as the real ones."""
-        n = OPEN_PROBES_FIRST if first else OPEN_PROBES
-        if self.occluders is None and not vehicles:
-            self.open_fraction = np.ones(len(boxes.nu))
-            return
-        if not first and self.open_fraction is not None and self._probe_frames > 0:
-            self._probe_frames -= 1
-            return
-        self._probe_frames = OPEN_PROBE_EVERY - 1
-        rng = np.random.default_rng(self.rng.integers(2**63))  # its own stream: probes never shift the drops
-        frac = np.empty(len(boxes.nu))
-        for k in range(len(boxes.nu)):
-            p = boxes.lo[k] + rng.random((n, 3)) * (boxes.hi[k] - boxes.lo[k])
-            u = np.zeros((n, 3))
-            u[:, [0, 2]] = wind[[0, 2]]
-            u[:, 1] = -physics.terminal_velocity(physics.sample_drop_diameters(rate, n, rng))
-            frac[k] = max(self.fate(p, u, boxes, vehicles)[0].mean(), 0.05)
-        if first or self.open_fraction is None:
-            self.open_fraction = frac
-        else:
-            self.open_fraction += OPEN_PROBE_BLEND * (frac - self.open_fraction)
+    def layer_of(self, index) -> np.ndarray:
+        return np.searchsorted(self.starts, np.asarray(index), side="right") - 1
 
-    def _new_region(self, k: int, boxes: Boxes, prev: Boxes | None, wind_xz, dt: float, density: float,
-                    rate: float) -> tuple[np.ndarray, np.ndarray]:
-        """Sample the drops (positions m, diameters mm) in layer k's box that were not in its previous box."""
-        rng = self.rng
-        lo, hi = boxes.lo[k], boxes.hi[k]
-        ext = hi - lo
-        if prev is None:
-            n = int(rng.poisson(density * float(np.prod(ext))))
-            pos = lo + rng.random((n, 3)) * ext
-            return pos, physics.sample_drop_diameters(rate, n, rng)
-        lo_p, hi_p = prev.lo[k], prev.hi[k]
-        v_max = float(physics.terminal_velocity(physics.D_MAX_MM))
-        shift_h = {0: wind_xz[0] * dt, 2: wind_xz[1] * dt}
+    def drops(self, index=None, time_s: float | None = None) -> dict[str, np.ndarray]:
+        """The instances ``index`` (default all) at time_s (default the last frame's; the wind's integral is
+        extrapolated with the last wind), float64, as ``shaders/rainfall/drops.glsl`` computes them.
 
-        def prev_interval(axis, v):
-            s = -v * dt if axis == 1 else shift_h[axis]
-            return lo_p[axis] + s, hi_p[axis] + s
+        Returns arrays: ``index``, ``layer``, ``d_mm``, ``pos`` (n, 3) m world, ``vel`` (n, 3) m/s, ``cycle``
+        (uint32), ``s`` (fraction of the current pass), ``drawn`` (passed the thinning), ``occluded`` (under a
+        roof, in a vehicle or below the ground), ``visible`` (drawn and not occluded, with a weight > 0),
+        ``weight`` (real drops each stands for, membership included)."""
+        upd, t, w_int = self._frame(time_s)
+        idx = np.arange(self.capacity) if index is None else np.asarray(index, dtype=np.int64)
+        layer = self.layer_of(idx)
+        keys = instance_keys(idx, self.key)
+        phase = u01(hash32(keys ^ SALT_PHASE))
+        tab = self.table[layer, table_bin(idx)].astype(np.float64)
+        d, m, vq = tab[:, 0], tab[:, 1], tab[:, 2]
+        count, s = cycles(m, phase, t)
+        hc = cycle_hash(keys, count)
+        x0, z0 = u01(hash32(hc ^ SALT_X)), u01(hash32(hc ^ SALT_Z))
+        keep = u01(hash32(hc ^ SALT_KEEP))
+        jx, jz = turbulence_steps(hc, SALT_TURB_X), turbulence_steps(hc, SALT_TURB_Z)
+        boxes = upd.boxes
+        lo, ext = boxes.lo[layer], boxes.ext[layer]
+        off, turb, yoff = box_offsets(boxes, w_int)
+        pos = np.empty((len(idx), 3))
+        pos[:, 0] = lo[:, 0] + np.mod(x0 * ext[:, 0] + off[layer, 0] + jx * turb[layer, 0], ext[:, 0])
+        pos[:, 1] = lo[:, 1] + np.mod(ext[:, 1] * (1.0 - s) + yoff[layer], ext[:, 1])
+        pos[:, 2] = lo[:, 2] + np.mod(z0 * ext[:, 2] + off[layer, 2] + jz * turb[layer, 2], ext[:, 2])
+        vel = np.stack([upd.wind_m_s[0] * (1.0 + jx * TURB_EPS), -vq, upd.wind_m_s[2] * (1.0 + jz * TURB_EPS)], 1)
+        r = upd.thin_a * np.exp(-upd.thin_b * d)
+        drawn = keep < np.minimum(1.0, r / upd.thin_c)
+        occluded = pos[:, 1] < GROUND_Y_M
+        if self.world is not None:
+            occluded |= pos[:, 1] < np.asarray(self.world.occluder_height(pos[:, 0], pos[:, 2]))
+        if upd.vehicles:
+            occluded |= inside_vehicles(pos, upd.vehicles)
+        weight = (np.maximum(r, upd.thin_c) * membership(pos, boxes, layer)
+                  / drawn_density_factor(pos, boxes, upd.density))
+        visible = drawn & ~occluded & (weight > 0)
+        return {"index": idx, "layer": layer, "d_mm": d, "pos": pos, "vel": vel, "cycle": count, "s": s,
+                "drawn": drawn, "occluded": occluded, "visible": visible, "weight": weight}
 
-        def in_slab(axis, side, p_axis, v):
-            a, b = prev_interval(axis, v)
-            if side == 0:
-                return p_axis < np.minimum(a, hi[axis])
-            return p_axis > np.maximum(b, lo[axis])
-
-        slabs = [(axis, side) for axis in (0, 2, 1) for side in (0, 1)]
-        out_p, out_d = [], []
-        for i, (axis, side) in enumerate(slabs):
-            vs = (0.0, v_max) if axis == 1 else (0.0,)
-            thick = 0.0
-            for v in vs:
-                a, b = prev_interval(axis, v)
-                th = (min(a, hi[axis]) - lo[axis]) if side == 0 else (hi[axis] - max(b, lo[axis]))
-                thick = max(thick, min(max(th, 0.0), ext[axis]))
-            if thick <= 0.0:
-                continue
-            others = [j for j in range(3) if j != axis]
-            n = int(rng.poisson(density * thick * ext[others[0]] * ext[others[1]]))
-            if n == 0:
-                continue
-            pos = lo + rng.random((n, 3)) * ext
-            r = rng.random(n) * thick
-            pos[:, axis] = lo[axis] + r if side == 0 else hi[axis] - r
-            d = physics.sample_drop_diameters(rate, n, rng)
-            v = physics.terminal_velocity(d)
-            ok = in_slab(axis, side, pos[:, axis], v)
-            for axis_j, side_j in slabs[:i]:
-                ok &= ~in_slab(axis_j, side_j, pos[:, axis_j], v)
-            out_p.append(pos[ok])
-            out_d.append(d[ok])
-        if not out_p:
-            return np.zeros((0, 3)), np.zeros(0)
-        return np.concatenate(out_p), np.concatenate(out_d)
-
-    def _spawn(self, t, dt, boxes: Boxes, prev: Boxes | None, inp: RainInput, v_cam, upd: RainUpdate) -> None:
-        rate = self.rate_eff
-        n_eff = inp.density_scale * physics.number_density_per_m3(rate)
-        if n_eff <= 0.0:
-            return
-        target = self.target_count(rate, inp.density_scale)
-        wind = np.asarray(inp.wind_m_s, dtype=np.float64)
-        self._probe_open(boxes, wind, rate, inp.vehicles, first=prev is None)
-        open_volume = float(np.sum(boxes.nu * boxes.volumes * self.open_fraction))
-        kappa = min(target / max(open_volume, 1e-9), n_eff / float(np.sum(boxes.nu)))
-        if kappa <= 0.0:
-            return
-        self.kappa = kappa
-        if prev is not None:
-            # The previous boxes in the current period image (the camera may have crossed a tile boundary).
-            dz = wrap_near(prev.lo[0, 2] - boxes.lo[0, 2], 0.0) - (prev.lo[0, 2] - boxes.lo[0, 2])
-            prev = Boxes(prev.lo + [0.0, 0.0, dz], prev.hi + [0.0, 0.0, dz], prev.fade, prev.nu)
-        pos_l, d_l, lay_l = [], [], []
-        for k in range(len(boxes.nu)):
-            pos, d = self._new_region(k, boxes, prev, wind[[0, 2]], dt, kappa * boxes.nu[k], rate)
-            pos_l.append(pos)
-            d_l.append(d)
-            lay_l.append(np.full(len(d), k, dtype=np.int64))
-        pos, d, lay = np.concatenate(pos_l), np.concatenate(d_l), np.concatenate(lay_l)
-        n = len(d)
-        upd.candidates = n
-        if n == 0:
-            return
-        speed_w = float(np.hypot(wind[0], wind[2]))
-        u = np.zeros((n, 3))
-        u[:, 0] = wind[0]
-        u[:, 2] = wind[2]
-        if speed_w > 0:
-            u[:, [0, 2]] += self.rng.normal(0.0, TURBULENCE * speed_w, (n, 2))
-        u[:, 1] = -physics.terminal_velocity(d)
-        keep, life = self.fate(pos, u, boxes, inp.vehicles)
-        upd.rejected = int(n - keep.sum())
-        idx = np.flatnonzero(keep)
-        if idx.size > self.pool.n_free:
-            upd.overflow = int(idx.size - self.pool.n_free)
-            self.pool.overflow += upd.overflow
-            idx = np.sort(self.rng.permutation(idx)[: self.pool.n_free])
-        slots = self.pool.allocate(idx.size)
-        if slots.size == 0:
-            return
-        self.pos0[slots] = pos[idx]
-        self.vel[slots] = u[idx]
-        self.t0[slots] = t
-        self.t_hit[slots] = t + life[idx]
-        self.diameter[slots] = d[idx]
-        self.weight[slots] = n_eff / kappa
-        self.layer[slots] = lay[idx]
-        self._schedule(slots, pos[idx], t, boxes, v_cam)
-        upd.spawn_slots = slots
-        upd.spawn_texels = self._pack(pos[idx], u[idx], t, life[idx], d[idx], n_eff / kappa, lay[idx])
-
-    def texels(self, slots) -> np.ndarray:
-        """The GPU record (n, 3, 4) float32 of slots: (x, y, z mod PERIOD_M, t0 mod TIME_PERIOD_S),
-        (u_x, u_y, u_z, lifetime), (D mm, weight, layer, 0)."""
-        slots = np.asarray(slots)
-        return self._pack(self.pos0[slots], self.vel[slots], self.t0[slots], self.t_hit[slots] - self.t0[slots],
-                          self.diameter[slots], self.weight[slots], self.layer[slots])
-
-    @staticmethod
-    def _pack(pos, vel, t0, life, d, weight, layer) -> np.ndarray:
-        out = np.zeros((len(pos), 3, 4), dtype=np.float32)
-        out[:, 0, 0:2] = pos[:, 0:2]
-        out[:, 0, 2] = np.mod(pos[:, 2], PERIOD_M)
-        out[:, 0, 3] = np.mod(t0, TIME_PERIOD_S)
-        out[:, 1, 0:3] = vel
-        out[:, 1, 3] = life
-        out[:, 2, 0] = d
-        out[:, 2, 1] = weight
-        out[:, 2, 2] = layer
-        return out
+    def positions(self, index, time_s: float | None = None) -> np.ndarray:
+        """World positions (m) of instances at time_s (see ``drops``)."""
+        return self.drops(index, time_s)["pos"]
 
     # --- splashes ---
 
     def splash_rate_per_s(self, rate_mm_h: float, area_m2: float, density_scale: float = 1.0) -> tuple[float, float]:
         """(splashes drawn per s, real impacts each stands for) on area_m2 of open ground at R (mm/h)."""
         phys = density_scale * splash_flux_per_m2_s(rate_mm_h) * area_m2
-        cap = 0.8 * self.splash_capacity / SPLASH_LIFE_S[1]
+        cap = 0.8 * self.splash_capacity / SPLASH_PERIOD_S
         ref = splash_flux_per_m2_s(BUDGET_FULL_AT_MM_H) * area_m2
         drawn = min(cap, phys * min(1.0, cap / ref)) if ref > 0 else 0.0
         return drawn, (phys / drawn if drawn > 0 else 0.0)
 
-    def _spawn_splashes(self, t, span, boxes: Boxes, inp: RainInput, upd: RainUpdate) -> None:
-        """Impacts during the last ``span`` seconds on the open ground of the splash layer's box."""
-        rate = self.rate_eff
-        if rate <= 0.0 or self.splash_capacity == 0:
-            return
-        lo, hi = boxes.lo[SPLASH_LAYER], boxes.hi[SPLASH_LAYER]
-        area = float((hi[0] - lo[0]) * (hi[2] - lo[2]))
-        per_s, weight = self.splash_rate_per_s(rate, area, inp.density_scale)
-        n = min(int(self.rng.poisson(per_s * span)), self.splash_capacity)
-        if n == 0:
-            return
-        rng = self.rng
-        x = lo[0] + rng.random(n) * (hi[0] - lo[0])
-        z = lo[2] + rng.random(n) * (hi[2] - lo[2])
-        t_imp = t - rng.random(n) * span
-        open_ = np.ones(n, dtype=bool)
-        if self.world is not None and hasattr(self.world, "occluder_height"):
-            open_ &= ~np.isfinite(np.asarray(self.world.occluder_height(x, z)))
-        for veh in inp.vehicles:
-            c = np.asarray(veh.position, dtype=np.float64)
-            rx, rz = x - c[0], wrap_near(z - c[2], 0.0)
-            cy, sy = math.cos(veh.yaw), math.sin(veh.yaw)
-            lx, lz = cy * rx - sy * rz, sy * rx + cy * rz
-            open_ &= ~((np.abs(lx) < veh.spec.width_m / 2 + 0.05) & (np.abs(lz) < veh.spec.length_m / 2 + 0.05))
-        # Splashing drops: D ≥ SPLASH_D_MIN_MM, impacts ∝ N(D)·v(D) (rejection on v).
-        lam = physics.mp_slope_per_mm(rate)
-        d = sample_truncated_exp(rng, lam, SPLASH_D_MIN_MM, physics.D_MAX_MM, 4 * n)
-        d = d[rng.random(d.size) * physics.terminal_velocity(physics.D_MAX_MM) < physics.terminal_velocity(d)]
-        if d.size < n:
-            d = np.concatenate([d, np.full(n - d.size, SPLASH_D_MIN_MM)])
-        d = d[:n]
-        kerb = (np.abs(x) >= layout.ROAD_HALF_WIDTH_M) & (np.abs(x) <= layout.ROAD_HALF_WIDTH_M
-                                                          + layout.KERB_WIDTH_M + layout.SIDEWALK_WIDTH_M)
-        y = np.where(kerb, layout.KERB_HEIGHT_M, GROUND_Y_M)
-        on_road = np.abs(x) < layout.ROAD_HALF_WIDTH_M
+    def splashes(self, time_s: float | None = None) -> dict[str, np.ndarray]:
+        """Every splash slot at time_s (default the last frame's), float64, as ``shaders/rainfall/splash.vert``:
+        ``pos`` (n, 3) m world, ``age`` s, ``life`` s, ``d_mm``, ``kind``, ``drawn`` (passed the rate's
+        thinning), ``visible`` (drawn, alive, on open ground)."""
+        upd, t, _ = self._frame(time_s)
+        n = self.splash_capacity
+        keys = instance_keys(np.arange(n), self.splash_key)
+        phase = u01(hash32(keys ^ SALT_PHASE))
+        c0, tau = splash_clock(t)
+        x = tau + phase
+        fl = np.floor(x)
+        count = ((c0 + fl.astype(np.int64)) & 0xFFFFFFFF).astype(np.uint32)
+        age = (x - fl) * SPLASH_PERIOD_S
+        hc = cycle_hash(keys, count)
+        drawn = u01(hash32(hc ^ SALT_KEEP)) < upd.splash_accept
+        lo, ext = upd.boxes.lo[SPLASH_LAYER], upd.boxes.ext[SPLASH_LAYER]
+        so = np.mod(-lo, ext)
+        px = lo[0] + np.mod(u01(hash32(hc ^ SALT_X)) * ext[0] + so[0], ext[0])
+        pz = lo[2] + np.mod(u01(hash32(hc ^ SALT_Z)) * ext[2] + so[2], ext[2])
+        d = splash_diameters(hc, upd.splash_lam)
+        life = splash_life_s(d)
+        kerb = (np.abs(px) >= layout.ROAD_HALF_WIDTH_M) & (
+            np.abs(px) <= layout.ROAD_HALF_WIDTH_M + layout.KERB_WIDTH_M + layout.SIDEWALK_WIDTH_M)
+        py = np.where(kerb, layout.KERB_HEIGHT_M, GROUND_Y_M)
+        pos = np.stack([px, py, pz], axis=1)
+        on_road = np.abs(px) < layout.ROAD_HALF_WIDTH_M
         if self.world is not None and hasattr(self.world, "road_height01"):
-            puddle = on_road & (np.asarray(self.world.road_height01(x, z)) < inp.puddles)
+            puddle = on_road & (np.asarray(self.world.road_height01(px, pz)) < upd.puddles)
         else:
             puddle = np.zeros(n, dtype=bool)
-        kind = np.where(puddle, TYPE_PUDDLE_CROWN, np.where(inp.wetness >= 0.3, TYPE_FILM_CROWN, TYPE_PROMPT))
-        life = splash_life_s(d)
-        keep = np.flatnonzero(open_)
-        m = keep.size
-        if m == 0:
-            return
-        slots = (self.splash_head + np.arange(m)) % self.splash_capacity
-        self.splash_head = int((self.splash_head + m) % self.splash_capacity)
-        self.splash_t0[slots] = t_imp[keep]
-        self.splash_life[slots] = life[keep]
-        self.splash_pos[slots] = np.stack([x[keep], y[keep], z[keep]], axis=1)
-        self.splash_weight[slots] = weight
-        data = np.zeros((m, 8), dtype=np.float32)
-        data[:, 0] = x[keep]
-        data[:, 1] = y[keep]
-        data[:, 2] = np.mod(z[keep], PERIOD_M)
-        data[:, 3] = np.mod(t_imp[keep], TIME_PERIOD_S)
-        data[:, 4] = d[keep]
-        data[:, 5] = life[keep]
-        data[:, 6] = kind[keep] + 0.999 * rng.random(m)  # type + a seed for the droplet pattern
-        data[:, 7] = weight
-        upd.splash_slots = slots
-        upd.splash_data = data
+        kind = np.where(puddle, TYPE_PUDDLE_CROWN, np.where(upd.wetness >= 0.3, TYPE_FILM_CROWN, TYPE_PROMPT))
+        open_ = np.ones(n, dtype=bool)
+        if self.world is not None:
+            open_ &= np.asarray(self.world.occluder_height(px, pz)) < py
+        if upd.vehicles:
+            open_ &= ~inside_vehicles(pos + [0.0, 0.01, 0.0], upd.vehicles)
+        visible = upd.splashes & drawn & (age < life) & open_
+        return {"pos": pos, "age": age, "life": life, "d_mm": d, "kind": kind, "drawn": drawn, "visible": visible,
+                "seed": u01(hash32(hc ^ SALT_KIND))}
+
+    def splashes_live(self, time_s: float | None = None) -> int:
+        return int(np.count_nonzero(self.splashes(time_s)["visible"])) if self.last is not None else 0
+
+
+def drawn_fraction_of_table(table: np.ndarray, a: float, b: float, c: float) -> float:
+    if a <= 0:
+        return 0.0
+    return float(np.mean(np.minimum(1.0, a * np.exp(-b * table[-1, :, 0].astype(np.float64)) / c)))
+
+
+def box_offsets(boxes: Boxes, wind_integral) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per layer, reduced in float64 so the GPU gets small numbers: off (L, 3) = (∫wind − lo) mod the box (x, z),
+    turb (L, 3) = TURB_EPS·∫wind mod the box (x, z), yoff (L,) = (BOX_BOTTOM_Y_M − lo_y) mod the box height."""
+    ext = boxes.ext
+    w = np.asarray(wind_integral, dtype=np.float64)
+    off = np.mod(w[None, :] - boxes.lo, ext)
+    turb = np.mod(TURB_EPS * w[None, :], ext)
+    off[:, 1] = 0.0
+    turb[:, 1] = 0.0
+    yoff = np.mod(BOX_BOTTOM_Y_M - boxes.lo[:, 1], ext[:, 1])
+    return off, turb, yoff
+
+
+def splash_clock(t: float) -> tuple[int, float]:
+    """(whole splash periods mod 2^32, the fraction) at t (s), from float64."""
+    x = t / SPLASH_PERIOD_S
+    c0 = math.floor(x)
+    return c0 & 0xFFFFFFFF, x - c0
+
+
+def splash_diameters(hc: np.ndarray, lam: float) -> np.ndarray:
+    """Diameters (mm) of the drops that splash, ∝ N(D)·v(D) on [SPLASH_D_MIN_MM, D_MAX_MM]: up to four
+    truncated-exponential draws, each kept with probability v(D)/v_max (the last is kept anyway)."""
+    v_max = SPLASH_V_M_S[-1]
+    d = np.zeros(len(hc))
+    done = np.zeros(len(hc), dtype=bool)
+    for k in range(len(SALT_D)):
+        dk = truncated_exp_quantile(u01(hash32(hc ^ SALT_D[k])), lam, SPLASH_D_MIN_MM, physics.D_MAX_MM)
+        ok = u01(hash32(hc ^ SALT_V[k])) * v_max < np.interp(dk, SPLASH_V_D_MM, SPLASH_V_M_S)
+        take = ~done & (ok | (k == len(SALT_D) - 1))
+        d = np.where(take, dk, d)
+        done |= take
+    return d

@@ -1,4 +1,6 @@
-"""Moving occluders: vehicles as convex pieces, tested analytically against a drop's path relative to each one."""
+"""Moving occluders: vehicles as convex pieces (a local box cut by at most two slanted planes each), which cull the
+drops inside them in the vertex shader (``rain_in_vehicle`` in shaders/rainfall/drops.glsl); ``inside_vehicles``
+is the NumPy twin."""
 
 from __future__ import annotations
 
@@ -6,23 +8,14 @@ import math
 
 import numpy as np
 
-from rain_core.effects.rainfall.boxes import Boxes, wrap_near
-from rain_core.effects.rainfall.constants import VEHICLE_WAKE_S
-
-
-def near_boxes(vehicle, boxes: Boxes, margin_m: float = 10.0) -> bool:
-    """Whether a vehicle is within margin_m (m) of the outer box horizontally (z periodic)."""
-    c = np.asarray(vehicle.position, dtype=np.float64)
-    lo, hi = boxes.lo[-1], boxes.hi[-1]
-    z = wrap_near(c[2], 0.5 * (lo[2] + hi[2]))
-    reach = margin_m + 0.5 * vehicle.spec.length_m
-    return bool(lo[0] - reach <= c[0] <= hi[0] + reach and lo[2] - reach <= z <= hi[2] + reach)
+from rain_core.effects.rainfall.boxes import wrap_near
+from rain_core.effects.rainfall.constants import MAX_VEHICLES
 
 
 def vehicle_pieces(spec) -> list[tuple[np.ndarray, float]]:
     """Convex pieces that rain cannot pass, in the vehicle's local frame (m; forward −Z): a list of
-    (side polygon (k, 2) as (z, y) counter-clockwise seen from +X, half width). Slightly inside the real body,
-    so a drop ends just under the paint (hidden by the depth test) rather than above it."""
+    (side polygon (k, 2) as (z, y), half width). Slightly inside the real body, so a drop vanishes just under
+    the paint (hidden by the depth test) rather than above it."""
     hl, hw, h = spec.length_m / 2.0, spec.width_m / 2.0, spec.height_m
     if spec.kind == "car":
         s, k = spec.length_m / 4.6, h / 1.45
@@ -48,17 +41,8 @@ def vehicle_pieces(spec) -> list[tuple[np.ndarray, float]]:
     return [(np.array([[-hl, -1.0], [hl, -1.0], [hl, h], [-hl, h]]), hw)]
 
 
-def _piece_planes(poly: np.ndarray, half_width: float) -> tuple[np.ndarray, np.ndarray]:
-    """Outward normals (m, 3) and offsets (m,) of a side polygon extruded ±half_width along x: n·p ≤ d inside."""
-    normals, offsets = [np.array([1.0, 0.0, 0.0]), np.array([-1.0, 0.0, 0.0])], [half_width, half_width]
-    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
-        dz, dy = b - a
-        # Counter-clockwise in (z, y): the outward normal of edge a→b is (dy, −dz) in (z, y).
-        n = np.array([0.0, -dz, dy])
-        n /= np.linalg.norm(n)
-        normals.append(n)
-        offsets.append(float(n[1] * a[1] + n[2] * a[0]))
-    return np.array(normals), np.array(offsets)
+PIECES_PER_VEHICLE = 2
+PLANES_PER_PIECE = 2
 
 
 def _ccw(poly: np.ndarray) -> np.ndarray:
@@ -67,61 +51,90 @@ def _ccw(poly: np.ndarray) -> np.ndarray:
     return poly if area > 0 else poly[::-1]
 
 
-_PIECE_CACHE: dict = {}
+_VOLUME_CACHE: dict = {}
 
 
-def _vehicle_planes(spec):
+def piece_volumes(spec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pieces of a vehicle as the shader tests them, in its local frame: lo, hi (PIECES, 3) boxes (m) and
+    planes (PIECES, PLANES, 4) (n, d): inside ⇔ inside the box and n·p ≤ d for each plane. The box is the
+    polygon's bounding box; its slanted edges (the windshield, the rear window) are the planes. Unused pieces
+    are empty boxes, unused planes (0, 0, 0, 1)."""
     key = id(spec)
-    if key not in _PIECE_CACHE:
-        _PIECE_CACHE[key] = (spec, [_piece_planes(_ccw(poly), hw) for poly, hw in vehicle_pieces(spec)])
-    return _PIECE_CACHE[key][1]
+    if key in _VOLUME_CACHE:
+        return _VOLUME_CACHE[key][1]
+    lo = np.full((PIECES_PER_VEHICLE, 3), 1.0)
+    hi = np.full((PIECES_PER_VEHICLE, 3), -1.0)
+    planes = np.zeros((PIECES_PER_VEHICLE, PLANES_PER_PIECE, 4))
+    planes[..., 3] = 1.0
+    pieces = vehicle_pieces(spec)
+    if len(pieces) > PIECES_PER_VEHICLE:
+        raise ValueError(f"a vehicle has at most {PIECES_PER_VEHICLE} pieces, {spec.kind} has {len(pieces)}")
+    for i, (poly, hw) in enumerate(pieces):
+        poly = _ccw(np.asarray(poly, dtype=np.float64))
+        lo[i] = (-hw, poly[:, 1].min(), poly[:, 0].min())
+        hi[i] = (hw, poly[:, 1].max(), poly[:, 0].max())
+        j = 0
+        for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+            dz, dy = b - a
+            if abs(dz) < 1e-9 or abs(dy) < 1e-9:
+                continue  # axis-aligned: the box has it
+            if j == PLANES_PER_PIECE:
+                raise ValueError(f"a piece has at most {PLANES_PER_PIECE} slanted edges ({spec.kind})")
+            n = np.array([0.0, -dz, dy])  # outward in (x, y, z) for a counter-clockwise (z, y) polygon
+            n /= np.linalg.norm(n)
+            planes[i, j] = (*n, n[1] * a[1] + n[2] * a[0])
+            j += 1
+    _VOLUME_CACHE[key] = (spec, (lo, hi, planes))
+    return lo, hi, planes
 
 
-def vehicle_fate(p0: np.ndarray, u: np.ndarray, life: np.ndarray, vehicles) -> tuple[np.ndarray, np.ndarray]:
-    """Cut drops' lives (s) where their paths p0 + u·τ (m, m/s) enter a vehicle moving at its current velocity;
-    keep is False for drops inside a vehicle or that left one less than VEHICLE_WAKE_S ago. (A ballistic wake
-    would be tens of metres long for slow small drops at driving speed; in fact they ride the airflow around
-    the body, so only drops that would emerge from the body itself are refused.) vehicles: objects with
-    ``spec``, ``position``, ``yaw``, ``velocity()`` (rain_core.vehicles.Vehicle)."""
-    n = len(p0)
-    keep = np.ones(n, dtype=bool)
-    life = life.copy()
+def cull_vehicles(vehicles, centre, reach_m: float) -> list:
+    """The vehicles (at most MAX_VEHICLES, nearest first) within reach_m (m) of centre (x, z) horizontally, z
+    periodic."""
+    out = []
     for veh in vehicles:
         c = np.asarray(veh.position, dtype=np.float64)
-        v = np.asarray(veh.velocity(), dtype=np.float64)
-        cy, sy = math.cos(veh.yaw), math.sin(veh.yaw)
-        rel = p0 - c
+        dz = float(wrap_near(c[2] - centre[1], 0.0))
+        dist = float(np.hypot(c[0] - centre[0], dz))
+        if dist <= reach_m + 0.5 * veh.spec.length_m:
+            out.append((dist, veh))
+    out.sort(key=lambda item: item[0])
+    return [veh for _, veh in out[:MAX_VEHICLES]]
+
+
+def vehicle_uniforms(vehicles, shift_z: float, around_z: float) -> dict[str, np.ndarray | int]:
+    """The shader's vehicle arrays: u_veh_pose (x, y, z in the frame shifted by shift_z and wrapped near
+    around_z, yaw), u_veh_lo / u_veh_hi (local boxes), u_veh_plane, u_veh_count."""
+    pose = np.zeros((MAX_VEHICLES, 4))
+    lo = np.zeros((MAX_VEHICLES * PIECES_PER_VEHICLE, 4))
+    hi = np.zeros((MAX_VEHICLES * PIECES_PER_VEHICLE, 4))
+    planes = np.zeros((MAX_VEHICLES * PIECES_PER_VEHICLE * PLANES_PER_PIECE, 4))
+    for i, veh in enumerate(vehicles[:MAX_VEHICLES]):
+        c = np.asarray(veh.position, dtype=np.float64)
+        z = float(wrap_near(c[2] - shift_z, around_z))
+        pose[i] = (c[0], c[1], z, veh.yaw)
+        plo, phi, pp = piece_volumes(veh.spec)
+        n = PIECES_PER_VEHICLE
+        lo[i * n: (i + 1) * n, :3] = plo
+        hi[i * n: (i + 1) * n, :3] = phi
+        planes[i * n * PLANES_PER_PIECE: (i + 1) * n * PLANES_PER_PIECE] = pp.reshape(-1, 4)
+    return {"u_veh_pose": pose, "u_veh_lo": lo, "u_veh_hi": hi, "u_veh_plane": planes,
+            "u_veh_count": min(len(vehicles), MAX_VEHICLES)}
+
+
+def inside_vehicles(p: np.ndarray, vehicles) -> np.ndarray:
+    """Whether points p (n, 3) (m, world) lie inside a vehicle's pieces (z periodic). Mirrors the shader."""
+    inside = np.zeros(len(p), dtype=bool)
+    for veh in vehicles:
+        c = np.asarray(veh.position, dtype=np.float64)
+        rel = p - c
         rel[:, 2] = wrap_near(rel[:, 2], 0.0)
-        w = u - v
-        # Local frame: world = R·local with R = [[c, 0, s], [0, 1, 0], [−s, 0, c]] (vehicles.model_matrix).
-        pl = np.stack([cy * rel[:, 0] - sy * rel[:, 2], rel[:, 1], sy * rel[:, 0] + cy * rel[:, 2]], axis=1)
-        wl = np.stack([cy * w[:, 0] - sy * w[:, 2], w[:, 1], sy * w[:, 0] + cy * w[:, 2]], axis=1)
-        # Prefilter: horizontal closest approach, while the drop is below the vehicle's top.
-        spec = veh.spec
-        radius = 0.5 * math.hypot(spec.length_m, spec.width_m) + 0.2
-        fall = np.maximum(-wl[:, 1], 1e-6)
-        t_lo = (pl[:, 1] - (spec.height_m + 0.1)) / fall
-        t_hi = (pl[:, 1] + 1.0) / fall
-        speed2 = np.maximum(wl[:, 0] ** 2 + wl[:, 2] ** 2, 1e-12)
-        t_close = np.clip(-(pl[:, 0] * wl[:, 0] + pl[:, 2] * wl[:, 2]) / speed2, t_lo, t_hi)
-        dx = pl[:, 0] + wl[:, 0] * t_close
-        dz = pl[:, 2] + wl[:, 2] * t_close
-        near = np.flatnonzero(dx * dx + dz * dz < radius * radius)
-        if near.size == 0:
-            continue
-        pn, wn = pl[near], wl[near]
-        for normals, offsets in _vehicle_planes(spec):
-            num = offsets[None, :] - pn @ normals.T  # n·p ≤ d ⇔ n·w·τ ≤ num
-            den = wn @ normals.T
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t_cross = num / den
-            t_enter = np.max(np.where(den < 0, t_cross, -np.inf), axis=1)
-            t_exit = np.min(np.where(den > 0, t_cross, np.inf), axis=1)
-            parallel_out = np.any((den == 0) & (num < 0), axis=1)
-            hits = (t_enter < t_exit) & ~parallel_out
-            past = hits & (t_enter < 0.0) & (t_exit > -VEHICLE_WAKE_S)
-            keep[near[past]] = False
-            future = hits & (t_enter >= 0.0)
-            idx = near[future]
-            life[idx] = np.minimum(life[idx], t_enter[future])
-    return keep, life
+        cy, sy = math.cos(veh.yaw), math.sin(veh.yaw)
+        local = np.stack([cy * rel[:, 0] - sy * rel[:, 2], rel[:, 1], sy * rel[:, 0] + cy * rel[:, 2]], axis=1)
+        plo, phi, pp = piece_volumes(veh.spec)
+        for i in range(PIECES_PER_VEHICLE):
+            k = np.all((local >= plo[i]) & (local <= phi[i]), axis=1)
+            for j in range(PLANES_PER_PIECE):
+                k &= local @ pp[i, j, :3] <= pp[i, j, 3]
+            inside |= k
+    return inside

@@ -23,7 +23,7 @@ def test_same_seed_same_frame(gl_ctx, shaders, rain):
 
 def test_a_rate_change_takes_effect_smoothly(rain):
     """R steps from 2 to 28 mm/h and back to 0: the weighted density moves a little each frame, no pop."""
-    sim = RainfallSim(6000, seed=6)
+    sim = RainfallSim(20000, seed=6)
     dt = 1.0 / 30.0
     t = rain.drive(sim, 3.0, rate=2.0, dt=dt)
     lo, hi = full_region(sim.boxes, 2)
@@ -37,12 +37,15 @@ def test_a_rate_change_takes_effect_smoothly(rain):
     series = np.array(series)
     n2, n28 = physics.number_density_per_m3(2.0), physics.number_density_per_m3(28.0)
     steps = np.abs(np.diff(series))
-    assert steps.max() < 0.05 * (n28 - n2)  # never more than 5 % of the change in one frame
+    # Never more than 8 % of the change in one frame: the ramp itself moves 2.2 % per frame at first, and the
+    # thinning decides mid-air which instances show (the drops keep no spawn history), which adds noise of
+    # about 3 % of the change per frame at this budget; a pop would be the whole change at once.
+    assert steps.max() < 0.08 * (n28 - n2)
     assert series[0] < n2 + 0.1 * (n28 - n2)  # the first frame after the change still looks like before
     rise = series[: int(12.0 / dt)]
     assert rise[-1] > n2 + 0.6 * (n28 - n2)  # most of the way there within 12 s
     fall = series[int(12.0 / dt):]
-    assert series[-1] < 0.3 * n28  # the air empties after the rain stops (the smallest drops take a minute)
+    assert series[-1] < 0.01 * n28  # the air empties after the rain stops
     assert np.all(np.diff(fall[int(5.0 / dt):]) <= 0.01 * n28)  # … steadily
     assert sim.rate_eff == 0.0
 
@@ -61,13 +64,13 @@ def test_no_rain_no_pass(gl_ctx, shaders, rain):
     scene.render()
     assert "rainfall.transparent" in {st.name for st in scene.renderer.stats}
     s.rain.rate_mm_h = 0.0
-    for _ in range(600):  # the slowest drops need a minute to reach the ground
+    for _ in range(600):  # the rate ramps down (RATE_RAMP_S); no drop outlives it
         scene.step(0.25)
         frame = scene.frame()
         if not effect.active(frame):
             break
         effect.update(frame, scene.renderer.render_context(frame))
-    assert not effect.active(scene.frame()) and effect.sim.live == 0
+    assert not effect.active(scene.frame()) and effect.sim.rate_eff == 0.0
     # Switched off: skipped at once.
     s.rain.rate_mm_h = 8.0
     s.rainfall.enabled = False
