@@ -53,7 +53,8 @@ def run_headless(args, settings) -> int:
     except GLUnavailableError as exc:
         print(f"rainroad: {exc}", file=sys.stderr)
         return 1
-    scene = Scene(ctx, args.size, settings=settings, seed=args.seed)
+    # No GPU timer queries: nobody reads them here (--panel turns them on while its table is drawn).
+    scene = Scene(ctx, args.size, settings=settings, seed=args.seed, gpu_timing=False)
     panel = None
     if args.panel:
         from app.panel import RainManagerPanel

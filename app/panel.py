@@ -46,6 +46,20 @@ def field_label(info) -> str:
     return name.replace("_", " ") + (f" ({info.unit})" if info.unit else "")
 
 
+def effect_totals(pass_table) -> list[tuple[str, float, float | None]]:
+    """(effect, CPU ms, GPU ms or None) per effect from a renderer's ``pass_table()``: an effect's passes
+    ("rainfall.update", "rainfall.transparent") summed, a built-in pass ("scene", "shadow") on its own, skipped
+    passes left out. GPU ms is None unless every pass of the effect has one."""
+    totals: dict[str, list] = {}
+    for name, ran, cpu_ms, gpu_ms, _note in pass_table:
+        if not ran:
+            continue
+        row = totals.setdefault(name.split(".", 1)[0], [0.0, 0.0])
+        row[0] += cpu_ms
+        row[1] = None if (gpu_ms is None or row[1] is None) else row[1] + gpu_ms
+    return [(name, cpu, gpu) for name, (cpu, gpu) in totals.items()]
+
+
 class RainManagerPanel:
     """Draws the Rain Manager for a ``Scene`` over a framebuffer."""
 
@@ -179,12 +193,24 @@ class RainManagerPanel:
             width, height = renderer.size
             imgui.text(f"{1000.0 / max(mean, 1e-6):.1f} FPS  ({mean:.2f} ms/frame)  {width}x{height}")
         imgui.text(f"speed {self.scene.ego.speed_m_s * 3.6:.0f} km/h   GPU timing: {renderer.timing_source}")
+        imgui.text_disabled("GPU ms are timed only while this section is open (one frame late)")
         flags = imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
+        table = renderer.pass_table()
+        if imgui.begin_table("effects", 3, flags):
+            for title in ("effect", "CPU ms", "GPU ms"):
+                imgui.table_setup_column(title)
+            imgui.table_headers_row()
+            for name, cpu_ms, gpu_ms in effect_totals(table):
+                imgui.table_next_row()
+                for text in (name, f"{cpu_ms:.2f}", "-" if gpu_ms is None else f"{gpu_ms:.2f}"):
+                    imgui.table_next_column()
+                    imgui.text(text)
+            imgui.end_table()
         if imgui.begin_table("passes", 5, flags):
             for title in ("pass", "ran", "CPU ms", "GPU ms", "note"):
                 imgui.table_setup_column(title)
             imgui.table_headers_row()
-            for name, ran, cpu_ms, gpu_ms, note in renderer.pass_table():
+            for name, ran, cpu_ms, gpu_ms, note in table:
                 imgui.table_next_row()
                 for text in (name, "yes" if ran else "skipped", f"{cpu_ms:.2f}" if ran else "-",
                              f"{gpu_ms:.2f}" if (ran and gpu_ms is not None) else "-", note):
@@ -222,7 +248,10 @@ class RainManagerPanel:
                 self._ripple_heights()
             if section == "camera" and self.cameras is not None:
                 self.cameras.set_mode(self.scene.settings.camera.mode, self.scene.ego)
-        if imgui.collapsing_header("Performance", imgui.TreeNodeFlags_.default_open.value):
+        performance = imgui.collapsing_header("Performance", imgui.TreeNodeFlags_.default_open.value)
+        # GPU timer queries only while the table is on screen: they add work to every pass.
+        self.scene.renderer.gpu_timing = performance
+        if performance:
             self._performance_section()
         imgui.end()
         layer.render(fbo)

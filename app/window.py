@@ -43,7 +43,8 @@ class RainroadApp:
         self.wnd = wnd
         self.ctx = wnd.ctx
         self.screenshot_dir = screenshot_dir
-        self.scene = Scene(self.ctx, self.render_size(settings), settings=settings, seed=seed)
+        # GPU timing starts off; the Rain Manager turns it on while its performance table is open.
+        self.scene = Scene(self.ctx, self.render_size(settings), settings=settings, seed=seed, gpu_timing=False)
         self.driver = KeyboardDriver()
         self.cameras = CameraModes(settings.camera.mode)
         self.panel = RainManagerPanel(self.ctx, wnd.size, self.scene, framebuffer_size=wnd.buffer_size)

@@ -92,43 +92,150 @@ def lighting_for_hour(hour: float, overcast: float = 0.0) -> Lighting:
     return Lighting(hour, sun_dir, sun, zenith, horizon, 0.15, night, ev100)
 
 
+# Cone cosines of the light kinds (shaders/common/lighting.glsl reads cos_outer, cos_inner per light).
+_LAMP_CONE = (math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0)  # cos_outer, cos_inner, range m
+_HEAD_CONE = (math.cos(math.radians(30)), math.cos(math.radians(12)), 150.0)
+_TAIL_CONE = (-0.2, 0.3, 20.0)
+_HEAD_CD, _HEAD_COLOR = 20000.0, (1.0, 0.96, 0.88)
+_TAIL_CD, _TAIL_COLOR = 60.0, (1.0, 0.05, 0.02)
+
+
+class LightSet:
+    """Lights as parallel arrays (what the renderer packs every frame without a Python object per light):
+    ``position`` (L, 3) m, ``direction`` (L, 3), ``intensity_cd`` (L,), ``color`` (L, 3), ``cos_outer``,
+    ``cos_inner``, ``range_m`` (L,), ``low_beam`` (L,) bool."""
+
+    __slots__ = ("position", "direction", "intensity_cd", "color", "cos_outer", "cos_inner", "range_m", "low_beam")
+
+    def __init__(self, position, direction, intensity_cd, color, cos_outer, cos_inner, range_m, low_beam):
+        self.position, self.direction, self.intensity_cd, self.color = position, direction, intensity_cd, color
+        self.cos_outer, self.cos_inner, self.range_m, self.low_beam = cos_outer, cos_inner, range_m, low_beam
+
+    def __len__(self) -> int:
+        return len(self.intensity_cd)
+
+    def take(self, index: np.ndarray) -> LightSet:
+        return LightSet(*(getattr(self, name)[index] for name in LightSet.__slots__))
+
+    def to_lights(self) -> list[Light]:
+        return [Light(self.position[i].copy(), self.direction[i].copy(), float(self.intensity_cd[i]),
+                      self.color[i].copy(), float(self.cos_outer[i]), float(self.cos_inner[i]),
+                      float(self.range_m[i]), bool(self.low_beam[i])) for i in range(len(self))]
+
+
+def _kind(position, direction, cd, color, cone, low_beam: bool) -> LightSet:
+    k = len(position)
+    return LightSet(position, direction, np.broadcast_to(np.asarray(cd, np.float64), (k,)),
+                    np.broadcast_to(np.asarray(color, np.float64), (k, 3)), np.full(k, cone[0]), np.full(k, cone[1]),
+                    np.full(k, cone[2]), np.full(k, low_beam))
+
+
+_LAMP_TABLES: dict[int, tuple[object, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
+
+
+def _lamp_table(lamps) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(positions, directions, cd, colours) of a lamp list, built once per list (a world's lamps never move)."""
+    entry = _LAMP_TABLES.get(id(lamps))
+    if entry is None or entry[0] is not lamps:
+        if len(_LAMP_TABLES) > 8:
+            _LAMP_TABLES.clear()
+        entry = (lamps, np.array([np.asarray(lamp.position, float) for lamp in lamps]).reshape(-1, 3),
+                 np.array([np.asarray(lamp.direction, float) for lamp in lamps]).reshape(-1, 3),
+                 np.array([float(lamp.intensity_cd) for lamp in lamps]),
+                 np.array([np.asarray(lamp.color, float) for lamp in lamps]).reshape(-1, 3))
+        _LAMP_TABLES[id(lamps)] = entry
+    return entry[1:]
+
+
+_LENS_TABLES: dict = {}
+
+
+def _lens_table(spec) -> np.ndarray:
+    """(4, 3) local lens centres of a vehicle spec, heads then tails (``vehicles.light_positions_local``)."""
+    table = _LENS_TABLES.get(id(spec))
+    if table is None or table[0] is not spec:
+        from rain_core.vehicles import light_positions_local
+
+        table = _LENS_TABLES[id(spec)] = (spec, np.concatenate(light_positions_local(spec)))
+    return table[1]
+
+
+def light_set_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift_z: float, period_m: float,
+                        headlights_on: bool, max_lights: int = MAX_LIGHTS) -> LightSet:
+    """``lights_for_frame`` as a ``LightSet`` (arrays, vectorised): what the renderer uses every frame."""
+    cam = np.asarray(camera_position, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
+    parts: list[LightSet] = []
+    if lighting.night_factor > 0.01 and len(lamps):
+        pos, dirs, cd, color = _lamp_table(lamps)
+        offsets = np.array([[0.0, 0.0, k * period_m] for k in (-1, 0, 1)])
+        tiles = (pos[:, None, :] + offsets[None, :, :]).reshape(-1, 3)  # lamp-major, as the list was built
+        index = np.flatnonzero(np.abs(tiles[:, 2] - cam[2]) < 250.0)
+        lamp = index // 3
+        parts.append(_kind(tiles[index], dirs[lamp], cd[lamp] * lighting.night_factor, color[lamp], _LAMP_CONE,
+                           False))
+    if headlights_on and vehicles:
+        from rain_core.vehicles import HEADLIGHT_PITCH_RAD
+
+        n = len(vehicles)
+        yaw = np.array([v.yaw for v in vehicles], dtype=np.float64)
+        centre = np.array([v.position for v in vehicles], dtype=np.float64).reshape(n, 3)
+        local = np.stack([_lens_table(v.spec) for v in vehicles])  # (n, 4, 3): 2 heads then 2 tails
+        c, s_ = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+        # Vehicle.model_matrix: rotation about +Y by yaw, [[c, 0, s], [0, 1, 0], [−s, 0, c]], then the position.
+        lx, ly, lz = local[..., 0], local[..., 1], local[..., 2]
+        pos = np.stack([c * lx + s_ * lz + centre[:, None, 0], ly + centre[:, None, 1],
+                        -s_ * lx + c * lz + centre[:, None, 2]], axis=-1).reshape(4 * n, 3)
+        pos[:, 2] -= shift_z
+        fwd = np.stack([-np.sin(yaw), np.zeros(n), -np.cos(yaw)], axis=1)  # Vehicle.forward()
+        pitch_c, pitch_s = math.cos(HEADLIGHT_PITCH_RAD), math.sin(HEADLIGHT_PITCH_RAD)
+        head_dir = fwd * pitch_c + np.array([0.0, pitch_s, 0.0])
+        dirs = np.stack([head_dir, head_dir, -fwd, -fwd], axis=1).reshape(4 * n, 3)
+        is_head = np.tile([True, True, False, False], n)
+        parts.append(LightSet(pos, dirs, np.where(is_head, _HEAD_CD, _TAIL_CD),
+                              np.where(is_head[:, None], _HEAD_COLOR, _TAIL_COLOR),
+                              np.where(is_head, _HEAD_CONE[0], _TAIL_CONE[0]),
+                              np.where(is_head, _HEAD_CONE[1], _TAIL_CONE[1]),
+                              np.where(is_head, _HEAD_CONE[2], _TAIL_CONE[2]), is_head))
+    if not parts:
+        return _kind(np.zeros((0, 3)), np.zeros((0, 3)), 0.0, (0.0, 0.0, 0.0), (-1.0, -1.0, 0.0), False)
+    lights = parts[0] if len(parts) == 1 else LightSet(
+        *(np.concatenate([getattr(part, name) for part in parts]) for name in LightSet.__slots__))
+    order = np.argsort(np.sum((lights.position - cam) ** 2, axis=1), kind="stable")[:max_lights]
+    return lights.take(order)
+
+
 def lights_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift_z: float, period_m: float,
                      headlights_on: bool, max_lights: int = MAX_LIGHTS) -> list[Light]:
     """Collect street lamps (one world tile, repeated every ``period_m``) and vehicle head/tail lights, nearest to
     the camera first. Positions are returned in the renderer's wrapped frame (world z − ``shift_z``)."""
-    cam = np.asarray(camera_position, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
-    lights: list[Light] = []
-    if lighting.night_factor > 0.01:
-        for lamp in lamps:
-            p = np.asarray(lamp.position, dtype=np.float64)
-            for k in (-1, 0, 1):
-                q = p + np.array([0.0, 0.0, k * period_m])
-                if abs(q[2] - cam[2]) < 250.0:
-                    lights.append(Light(q, np.asarray(lamp.direction, float), lamp.intensity_cd * lighting.night_factor,
-                                        np.asarray(lamp.color, float), cos_outer=math.cos(math.radians(75)),
-                                        cos_inner=math.cos(math.radians(55)), range_m=70.0))
-    if headlights_on:
-        for v in vehicles:
-            for pos, direction in v.headlights():
-                q = np.asarray(pos, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
-                lights.append(Light(q, np.asarray(direction, float), 20000.0, np.array([1.0, 0.96, 0.88]),
-                                    cos_outer=math.cos(math.radians(30)), cos_inner=math.cos(math.radians(12)),
-                                    range_m=150.0, low_beam=True))
-            for pos in v.taillights():
-                q = np.asarray(pos, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
-                lights.append(Light(q, -v.forward(), 60.0, np.array([1.0, 0.05, 0.02]),
-                                    cos_outer=-0.2, cos_inner=0.3, range_m=20.0))
-    lights.sort(key=lambda light: float(np.sum((light.position - cam) ** 2)))
-    return lights[:max_lights]
+    return light_set_for_frame(lamps, vehicles, camera_position, lighting, shift_z, period_m, headlights_on,
+                               max_lights).to_lights()
 
 
-def pack_lights(lights: list[Light], max_lights: int = MAX_LIGHTS) -> tuple[bytes, bytes, bytes, int]:
-    """Uniform arrays for shaders/common/lighting.glsl: pos+range, dir+cos_outer, colour·cd+cos_inner."""
-    pos = np.zeros((max_lights, 4), np.float32)
-    dirs = np.zeros((max_lights, 4), np.float32)
-    col = np.zeros((max_lights, 4), np.float32)
-    for i, light in enumerate(lights[:max_lights]):
-        pos[i] = (*light.position, -light.range_m if light.low_beam else light.range_m)
-        dirs[i] = (*light.direction, light.cos_outer)
-        col[i] = (*(light.color * light.intensity_cd), light.cos_inner)
-    return pos.tobytes(), dirs.tobytes(), col.tobytes(), min(len(lights), max_lights)
+def pack_lights(lights, max_lights: int = MAX_LIGHTS) -> tuple[bytes, bytes, bytes, int]:
+    """Uniform arrays for shaders/common/lighting.glsl: pos+range, dir+cos_outer, colour·cd+cos_inner.
+    ``lights``: a list of ``Light`` or a ``LightSet``."""
+    if not isinstance(lights, LightSet):
+        lights = list(lights)[:max_lights]
+        if not lights:
+            lights = _kind(np.zeros((0, 3)), np.zeros((0, 3)), 0.0, (0.0, 0.0, 0.0), (-1.0, -1.0, 0.0), False)
+        else:
+            lights = LightSet(np.array([lt.position for lt in lights], float),
+                              np.array([lt.direction for lt in lights], float),
+                              np.array([lt.intensity_cd for lt in lights], float),
+                              np.array([lt.color for lt in lights], float),
+                              np.array([lt.cos_outer for lt in lights], float),
+                              np.array([lt.cos_inner for lt in lights], float),
+                              np.array([lt.range_m for lt in lights], float),
+                              np.array([lt.low_beam for lt in lights], bool))
+    count = min(len(lights), max_lights)
+    packed = np.zeros((3, max_lights, 4), np.float32)
+    if count:
+        lights = lights.take(np.arange(count))
+        packed[0, :count, :3] = lights.position
+        packed[0, :count, 3] = np.where(lights.low_beam, -lights.range_m, lights.range_m)
+        packed[1, :count, :3] = lights.direction
+        packed[1, :count, 3] = lights.cos_outer
+        packed[2, :count, :3] = lights.color * lights.intensity_cd[:, None]
+        packed[2, :count, 3] = lights.cos_inner
+    return packed[0].tobytes(), packed[1].tobytes(), packed[2].tobytes(), count

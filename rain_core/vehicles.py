@@ -191,8 +191,9 @@ class Vehicle:
 
     def to_world(self, points_local) -> np.ndarray:
         """Local-frame points (n, 3) m → world (n, 3) m."""
-        m = self.model_matrix()
-        return np.asarray(points_local, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
+        c, s = math.cos(self.yaw), math.sin(self.yaw)  # model_matrix's rotation, without the 4×4 per call
+        rotation_t = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+        return np.asarray(points_local, dtype=np.float64) @ rotation_t + self.position
 
     def rear_axle(self) -> np.ndarray:
         """(3,) world ground point under the rear-axle centre (the bicycle model's reference point), m."""
@@ -209,7 +210,14 @@ class Vehicle:
 
     def velocity(self) -> np.ndarray:
         """(3,) world velocity of the body centre (``position``), m/s."""
-        return self._point_velocity(self.position)[0]
+        # _point_velocity for one point in scalars (the traffic asks every step): the same operations, so the
+        # same bits, without the (1, 3) temporaries.
+        fx, fz = -math.sin(self.yaw), -math.cos(self.yaw)
+        half = self.spec.wheelbase_m / 2.0
+        px, pz = float(self.position[0]), float(self.position[2])
+        rel_x, rel_z = px - (px - fx * half), pz - (pz - fz * half)
+        w = self.yaw_rate_rad_s
+        return np.array([fx * self.speed_m_s + w * rel_z, 0.0 * self.speed_m_s, fz * self.speed_m_s - w * rel_x])
 
     def wheel_contacts(self) -> np.ndarray:
         """(4, 3) world contact points (m), order FL, FR, RL, RR, on the road plane y = 0."""
@@ -338,8 +346,18 @@ def idm_accel(speed_m_s: float, desired_m_s: float, gap_m: float, closing_m_s: f
     return min(max(max_accel_m_s2 * (free - interaction), -max_brake_m_s2), max_accel_m_s2)
 
 
+def _lane_direction_array(yaw: float) -> np.ndarray:
+    d = _forward(yaw)
+    d.flags.writeable = False  # shared: every caller only reads it
+    return d
+
+
+_LANE_DIRECTIONS = tuple(_lane_direction_array(yaw) for yaw in layout.LANE_YAW)
+
+
 def _lane_direction(lane_index: int) -> np.ndarray:
-    return _forward(layout.LANE_YAW[lane_index])
+    """Unit vector (3,) along a lane's driving direction (a shared read-only array: the traffic asks per step)."""
+    return _LANE_DIRECTIONS[lane_index]
 
 
 def _in_lane(vehicle: Vehicle, lane_index: int) -> bool:

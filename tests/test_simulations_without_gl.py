@@ -41,38 +41,42 @@ for i in range(10):
     update = sim.advance(RainInput(time_s=i / 30, camera_position=np.array([1.75, 1.2, 600.0 - i]),
                                    camera_forward=np.array([0.0, 0.0, -1.0]),
                                    camera_velocity=np.array([0.0, 0.0, -30.0]), rate_mm_h=8.0))
-assert sim.live > 0
+assert update.drawn_expected > 0 and sim.drops()["visible"].sum() > 0 and sim.splashes()["pos"].shape[1] == 3
 """,
     "spray": """
 from rain_core.effects.spray import KMH, SprayEmitter
 from rain_core.vehicles import TRUCK_SPEC, Vehicle
 from rain_core.weather import WeatherState
-truck = Vehicle(TRUCK_SPEC, (layout.LANE_CENTRES_X[0], 0.0, 500.0), 0.0, 100 * KMH)
-em = SprayEmitter(seed=1, budget=500, film_depth_fn=lambda x, z: np.full(np.shape(x), 3.0))
-for i in range(10):
-    truck.position = truck.position + truck.forward() * truck.speed_m_s / 30
-    em.emit(SimpleNamespace(time_s=i / 30, vehicles=[truck], weather=WeatherState(wetness=1.0), settings=None,
-                            world=None))
-assert em.stats.parcels > 0 and em.landed_impacts().shape[1] == 3
+for reference in (False, True):  # the fast path and its float64 reference
+    truck = Vehicle(TRUCK_SPEC, (layout.LANE_CENTRES_X[0], 0.0, 500.0), 0.0, 100 * KMH)
+    em = SprayEmitter(seed=1, budget=500, film_depth_fn=lambda x, z: np.full(np.shape(x), 3.0),
+                      reference=reference)
+    for i in range(10):
+        truck.position = truck.position + truck.forward() * truck.speed_m_s / 30
+        em.emit(SimpleNamespace(time_s=i / 30, vehicles=[truck], weather=WeatherState(wetness=1.0), settings=None,
+                                world=None))
+    assert em.stats.parcels > 0 and em.landed_impacts().shape[1] == 3
 """,
     "ripples": """
 from rain_core.effects.ripples import RippleField, WaveSolver, WaveSolverF32
 field = RippleField(n=32, extent_m=3.1, seed=1)
 report = field.update(1 / 60, center_xz=(0.0, 0.0), rate_mm_h=5.0,
-                      film_depth_fn=lambda x, z: np.full(np.shape(x), 3.0))
-assert report['substeps'] >= 1 and np.isfinite(field.height).all()
+                      film_depth_fn=lambda x, z: np.full(np.shape(x), 3.0),
+                      wheels=[((-1.0, 0.0), (1.0, 0.0), 10.0, None, 0.2)], impacts=np.array([[0.1, 0.2, 1e-4]]))
+assert report['substeps'] >= 1 and report['wake_bumps'] > 0 and np.isfinite(field.height).all()
 for cls in (WaveSolver, WaveSolverF32):
     solver = cls(16, 0.05, 0.35)
     solver.add_impulse(0.4, 0.4, 0.1, 1e-3)
     assert solver.step(1 / 60) >= 1
 """,
     "windshield": """
-from rain_core.effects.windshield import GlassInputs, WindshieldSim
+from rain_core.effects.windshield import GlassInputs, WindshieldSim, WindshieldSimReference
 from rain_core.effects.windshield.splats import drop_splats, film_splats
-sim = WindshieldSim(seed=1)
-for _ in range(30):
-    sim.step(1 / 30, GlassInputs.for_speed(60.0, 8.0, wiper_mode='high'))
-assert sim.count > 0 and len(drop_splats(sim, 0.003)) and len(film_splats(sim, 0.003))
+for cls in (WindshieldSim, WindshieldSimReference):
+    sim = cls(seed=1)
+    for _ in range(30):
+        sim.step(1 / 30, GlassInputs.for_speed(60.0, 8.0, wiper_mode='high'))
+    assert sim.count > 0 and len(drop_splats(sim, 0.003)) and len(film_splats(sim, 0.003))
 """,
     "water film": """
 from rain_core.water_film import film_depth_mm

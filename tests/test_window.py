@@ -93,3 +93,37 @@ def test_panel_shows_every_section_with_water_on_the_road(gl_ctx):
     assert not panel.errors
     panel.layer.shutdown()
     scene.release()
+
+
+def test_performance_table_turns_gpu_timing_on_only_while_shown(gl_ctx):
+    """GPU timer queries run only while the Performance section is drawn; CPU ms are there always."""
+    from app.panel import RainManagerPanel
+    from rain_core.scene import Scene
+
+    scene = Scene(gl_ctx, (160, 90), seed=2, gpu_timing=False)
+    scene.step(1 / 30)
+    scene.render()
+    assert scene.renderer.timing_source == "none"
+    assert all(gpu is None for _n, ran, _c, gpu, _t in scene.renderer.pass_table() if ran)
+    assert all(cpu >= 0.0 for _n, ran, cpu, _g, _t in scene.renderer.pass_table() if ran)
+    panel = RainManagerPanel(gl_ctx, (160, 90), scene)
+    for _ in range(3):  # the section is open by default; GPU ms arrive a frame after timing starts
+        panel.draw(1 / 30, scene.renderer.ldr)
+        scene.step(1 / 30)
+        scene.render()
+    assert scene.renderer.gpu_timing and scene.renderer.timing_source != "none"
+    assert any(gpu is not None for _n, ran, _c, gpu, _t in scene.renderer.pass_table() if ran)
+    panel.layer.shutdown()
+    scene.renderer.gpu_timing = False  # what a closed section does
+    scene.render()
+    assert all(gpu is None for _n, ran, _c, gpu, _t in scene.renderer.pass_table() if ran)
+    scene.release()
+
+
+def test_effect_totals_sum_each_effects_passes():
+    from app.panel import effect_totals
+
+    table = [("rainfall.update", True, 1.0, 0.5, ""), ("scene", True, 2.0, 3.0, ""),
+             ("rainfall.transparent", True, 0.5, 1.5, ""), ("spray", False, 0.0, None, ""),
+             ("ripples.update", True, 0.25, None, "numpy32")]
+    assert effect_totals(table) == [("rainfall", 1.5, 2.0), ("scene", 2.0, 3.0), ("ripples", 0.25, None)]

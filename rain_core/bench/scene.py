@@ -43,7 +43,7 @@ def _settings(rate: float, hour: float, levels, camera: str, effects_on: bool = 
 def measure(ctx, settings, size, frames: int, warmup: int) -> dict:
     from rain_core.scene import Scene
 
-    scene = Scene(ctx, size, settings=settings, seed=1)
+    scene = Scene(ctx, size, settings=settings, seed=1, gpu_timing=True)  # per-pass GPU ms (a frame late)
     times, passes = [], {}
     for i in range(warmup + frames):
         scene.step(1 / 30)

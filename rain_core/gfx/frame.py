@@ -132,24 +132,38 @@ class RenderContext:
         out[..., 2] -= self.shift_z
         return out
 
-    def set_frame_uniforms(self, program: moderngl.Program) -> None:
-        """Camera, exposure, sun/sky, lights, atmosphere and shadow uniforms, where the program has them."""
+    def _frame_values(self) -> dict:
+        """Camera, exposure, sun/sky and light values of this context, computed once (every program of the frame
+        gets the same; ``view``/``projection`` replaced means a new context, see dataclasses.replace)."""
+        key = (id(self.view), id(self.projection), id(self.frame), id(self.lights))
+        cached = self.__dict__.get("_frame_cache")
+        if cached is not None and cached[0] == key:
+            return cached[1]
         lighting = self.frame.lighting
         values = {
             "u_view_proj": mat4_bytes(self.view_proj),
-            "u_camera_pos": tuple(self.camera_position),
+            "u_camera_pos": tuple(float(v) for v in self.camera_position),
             "u_exposure": lighting.exposure,
             "u_time": self.frame.time_s,
             "u_night": lighting.night_factor,
-            "u_sun_dir": tuple(lighting.sun_direction),
-            "u_sun_illum": tuple(lighting.sun_illuminance),
-            "u_sky_zenith": tuple(lighting.sky_zenith),
-            "u_sky_horizon": tuple(lighting.sky_horizon),
+            "u_sun_dir": tuple(float(v) for v in lighting.sun_direction),
+            "u_sun_illum": tuple(float(v) for v in lighting.sun_illuminance),
+            "u_sky_zenith": tuple(float(v) for v in lighting.sky_zenith),
+            "u_sky_horizon": tuple(float(v) for v in lighting.sky_horizon),
             "u_ground_albedo": lighting.ground_albedo,
             "u_light_count": self.lights[3],
-            **self.uniforms,
+            "u_light_pos": self.lights[0],
+            "u_light_dir": self.lights[1],
+            "u_light_color": self.lights[2],
         }
+        self.__dict__["_frame_cache"] = (key, values)
+        return values
+
+    def set_frame_uniforms(self, program: moderngl.Program) -> None:
+        """Camera, exposure, sun/sky, lights, atmosphere and shadow uniforms, where the program has them."""
+        values = self._frame_values()
         for name, value in values.items():
+            if name not in self.uniforms:  # the frame's own uniforms (medium, shadow) take precedence
+                set_uniform(program, name, value)
+        for name, value in self.uniforms.items():
             set_uniform(program, name, value)
-        for name, data in zip(("u_light_pos", "u_light_dir", "u_light_color"), self.lights[:3], strict=True):
-            set_uniform(program, name, data)

@@ -23,6 +23,16 @@ CABIN_DIRECT_LIGHT = 0.2
 GL_CLIP_DISTANCE0 = 0x3000  # not in moderngl's enable flags: toggled with ctx.enable_direct
 
 
+def _tile_model(k: int) -> np.ndarray:
+    m = np.eye(4)
+    m[2, 3] = k * layout.PERIOD_M
+    m.flags.writeable = False  # shared by every frame
+    return m
+
+
+_TILE_MODELS = tuple(_tile_model(k) for k in (-1, 0, 1))  # the world tile one period behind, here, ahead
+
+
 @dataclass
 class GpuMesh:
     """A VERTEX_DTYPE mesh on the GPU: one VAO for the lit scene shader, one for the shadow depth pass."""
@@ -90,12 +100,9 @@ class SceneDrawer:
         """(mesh, model matrix in the wrapped frame, direct-light share) of everything opaque in the frame."""
         frame = rc.frame
         cam_z = rc.camera_position[2]
-        for k in (-1, 0, 1):
-            offset = k * layout.PERIOD_M
-            if abs(cam_z - (offset + layout.PERIOD_M / 2)) > layout.PERIOD_M * 1.5:
+        for k, model in zip((-1, 0, 1), _TILE_MODELS, strict=True):
+            if abs(cam_z - (k * layout.PERIOD_M + layout.PERIOD_M / 2)) > layout.PERIOD_M * 1.5:
                 continue
-            model = np.eye(4)
-            model[2, 3] = offset
             yield self._world, model, 1.0
         inside = frame.camera.inside_car
         for vehicle in frame.vehicles:
@@ -134,11 +141,15 @@ class SceneDrawer:
                 effect.bind_scene(prog, rc)
             else:
                 effect.unbind_scene(prog, rc)
+        model_u, scale_u = prog["u_model"], prog["u_direct_scale"]
+        scale_u.value = current = 1.0
         for mesh, model, share in self.draw_list(rc, include_cabin=True):
-            prog["u_model"].write(mat4_bytes(model))
-            prog["u_direct_scale"].value = share
+            model_u.write(mat4_bytes(model))
+            if share != current:  # only the cabin's interior differs: no write per mesh
+                scale_u.value = current = share
             mesh.vao.render(moderngl.TRIANGLES, vertices=mesh.count)
-        prog["u_direct_scale"].value = 1.0
+        if current != 1.0:
+            scale_u.value = 1.0
         if clip_plane is not None:
             ctx.disable_direct(GL_CLIP_DISTANCE0)
 

@@ -1,4 +1,8 @@
-"""Per-pass timing: CPU time of the Python side, GPU time from a timer query where the driver has one."""
+"""Per-pass timing: CPU time of the Python side always (two clock reads), GPU time only when asked for.
+
+A timer query's result is only ready once the GPU has done the pass: reading it at once stalls the CPU until
+then. The renderer therefore times the GPU only while a performance table is shown (``Renderer.gpu_timing``)
+and reads each query one frame late (``PassTimer(lagged=True)``), when the result is long ready."""
 
 from __future__ import annotations
 
@@ -8,39 +12,65 @@ import moderngl
 
 
 class PassTimer:
-    """Measures one pass: CPU time of the Python side, and GPU time from a timer query where the driver has one
-    (else the wall time up to ``ctx.finish()``, which includes the CPU side). ``gpu_source`` says which."""
+    """Measures one pass. ``measure(fn, gpu=None)`` runs fn() and returns (cpu_ms, gpu_ms or None).
 
-    def __init__(self, ctx: moderngl.Context, gpu: bool = True):
+    GPU time (``gpu`` true) comes from a timer query around fn(); where the driver has none, from the wall time
+    up to ``ctx.finish()`` (which includes the CPU side). ``gpu_source`` says which. ``lagged``: alternate two
+    queries and return the GPU time of the *previous* measurement (None the first time), so nothing waits;
+    otherwise the query is read at once (a stall, fine for a benchmark of one pass)."""
+
+    def __init__(self, ctx: moderngl.Context, gpu: bool = True, lagged: bool = False):
         self.ctx = ctx
         self.gpu = gpu
-        self._query = None
+        self.lagged = lagged
+        self._queries: list | None = None  # one or two timer queries, made on first use
+        self._index = 0
+        self._pending = [False, False]  # whether query i holds an unread measurement (lagged)
         self.gpu_source = "none"
         if gpu:
-            try:
-                self._query = ctx.query(time=True)
-                self.gpu_source = "timer query"
-            except Exception:  # drivers without ARB_timer_query
-                self._query = None
-                self.gpu_source = "wall time after finish"
+            self._make_queries()
 
-    def measure(self, fn) -> tuple[float, float | None]:
-        """Run fn(); return (cpu_ms, gpu_ms or None)."""
-        if not self.gpu:
+    def _make_queries(self) -> None:
+        try:
+            self._queries = [self.ctx.query(time=True) for _ in range(2 if self.lagged else 1)]
+            self.gpu_source = "timer query (previous frame)" if self.lagged else "timer query"
+        except Exception:  # drivers without ARB_timer_query
+            self._queries = []
+            self.gpu_source = "wall time after finish"
+
+    def forget(self) -> None:
+        """Drop unread lagged measurements (GPU timing was switched off: a later read would be stale)."""
+        self._pending = [False, False]
+
+    def measure(self, fn, gpu: bool | None = None) -> tuple[float, float | None]:
+        """Run fn(); return (cpu_ms, gpu_ms or None). ``gpu``: time the GPU too (default: ``self.gpu``)."""
+        if not (self.gpu if gpu is None else gpu):
             t0 = time.perf_counter()
             fn()
             return (time.perf_counter() - t0) * 1e3, None
-        if self._query is not None:
+        if self._queries is None:
+            self._make_queries()
+        if not self._queries:
             t0 = time.perf_counter()
-            with self._query:
-                fn()
+            fn()
             cpu = (time.perf_counter() - t0) * 1e3
-            elapsed_ns = self._query.elapsed
-            # Some drivers answer a query they could not time (e.g. across a shader compile) with 2³²−1 ns.
-            return cpu, (None if elapsed_ns >= 0xFFFFFFFF else elapsed_ns * 1e-6)
+            self.ctx.finish()
+            return cpu, (time.perf_counter() - t0) * 1e3
+        query = self._queries[self._index]
         t0 = time.perf_counter()
-        fn()
+        with query:
+            fn()
         cpu = (time.perf_counter() - t0) * 1e3
-        self.ctx.finish()
-        return cpu, (time.perf_counter() - t0) * 1e3
+        if not self.lagged:
+            return cpu, _gpu_ms(query.elapsed)
+        self._pending[self._index] = True
+        self._index = 1 - self._index
+        if not self._pending[self._index]:
+            return cpu, None
+        self._pending[self._index] = False  # the other query: this pass in the previous frame, done by now
+        return cpu, _gpu_ms(self._queries[self._index].elapsed)
 
+
+def _gpu_ms(elapsed_ns: int) -> float | None:
+    # Some drivers answer a query they could not time (e.g. across a shader compile) with 2³²−1 ns.
+    return None if elapsed_ns >= 0xFFFFFFFF else elapsed_ns * 1e-6

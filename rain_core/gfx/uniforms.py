@@ -11,14 +11,16 @@ import numpy as np
 
 def set_uniform(program, name: str, value) -> None:
     """Write one uniform if ``program`` declares it."""
-    if name not in program:
+    # program.get is one dict lookup; ``name in program`` would walk every uniform (moderngl has no __contains__).
+    uniform = program.get(name, None)
+    if uniform is None:
         return
     if isinstance(value, bytes):
-        program[name].write(value)
+        uniform.write(value)
     elif isinstance(value, np.ndarray):
-        program[name].write(np.ascontiguousarray(value, dtype=np.float32).tobytes())
+        uniform.write(np.ascontiguousarray(value, dtype=np.float32).tobytes())
     else:
-        program[name].value = value
+        uniform.value = value
 
 
 def set_uniforms(program, values: dict | None = None, /, **named) -> None:

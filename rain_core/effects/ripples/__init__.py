@@ -2,7 +2,7 @@
 raindrops disturb, its normals for the road's water, and a tiled rain-ring normal map for far puddles.
 
 GL-free (NumPy only): ``constants``, ``solver`` (the scheme and the float64 reference ``WaveSolver``),
-``solver_f32`` (``WaveSolverF32``), ``field`` (``RippleField``, ``WheelSweep``). GL side: ``gpu``
+``solver_f32`` (``WaveSolverF32``), ``field`` (``RippleField``, ``WheelSweep``, ``WheelBatch``). GL side: ``gpu``
 (``WaveSolverGPU``), ``backend`` (``make_solver``, ``choose_backend``, ``make_field``), ``textures``
 (``RippleTextures``: the field's height and slope textures), ``rain_tiles`` (``RainRippleTexture``), ``effect``
 (``RipplesEffect``). The GL names are imported on first use, so the simulation imports and runs without
@@ -26,7 +26,14 @@ from rain_core.effects.ripples.constants import (
     SLEEP_SLOPE,
     WAKE_REF_SPEED_M_S,
 )
-from rain_core.effects.ripples.field import CPU_SOLVERS, FilmDepthFn, RippleField, WheelSweep, field_grid
+from rain_core.effects.ripples.field import (
+    CPU_SOLVERS,
+    FilmDepthFn,
+    RippleField,
+    WheelBatch,
+    WheelSweep,
+    field_grid,
+)
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
 
@@ -50,4 +57,4 @@ def __getattr__(name: str):
 __all__ = ["BACKENDS", "CAPILLARY_SPEED_M_S", "CPU_SOLVERS", "CRATER_RADIUS_PER_D", "DEFAULT_DAMPING_PER_S",
            "DEFAULT_MAX_SUBSTEPS", "MAX_COURANT2", "MAX_IMPULSE_M", "MIN_FOOTPRINT_CELLS", "RAIN_DENT_M_PER_KG_M_S",
            "SLEEP_SLOPE", "WAKE_REF_SPEED_M_S", "FilmDepthFn", "RippleField", "WaveSolver", "WaveSolverF32",
-           "WheelSweep", "field_grid", *_GL_NAMES]
+           "WheelBatch", "WheelSweep", "field_grid", *_GL_NAMES]

@@ -8,6 +8,13 @@ CAPILLARY_SPEED_M_S = 0.35
 DEFAULT_DAMPING_PER_S = 0.5
 MAX_COURANT2 = 0.5  # the leapfrog's stability bound on C² = (s·Δt/h)²
 MAX_IMPULSE_M = 1e9  # |amount| bound: keeps float32 state finite (no ripple is a kilometre high)
+MAX_CELLS_PER_SIDE = 4096  # solver grid bound: 4096² float64 levels are 268 MB (settings allow 2048)
+# A step shorter than this fraction of the largest stable sub-step is not taken but carried into the next call:
+# 1/Δt of a denormal or 1e-200 s step overflows (the whole field turned non-finite), and such a step moves
+# nothing a float can hold anyway.
+MIN_STEP_FRACTION = 1e-9
+# Work bound of one impulse footprint batch: bumps × (cells across)² evaluated at once (float64 temporaries).
+FOOTPRINT_BATCH_CELLS = 1 << 20
 DEFAULT_MAX_SUBSTEPS = 1000  # per step() call; a stall longer than this many Δt_max is shortened (see step)
 SLEEP_SLOPE = 1e-4  # sleep when the energy is below that of a field with this RMS slope everywhere
 MIN_FOOTPRINT_CELLS = 1.5  # impulses narrower than this many cells are widened (volume kept)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from rain_core.effects.ripples.backend import make_field
-from rain_core.effects.ripples.field import RippleField, WheelSweep
+from rain_core.effects.ripples.field import RippleField, WheelBatch, WheelSweep
 from rain_core.effects.ripples.rain_tiles import RainRippleTexture
 from rain_core.effects.ripples.textures import RippleTextures
 from rain_core.gfx.effect import Effect
@@ -63,22 +63,32 @@ class RipplesEffect(Effect):
             return False
         return max(weather.cracks, weather.puddles) > 0.0
 
-    def wheel_sweeps(self, frame, field: RippleField) -> list[WheelSweep]:
-        """The wheels whose contact path this frame lies in the window (world m, speeds m/s)."""
+    def wheel_batch(self, frame, field: RippleField) -> WheelBatch:
+        """The wheels whose contact path this frame may touch the window, as one ``WheelBatch`` (world m, m/s;
+        film depths left to the road's function)."""
         ox, oz = field.origin_xz
-        sweeps = []
+        reach = field.extent_m
+        p0, p1, speeds, widths = [], [], [], []
         for vehicle in frame.vehicles:
+            # Cheap reject on the body position first: wheels lie within a few metres of it.
+            x, z = float(vehicle.position[0]), float(vehicle.position[2])
+            if not (ox - 20.0 < x < ox + reach + 20.0 and oz - 20.0 < z < oz + reach + 20.0):
+                continue
             now = vehicle.wheel_contacts()
             before = getattr(vehicle, "previous_wheel_contacts", None)
-            before = now if before is None else before
-            xs, zs = np.concatenate([now[:, 0], before[:, 0]]), np.concatenate([now[:, 2], before[:, 2]])
-            if xs.max() < ox or xs.min() > ox + field.extent_m or zs.max() < oz or zs.min() > oz + field.extent_m:
-                continue
-            speeds, widths = np.abs(vehicle.wheel_speeds()), vehicle.wheel_widths()
-            for i in range(4):
-                sweeps.append(WheelSweep((before[i, 0], before[i, 2]), (now[i, 0], now[i, 2]), float(speeds[i]),
-                                         float(widths[i])))
-        return sweeps
+            p1.append(now[:, (0, 2)])
+            p0.append(now[:, (0, 2)] if before is None else before[:, (0, 2)])
+            speeds.append(np.abs(vehicle.wheel_speeds()))
+            widths.append(vehicle.wheel_widths())
+        if not p0:
+            return WheelBatch.of(())
+        return WheelBatch(np.concatenate(p0), np.concatenate(p1), np.concatenate(speeds), np.concatenate(widths))
+
+    def wheel_sweeps(self, frame, field: RippleField) -> list[WheelSweep]:
+        """``wheel_batch`` as a list of ``WheelSweep`` (one per wheel)."""
+        batch = self.wheel_batch(frame, field)
+        return [WheelSweep(tuple(batch.p0_xz[i]), tuple(batch.p1_xz[i]), float(batch.speed_m_s[i]),
+                           float(batch.tire_width_m[i])) for i in range(len(batch))]
 
     def update(self, frame, rc) -> None:
         field = self._ensure_field(frame.settings)
@@ -88,9 +98,10 @@ class RipplesEffect(Effect):
         ego = frame.ego
         center = None if ego is None else (float(ego.position[0]), float(ego.position[2]))
         rate = frame.rain_rate_mm_h
-        field.add_droplet_impacts(rc.shared.droplet_impacts)
+        # Rain, wakes and the spray's droplets reach the solver as one batch (one draw on the GPU backend).
         self.last_report = field.update(frame.dt_s, center_xz=center, rate_mm_h=rate,
-                                        wheels=self.wheel_sweeps(frame, field), film_depth_fn=film_fn)
+                                        wheels=self.wheel_batch(frame, field), film_depth_fn=film_fn,
+                                        impacts=rc.shared.droplet_impacts)
         if self.textures is not None:
             rc.shared.water_normals = self.textures.water_normals()
         if rate > 0.0 and self.rain_tiles is not None:

@@ -8,7 +8,7 @@ NumPy only: the field runs, steps and sleeps without OpenGL. The GPU solver is b
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +19,8 @@ from rain_core.effects.ripples.constants import (
     CAPILLARY_SPEED_M_S,
     CRATER_RADIUS_PER_D,
     DEFAULT_DAMPING_PER_S,
+    MAX_CELLS_PER_SIDE,
+    MAX_IMPULSE_M,
     RAIN_DENT_M_PER_KG_M_S,
     WAKE_REF_SPEED_M_S,
 )
@@ -44,11 +46,72 @@ class WheelSweep:
 FilmDepthFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
+@dataclass(frozen=True)
+class WheelBatch:
+    """Many wheels' contact paths over a frame, as arrays: ``p0_xz`` and ``p1_xz`` (W, 2) world m, ``speed_m_s``
+    (W,) ≥ 0, ``tire_width_m`` (W,), ``film_depth_mm`` (W,) or None (ask the film-depth function, once for all
+    wheels, at the middle of each path). ``WheelBatch.of(wheels)`` also takes ``WheelSweep``s or 5-tuples."""
+
+    p0_xz: np.ndarray
+    p1_xz: np.ndarray
+    speed_m_s: np.ndarray
+    tire_width_m: np.ndarray
+    film_depth_mm: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.speed_m_s)
+
+    @property
+    def needs_depth(self) -> bool:
+        return len(self) > 0 and (self.film_depth_mm is None or bool(np.isnan(self.film_depth_mm).any()))
+
+    @classmethod
+    def of(cls, wheels) -> WheelBatch:
+        """A validated batch (ValueError naming the bad field): a WheelBatch, or an iterable of ``WheelSweep``
+        or (p0, p1, speed, film depth mm or None, tyre width) tuples."""
+        if isinstance(wheels, WheelBatch):
+            p0, p1, speed, width, depth = (wheels.p0_xz, wheels.p1_xz, wheels.speed_m_s, wheels.tire_width_m,
+                                           wheels.film_depth_mm)
+        else:
+            rows = [(w.p0_xz, w.p1_xz, w.speed_m_s, w.film_depth_mm, w.tire_width_m) if isinstance(w, WheelSweep)
+                    else tuple(w) for w in wheels]
+            if not rows:
+                return _NO_WHEELS
+            if any(len(r) != 5 for r in rows):
+                raise ValueError("each wheel must be a WheelSweep or (p0, p1, speed, film depth mm, tyre width)")
+            p0, p1, speed, depth, width = zip(*rows, strict=True)
+            depth = [math.nan if d is None else d for d in depth]
+        p0 = checks.finite_array("p0_xz", p0).reshape(-1, 2)
+        p1 = checks.finite_array("p1_xz", p1).reshape(-1, 2)
+        speed = checks.array("speed_m_s", speed, 0.0, 1e3, "m/s").reshape(-1)
+        width = checks.array("tire_width_m", width, 1e-3, 10.0, "m").reshape(-1)
+        if depth is not None:
+            depth = np.asarray(depth, dtype=np.float64).reshape(-1)
+            known = ~np.isnan(depth)
+            checks.array("film_depth_mm", depth[known], 0.0, 1e3, "mm")
+        if not (len(p0) == len(p1) == len(speed) == len(width)) or (depth is not None and len(depth) != len(speed)):
+            raise ValueError("the wheel arrays must have one entry per wheel")
+        return cls(p0, p1, speed, width, depth)
+
+    def rows(self, film_depth_fn: FilmDepthFn | None) -> np.ndarray:
+        """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call."""
+        depth = np.full(len(self), np.nan) if self.film_depth_mm is None else self.film_depth_mm.copy()
+        unknown = np.isnan(depth)
+        if unknown.any():
+            mid = 0.5 * (self.p0_xz[unknown] + self.p1_xz[unknown])
+            asked = np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64)
+            depth[unknown] = np.clip(np.nan_to_num(np.broadcast_to(asked, mid[:, 0].shape), nan=0.0), 0.0, 1e3)
+        return np.column_stack([self.p0_xz, self.p1_xz, self.speed_m_s, depth, self.tire_width_m])
+
+
+_NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
+
+
 def field_grid(n: int, extent_m: float) -> tuple[int, float, float]:
     """(n, extent in m, cell size in m) of a field of n cells per side (≥ 8) spanning extent_m; ValueError if
     either is bad."""
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 8:
-        raise ValueError(f"n must be an int >= 8 (cells per side), got {n!r}")
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or not 8 <= n <= MAX_CELLS_PER_SIDE:
+        raise ValueError(f"n must be an int in [8, {MAX_CELLS_PER_SIDE}] (cells per side), got {checks.quote(n)}")
     extent = checks.number("extent_m", extent_m, 1e-3, 1e5, "m")
     return int(n), extent, extent / (int(n) - 1)
 
@@ -74,7 +137,7 @@ class RippleField:
             raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
         self.n, self.extent_m, self.cell_m = field_grid(n, extent_m)
         self.recenter_margin_cells = max(1, int(recenter_margin_cells))
-        self.max_drops_per_frame = max(1, int(max_drops_per_frame))
+        self.max_drops_per_frame = int(checks.number("max_drops_per_frame", max_drops_per_frame, 1, 10**6))
         self.rain_gain = checks.number("rain_gain", rain_gain, 0.0, 1e6)
         self.wake_gain = checks.number("wake_gain", wake_gain, 0.0, 1e6)
         self.mask_refresh_s = checks.number("mask_refresh_s", mask_refresh_s, 0.0, 1e6, "s")
@@ -99,6 +162,8 @@ class RippleField:
         self._film_fn: FilmDepthFn | None = None
         self._depth_mm: np.ndarray | None = None  # film depth of each cell from _film_fn (NaN: not yet asked)
         self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
+        self._batch: list | None = None  # the frame's bumps while ``update`` gathers them
+        self._cdf_table = None  # (rate, grid, cdf) of the arriving drop diameters
         self.version = 0
 
     # -- geometry --
@@ -225,6 +290,24 @@ class RippleField:
         self._water_cells = np.flatnonzero(water.ravel())
 
     # -- sources --
+    #
+    # Every source ends in ``_emit``: outside ``update`` a bump batch goes to the solver at once; inside it the
+    # frame's batches (raindrops, wakes, spray droplets) are gathered and handed over as one (one footprint
+    # evaluation on the CPU, one buffer write and one draw on the GPU).
+
+    def _emit(self, xs: np.ndarray, zs: np.ndarray, radii, amounts: np.ndarray) -> None:
+        """Window-metre centres, radii (scalar or per bump, ≤ the span) and peaks (m), already valid."""
+        radii = np.broadcast_to(np.asarray(radii, dtype=np.float64), xs.shape)
+        if self._batch is not None:
+            self._batch.append((xs, zs, radii, amounts))
+        else:
+            self.solver.add_impulses_unchecked(xs, zs, radii, amounts)
+
+    def _flush_batch(self) -> None:
+        batch, self._batch = self._batch, None
+        if batch:
+            xs, zs, radii, amounts = (np.concatenate(parts) for parts in zip(*batch, strict=True))
+            self.solver.add_impulses_unchecked(xs, zs, radii, amounts)
 
     def add_wheel_sweep(self, p0_xz, p1_xz, speed_m_s: float, film_depth_mm: float, tire_width_m: float) -> int:
         """Disturb the water along a wheel's path from p0_xz to p1_xz (world m) this frame: a trough as wide as
@@ -234,43 +317,52 @@ class RippleField:
         x0, z0 = (checks.number("p0_xz", v, unit="m") for v in p0_xz)
         x1, z1 = (checks.number("p1_xz", v, unit="m") for v in p1_xz)
         speed = checks.number("speed_m_s", speed_m_s, 0.0, 1e3, "m/s")
-        depth_m = checks.number("film_depth_mm", film_depth_mm, 0.0, 1e3, "mm") * 1e-3
-        radius = 0.5 * checks.number("tire_width_m", tire_width_m, 1e-3, 10.0, "m")
-        trough = self.wake_gain * depth_m * speed / WAKE_REF_SPEED_M_S
-        if trough == 0.0:
-            return 0
+        depth = checks.number("film_depth_mm", film_depth_mm, 0.0, 1e3, "mm")
+        width = checks.number("tire_width_m", tire_width_m, 1e-3, 10.0, "m")
+        return int(self._wakes(np.array([[x0, z0, x1, z1, speed, depth, width]])).sum())
+
+    def _wakes(self, wheels: np.ndarray) -> np.ndarray:
+        """``add_wheel_sweep`` for W valid wheels at once: rows (x0, z0, x1, z1 world m, speed m/s, film depth
+        mm, tyre width m). Returns the bumps laid per wheel."""
+        x0, z0, x1, z1, speed, depth_mm, width = wheels.T
+        radius = np.minimum(0.5 * width, self.solver.max_radius_m)
+        trough = self.wake_gain * depth_mm * 1e-3 * speed / WAKE_REF_SPEED_M_S
         ox, oz = self.origin_xz
-        seg = self._clip_segment(x0 - ox, z0 - oz, x1 - ox, z1 - oz, radius + 2.0 * self.cell_m)
-        if seg is None:
-            return 0
-        ax, az, bx, bz = seg
-        length = math.hypot(bx - ax, bz - az)
-        count = max(1, math.ceil(length / self.cell_m))
-        t = (np.arange(count) + 0.5) / count
+        ax, az, bx, bz, inside = self._clip_segments(x0 - ox, z0 - oz, x1 - ox, z1 - oz,
+                                                     radius + 2.0 * self.cell_m)
+        live = inside & (trough != 0.0)
+        counts = np.zeros(len(wheels), np.int64)
+        if not live.any():
+            return counts
+        ax, az, bx, bz, radius, trough = (v[live] for v in (ax, az, bx, bz, radius, trough))
+        length = np.hypot(bx - ax, bz - az)
+        count = np.maximum(1, np.ceil(length / self.cell_m)).astype(np.int64)
+        counts[live] = count
         # A row of raised cosines of radius R spaced ds sums to R/ds times one peak along its axis: scale each
         # peak by ds/R so the trough depth does not depend on the frame rate or the grid.
-        spacing = length / count if length > 0.0 else radius
-        peak = -trough * min(spacing / radius, 1.0)
-        self.solver.add_impulses(ax + t * (bx - ax), az + t * (bz - az), radius, np.full(count, peak))
-        return count
+        spacing = np.where(length > 0.0, length / count, radius)
+        peak = -trough * np.minimum(spacing / radius, 1.0)
+        wheel = np.repeat(np.arange(count.size), count)
+        t = (np.arange(wheel.size) - np.repeat(np.cumsum(count) - count, count) + 0.5) / count[wheel]
+        self._emit(ax[wheel] + t * (bx - ax)[wheel], az[wheel] + t * (bz - az)[wheel], radius[wheel], peak[wheel])
+        return counts
 
-    def _clip_segment(self, ax, az, bx, bz, pad):
-        """Liang–Barsky clip of a segment (window metres) to the window grown by pad; None if outside."""
+    def _clip_segments(self, ax, az, bx, bz, pad):
+        """Liang–Barsky clip of segments (window metres, arrays) to the window grown by pad (per segment):
+        the clipped ends and whether anything is left."""
         lo, hi = -pad, self.solver.length_m + pad
-        t0, t1 = 0.0, 1.0
+        t0, t1 = np.zeros_like(ax), np.ones_like(ax)
+        inside = np.ones(ax.shape, bool)
         for p, q in ((-(bx - ax), ax - lo), (bx - ax, hi - ax), (-(bz - az), az - lo), (bz - az, hi - az)):
-            if p == 0.0:
-                if q < 0.0:
-                    return None
-                continue
-            r = q / p
-            if p < 0.0:
-                t0 = max(t0, r)
-            else:
-                t1 = min(t1, r)
-            if t0 > t1:
-                return None
-        return ax + t0 * (bx - ax), az + t0 * (bz - az), ax + t1 * (bx - ax), az + t1 * (bz - az)
+            flat = p == 0.0
+            inside &= ~(flat & (q < 0.0))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                r = np.where(flat, 0.0, q / np.where(flat, 1.0, p))
+            t0 = np.where(~flat & (p < 0.0), np.maximum(t0, r), t0)
+            t1 = np.where(~flat & (p > 0.0), np.minimum(t1, r), t1)
+        inside &= t0 <= t1
+        dx, dz = bx - ax, bz - az
+        return ax + t0 * dx, az + t0 * dz, ax + t1 * dx, az + t1 * dz, inside
 
     def add_raindrops(self, rate_mm_h: float, dt_s: float) -> int:
         """Drops that hit the water cells of the window in dt_s seconds at a rain rate in mm/h: a Poisson count
@@ -280,6 +372,9 @@ class RippleField:
         many drops each carrying a proportional share (the momentum flux is kept). Returns the drops laid."""
         rate = checks.number("rate_mm_h", rate_mm_h, 0.0, 500.0, "mm/h")
         dt = checks.number("dt_s", dt_s, 0.0, math.inf, "s")
+        return self._raindrops(rate, dt)
+
+    def _raindrops(self, rate: float, dt: float) -> int:
         if rate == 0.0 or dt == 0.0 or self.rain_gain == 0.0:
             return 0
         interior = (self.n - 2) ** 2
@@ -302,36 +397,46 @@ class RippleField:
         else:
             iz, ix = np.divmod(self._water_cells[self.rng.integers(0, cells, drawn)], self.n)
         jitter = self.rng.random((2, drawn)) - 0.5  # anywhere within the cell
-        self.solver.add_impulses((ix + jitter[0]) * self.cell_m, (iz + jitter[1]) * self.cell_m,
-                                 CRATER_RADIUS_PER_D * diam * 1e-3,
-                                 -self.rain_gain * RAIN_DENT_M_PER_KG_M_S * weight * momentum)
+        self._emit((ix + jitter[0]) * self.cell_m, (iz + jitter[1]) * self.cell_m,
+                   CRATER_RADIUS_PER_D * diam * 1e-3, -self.rain_gain * RAIN_DENT_M_PER_KG_M_S * weight * momentum)
         return drawn
 
     def add_droplet_impacts(self, impacts, radius_m: float = 0.02) -> int:
         """Droplets landing in the water (e.g. wheel spray): (x m, z m world, downward momentum kg·m/s) each,
-        pressing a dent by the raindrops' law (RAIN_DENT_M_PER_KG_M_S × wake_gain); None: none. Returns the dents
-        laid."""
+        pressing a dent by the raindrops' law (RAIN_DENT_M_PER_KG_M_S × wake_gain); None: none. Rows with a
+        NaN or inf are skipped. Returns the dents laid."""
         if impacts is None:
             return 0
-        impacts = np.asarray(list(impacts), dtype=np.float64).reshape(-1, 3)
+        radius = checks.number("radius_m", radius_m, 0.0, self.solver.max_radius_m, "m")
+        try:
+            impacts = np.asarray(impacts if isinstance(impacts, np.ndarray) else list(impacts), dtype=np.float64)
+            impacts = impacts.reshape(-1, 3)
+        except (TypeError, ValueError):
+            raise ValueError(f"impacts must be an (N, 3) array of x m, z m, momentum kg·m/s, got "
+                             f"{checks.quote(impacts)}") from None
         if len(impacts) == 0 or self.wake_gain == 0.0:
             return 0
         impacts = impacts[np.all(np.isfinite(impacts), axis=1)]
         ox, oz = self.origin_xz
-        self.solver.add_impulses(impacts[:, 0] - ox, impacts[:, 1] - oz, radius_m,
-                                 -self.wake_gain * RAIN_DENT_M_PER_KG_M_S * np.abs(impacts[:, 2]))
+        dent = -self.wake_gain * RAIN_DENT_M_PER_KG_M_S * np.abs(impacts[:, 2])
+        dent = np.clip(dent, -MAX_IMPULSE_M, MAX_IMPULSE_M)
+        self._emit(impacts[:, 0] - ox, impacts[:, 1] - oz, radius, dent)
         return len(impacts)
 
     def _flux_weighted_diameters(self, rate: float, count: int) -> np.ndarray:
         """Diameters (mm) of drops arriving on a surface: the law of ``physics.sample_drop_diameters`` (the
         airborne N(D), ``physics.drop_diameter_cdf``) weighted by the fall speed v(D), since faster drops of a
-        size class arrive more often; inverse-CDF sampling on a 512-point table built for this rate."""
-        grid = np.linspace(physics.D_MIN_MM, physics.D_MAX_MM, 513)
-        mass = np.diff(np.asarray(physics.drop_diameter_cdf(grid, rate), dtype=np.float64))
-        mid = 0.5 * (grid[1:] + grid[:-1])
-        weights = mass * np.asarray(physics.terminal_velocity(mid), dtype=np.float64)
-        cdf = np.concatenate([[0.0], np.cumsum(weights)])
-        cdf /= cdf[-1]
+        size class arrive more often; inverse-CDF sampling on a 512-point table built for this rate (kept
+        while the rate stays the same: it costs more than the sampling)."""
+        if self._cdf_table is None or self._cdf_table[0] != rate:
+            grid = np.linspace(physics.D_MIN_MM, physics.D_MAX_MM, 513)
+            mass = np.diff(np.asarray(physics.drop_diameter_cdf(grid, rate), dtype=np.float64))
+            mid = 0.5 * (grid[1:] + grid[:-1])
+            weights = mass * np.asarray(physics.terminal_velocity(mid), dtype=np.float64)
+            cdf = np.concatenate([[0.0], np.cumsum(weights)])
+            cdf /= cdf[-1]
+            self._cdf_table = (rate, grid, cdf)
+        _, grid, cdf = self._cdf_table
         return np.interp(self.rng.random(count), cdf, grid)
 
     # -- time --
@@ -344,14 +449,20 @@ class RippleField:
             self.version += 1
         return k
 
-    def update(self, dt_s: float, center_xz=None, rate_mm_h: float = 0.0, wheels: Iterable = (),
-               film_depth_fn: FilmDepthFn | None = None) -> dict:
+    def update(self, dt_s: float, center_xz=None, rate_mm_h: float = 0.0, wheels=(),
+               film_depth_fn: FilmDepthFn | None = None, impacts=None) -> dict:
         """One frame: recenter on center_xz (world m; None keeps the window), follow the water mask of
         film_depth_fn(x_m, z_m) -> mm (see ``refresh_water_mask``: evaluated in full the first time, then in
         strips and bands, so it may be a new function object every frame), lay raindrops for
-        rate_mm_h (mm/h) and the wheel sweeps (``WheelSweep`` or 5-tuples in ``add_wheel_sweep`` order:
-        p0, p1, speed, film depth mm, tyre width), then step by dt_s (s). Returns what it did."""
+        rate_mm_h (mm/h), the wheel sweeps and the droplet ``impacts`` (as ``add_droplet_impacts``), then step
+        by dt_s (s). ``wheels``: a ``WheelBatch``, or ``WheelSweep``s or 5-tuples in ``add_wheel_sweep`` order
+        (p0, p1, speed, film depth mm or None, tyre width). Everything is validated here, once; the frame's
+        bumps reach the solver as one batch. Returns what it did."""
         dt = checks.number("dt_s", dt_s, 0.0, math.inf, "s")
+        rate = checks.number("rate_mm_h", rate_mm_h, 0.0, 500.0, "mm/h")
+        batch = WheelBatch.of(wheels)
+        if batch.needs_depth and film_depth_fn is None:
+            raise ValueError("a wheel without film_depth_mm needs film_depth_fn")
         # With a film-depth function the cells that scroll in are asked together with this frame's band.
         fill = film_depth_fn is None or self._depth_mm is None
         shift = (0, 0) if center_xz is None else self._recenter(*center_xz, fill=fill)
@@ -361,20 +472,14 @@ class RippleField:
             else:  # a new function object each frame (the weather moves on): keep rolling, no full re-ask
                 self._film_fn = film_depth_fn
                 self._refresh_depth_band(dt)
-        drops = self.add_raindrops(rate_mm_h, dt)
-        bumps = 0
-        for wheel in wheels:
-            if isinstance(wheel, WheelSweep):
-                p0, p1, speed, depth, width = (wheel.p0_xz, wheel.p1_xz, wheel.speed_m_s, wheel.film_depth_mm,
-                                               wheel.tire_width_m)
-            else:
-                p0, p1, speed, depth, width = wheel
-            if depth is None:
-                if film_depth_fn is None:
-                    raise ValueError("a wheel without film_depth_mm needs film_depth_fn")
-                mid_x, mid_z = 0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1])
-                depth = float(np.asarray(film_depth_fn(np.array([mid_x]), np.array([mid_z]))).ravel()[0])
-            bumps += self.add_wheel_sweep(p0, p1, speed, depth, width)
+        self._batch = []
+        try:
+            drops = self._raindrops(rate, dt)
+            bumps = int(self._wakes(batch.rows(film_depth_fn)).sum()) if len(batch) else 0
+            self.add_droplet_impacts(impacts)
+            self._flush_batch()
+        finally:
+            self._batch = None
         substeps = self.step(dt)
         return {"shift": shift, "drops": drops, "wake_bumps": bumps, "substeps": substeps,
                 "asleep": self.asleep, "backend": self.backend}

@@ -20,8 +20,9 @@ _CONSTANTS_IN: dict[int, dict] = {}
 
 class WaveSolverGPU(WaveSolver):
     """The same solver in fragment shaders (OpenGL 3.3): an RG32F texture (current, previous) ping-ponged
-    through ``shaders/ripples/step.frag``; sources are summed on the CPU into a displacement texture and added
-    by ``shaders/ripples/impulse.frag`` with additive blending. ``height`` reads the texture back (float32).
+    through ``shaders/ripples/step.frag``. Sources are queued as bumps (centre, radius, peak) and, before the
+    next pass, drawn all at once: one buffer write and one instanced draw of ``shaders/ripples/impulse.*`` with
+    additive blending — the CPU never evaluates a footprint. ``height`` reads the texture back (float32).
 
     ``WaveSolverGPU(ctx, n, cell_m, speed_m_s, damping_per_s=0.0, shaders=None, **kw)``. Passes bind their
     inputs to the scratch texture units (``units.SCRATCH``) and leave blending disabled and the scissor reset.
@@ -43,11 +44,9 @@ class WaveSolverGPU(WaveSolver):
         for target in self.state.targets:
             target.fbo.clear(0.0, 0.0, 0.0, 0.0)
         self.mask_texture = ctx.texture((n, n), 1, np.full(n * n, 255, np.uint8).tobytes(), dtype="f1")
-        self.source_texture = ctx.texture((n, n), 1, dtype="f4")
+        self.mask_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
         nb = -(-n // REDUCE_BLOCK)
         self.reduce_target = float_target(ctx, (nb, nb), 4, "f4", filter_linear=False)
-        for tex in (self.mask_texture, self.source_texture):
-            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         prog = self.shaders.program
         self._progs = {
             "step": prog("common/fullscreen.vert", "ripples/step.frag"),
@@ -55,14 +54,27 @@ class WaveSolverGPU(WaveSolver):
             "reduce": prog("common/fullscreen.vert", "ripples/step.frag",
                            defines={"RIPPLES_REDUCE": 1, "RIPPLES_BLOCK": REDUCE_BLOCK}),
             "shift": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_SHIFT": 1}),
-            "impulse": prog("common/fullscreen.vert", "ripples/impulse.frag"),
+            "impulse": prog("ripples/impulse.vert", "ripples/impulse.frag"),
         }
-        self._vaos = {name: fullscreen_triangle(ctx, p) for name, p in self._progs.items()}
-        state_unit, mask_unit, source_unit = units.SCRATCH
-        self._constants = {"u_state": state_unit, "u_mask": mask_unit, "u_source": source_unit, "u_n": n,
+        self._vaos = {name: fullscreen_triangle(ctx, p) for name, p in self._progs.items() if name != "impulse"}
+        state_unit, mask_unit, _ = units.SCRATCH
+        self._constants = {"u_state": state_unit, "u_mask": mask_unit, "u_n": n,
                            "u_s2": self.speed_m_s ** 2, "u_inv_h2": 1.0 / self.cell_m ** 2}
-        self._pending = np.zeros((n, n), np.float32)
-        self._pending_box: list[int] | None = None  # [x0, z0, x1, z1) of pending sources
+        self._queued: list[np.ndarray] = []  # (K, 4) float32 bumps (x, z, radius in cells; peak m) not drawn yet
+        self._bump_capacity = 0
+        self._bump_buffer = None
+        self._bump_vao = None
+        self._grow_bumps(1024)
+
+    def _grow_bumps(self, count: int) -> None:
+        """Room for ``count`` bumps in the instance buffer (doubling, so a growing batch reallocates rarely)."""
+        capacity = max(count, 2 * self._bump_capacity)
+        for obj in (self._bump_vao, self._bump_buffer):
+            if obj is not None:
+                obj.release()
+        self._bump_buffer = self.ctx.buffer(reserve=capacity * 16, dynamic=True)
+        self._bump_vao = self.ctx.vertex_array(self._progs["impulse"], [(self._bump_buffer, "4f/i", "in_bump")])
+        self._bump_capacity = capacity
 
     def _own(self, prog) -> None:
         """Write this solver's constant uniforms into ``prog`` unless they are already there."""
@@ -85,39 +97,36 @@ class WaveSolverGPU(WaveSolver):
         self._draw(name, self.state.dst, **uniforms)
         self.state.swap()
 
-    def _flush(self):
-        """Add the pending source displacement to both stored levels (one blended, scissored pass)."""
-        if self._pending_box is None:
+    def add_impulses_unchecked(self, xs, zs, radii, amounts):
+        """Queue the bumps (see ``WaveSolver.add_impulses_unchecked``); they are drawn together before the next
+        pass that reads the state."""
+        xs, zs, r_eff, amounts = self._bumps(xs, zs, radii, amounts)
+        if xs.size == 0:
             return
-        x0, z0, x1, z1 = self._pending_box
-        region = np.ascontiguousarray(self._pending[z0:z1, x0:x1])
-        self.source_texture.write(region.tobytes(), viewport=(x0, z0, x1 - x0, z1 - z0))
-        self._pending[z0:z1, x0:x1] = 0.0
-        self._pending_box = None
+        inv_h = 1.0 / self.cell_m
+        self._queued.append(np.stack([xs * inv_h, zs * inv_h, r_eff * inv_h, amounts], axis=1).astype(np.float32))
+        self._sourced = True
+        self._asleep = False
+
+    def _flush(self):
+        """Add the queued bumps to both stored levels: one buffer write, one instanced additive draw."""
+        if not self._queued:
+            return
+        bumps = self._queued[0] if len(self._queued) == 1 else np.concatenate(self._queued)
+        self._queued = []
+        if len(bumps) > self._bump_capacity:
+            self._grow_bumps(len(bumps))
+        self._bump_buffer.write(bumps)
         fbo = self.state.src.fbo
         self._own(self._progs["impulse"])
-        _, mask_unit, source_unit = units.SCRATCH
-        self.source_texture.use(source_unit)
-        self.mask_texture.use(mask_unit)
+        self.mask_texture.use(units.SCRATCH[1])
         fbo.use()
-        fbo.scissor = (x0, z0, x1 - x0, z1 - z0)
         self.ctx.enable(moderngl.BLEND)
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         try:
-            self._vaos["impulse"].render(vertices=3)
+            self._bump_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=len(bumps))
         finally:
             self.ctx.disable(moderngl.BLEND)
-            fbo.scissor = None
-
-    def _deposit(self, flat: np.ndarray, values: np.ndarray):
-        n = self.n
-        np.add.at(self._pending.ravel(), flat, values.astype(np.float32))
-        rows, cols = np.divmod(flat, n)
-        box = [int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1]
-        if self._pending_box is not None:
-            old = self._pending_box
-            box = [min(old[0], box[0]), min(old[1], box[1]), max(old[2], box[2]), max(old[3], box[3])]
-        self._pending_box = box
 
     def _get_state(self):
         self._flush()
@@ -125,8 +134,7 @@ class WaveSolverGPU(WaveSolver):
         return data[..., 0].astype(np.float64), data[..., 1].astype(np.float64)
 
     def _set_state(self, z, zp):
-        self._pending[:] = 0.0
-        self._pending_box = None
+        self._queued = []
         data = np.stack([np.asarray(z, np.float32), np.asarray(zp, np.float32)], axis=-1)
         self.state.src.color.write(np.ascontiguousarray(data).tobytes())
 
@@ -206,7 +214,7 @@ class WaveSolverGPU(WaveSolver):
                 del _CONSTANTS_IN[prog.glo]
         self.state.release()
         self.reduce_target.release()
-        for obj in (self.mask_texture, self.source_texture, *self._vaos.values()):
+        for obj in (self.mask_texture, self._bump_vao, self._bump_buffer, *self._vaos.values()):
             obj.release()
         if self._owns_shaders:
             self.shaders.release()

@@ -60,9 +60,12 @@ import numpy as np
 from rain_core import checks
 from rain_core.effects.ripples.constants import (
     DEFAULT_MAX_SUBSTEPS,
+    FOOTPRINT_BATCH_CELLS,
+    MAX_CELLS_PER_SIDE,
     MAX_COURANT2,
     MAX_IMPULSE_M,
     MIN_FOOTPRINT_CELLS,
+    MIN_STEP_FRACTION,
     SLEEP_SLOPE,
 )
 
@@ -80,10 +83,11 @@ def shifted(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
 class WaveSolver:
     """Float64 NumPy reference of the damped leapfrog wave solver (see the module docstring for the scheme).
 
-    ``WaveSolver(n, cell_m, speed_m_s, damping_per_s=0.0)``: n cells per side including the fixed edges (≥ 3),
-    cell size in m, wave speed in m/s, amplitude damping rate in 1/s. ``sleep_energy`` (m⁴/s²): below it, with
-    no sources, the solver zeroes the field and stops stepping (None: the energy of a field with RMS slope
-    ``SLEEP_SLOPE``; 0 never sleeps). Energy is checked every ``sleep_check_every`` step() calls.
+    ``WaveSolver(n, cell_m, speed_m_s, damping_per_s=0.0)``: n cells per side including the fixed edges (3 to
+    ``MAX_CELLS_PER_SIDE``), cell size in m, wave speed in m/s, amplitude damping rate in 1/s.
+    ``sleep_energy`` (m⁴/s²): below it, with no sources, the solver zeroes the field and stops stepping (None:
+    the energy of a field with RMS slope ``SLEEP_SLOPE``; 0 never sleeps). Energy is checked every
+    ``sleep_check_every`` step() calls.
     """
 
     dtype = np.float64
@@ -91,10 +95,12 @@ class WaveSolver:
     def __init__(self, n: int, cell_m: float, speed_m_s: float, damping_per_s: float = 0.0, *,
                  sleep_energy: float | None = None, max_substeps: int = DEFAULT_MAX_SUBSTEPS,
                  sleep_check_every: int = 8):
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 3:
-            raise ValueError(f"n must be an int >= 3 (cells per side, edges included), got {n!r}")
-        if isinstance(max_substeps, bool) or not isinstance(max_substeps, int | np.integer) or max_substeps < 1:
-            raise ValueError(f"max_substeps must be an int >= 1, got {max_substeps!r}")
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or not 3 <= n <= MAX_CELLS_PER_SIDE:
+            raise ValueError(f"n must be an int in [3, {MAX_CELLS_PER_SIDE}] (cells per side, edges included), "
+                             f"got {checks.quote(n)}")
+        if isinstance(max_substeps, bool) or not isinstance(max_substeps, int | np.integer) \
+                or not 1 <= max_substeps <= 10**6:
+            raise ValueError(f"max_substeps must be an int in [1, 1000000], got {checks.quote(max_substeps)}")
         self.n = int(n)
         self.cell_m = checks.number("cell_m", cell_m, 1e-9, 1e6, "m")
         self.speed_m_s = checks.number("speed_m_s", speed_m_s, 1e-9, 1e6, "m/s")
@@ -109,6 +115,8 @@ class WaveSolver:
         while self.courant2(dt_max) > MAX_COURANT2:  # so every Δt ≤ dt_max keeps C² ≤ 1/2 after rounding
             dt_max = math.nextafter(dt_max, 0.0)
         self.dt_max = dt_max
+        self.min_step_s = MIN_STEP_FRACTION * dt_max  # shorter calls are carried, not stepped (see step)
+        self._carry = 0.0  # s of calls shorter than min_step_s, not yet stepped
         self._mask: np.ndarray | None = None  # None: all water; else 1.0 water / 0.0 held, in self.dtype
         self._dt: float | None = None  # sub-step of the stored (z, z⁻); None: synchronous and at rest
         self._debt = 0.0  # s of frame time not yet simulated (only with reuse_tolerance)
@@ -136,16 +144,10 @@ class WaveSolver:
         self._zp = np.ascontiguousarray(zp, dtype=self.dtype)
 
     def _deposit(self, flat: np.ndarray, values: np.ndarray):
-        add = self._z.ravel()
-        prev = self._zp.ravel()
-        if flat.size > self.n * self.n // 8:  # many sources: one dense accumulation beats scattered adds
-            acc = np.bincount(flat, weights=values, minlength=self.n * self.n).astype(self.dtype)
-            add += acc
-            prev += acc
-        else:
-            vals = values.astype(self.dtype)
-            np.add.at(add, flat, vals)
-            np.add.at(prev, flat, vals)
+        # Scattered adds (NumPy ≥ 2 makes ufunc.at fast): no dense n×n accumulator allocated every frame.
+        vals = values.astype(self.dtype)
+        np.add.at(self._z.ravel(), flat, vals)
+        np.add.at(self._zp.ravel(), flat, vals)
 
     def _advance(self, k: int, alpha: float, kc2: float):
         z, zp = self._z, self._zp
@@ -178,9 +180,9 @@ class WaveSolver:
         """(k, Δt): k equal sub-steps of Δt (s) for a frame of dt_s (s), C² ≤ 1/2. A frame longer than
         max_substeps·Δt_max is shortened to that (the water lives through less time than the stall; the app
         must not freeze for it)."""
-        k = max(1, math.ceil(dt_s / self.dt_max))
-        if k > self.max_substeps:
+        if dt_s > self.max_substeps * self.dt_max:  # before ceil: dt/Δt_max may not even be a finite number
             return self.max_substeps, self.dt_max
+        k = max(1, math.ceil(dt_s / self.dt_max))
         sub = dt_s / k
         while sub > self.dt_max:
             k += 1
@@ -276,17 +278,20 @@ class WaveSolver:
 
     def reset(self, height0=None):
         """Start at rest (zero velocity) from height0, an (n, n) array in metres (None: flat). Edges and held
-        cells are set to 0. Raises ValueError for a wrong shape or NaN/inf."""
+        cells are set to 0. Raises ValueError for a wrong shape, NaN/inf or heights beyond ±MAX_IMPULSE_M."""
         if height0 is None:
             z = np.zeros((self.n, self.n))
         else:
             z = checks.finite_array("height0", height0, (self.n, self.n)).copy()
+            if np.any(np.abs(z) > MAX_IMPULSE_M):
+                raise ValueError(f"height0 must be within ±{MAX_IMPULSE_M:g} m")
         z[0, :] = z[-1, :] = z[:, 0] = z[:, -1] = 0.0
         if self._mask is not None:
             z *= self._mask
         self._set_state(z, z.copy())
         self._dt = None
         self._debt = 0.0
+        self._carry = 0.0
         self._dt_avg = None
         self.time_s = 0.0
         self.steps = 0
@@ -296,7 +301,10 @@ class WaveSolver:
 
     def step(self, dt_s: float, *, reuse_tolerance: float = 0.0) -> int:
         """Advance by dt_s seconds (finite, ≥ 0) in equal sub-steps with C² ≤ 1/2; returns the number of
-        sub-steps taken (0 while asleep or for dt_s = 0). Raises ValueError for NaN, inf or negative dt_s.
+        sub-steps taken (0 while asleep or for dt_s = 0). Raises ValueError for NaN, inf, negative or
+        non-numeric dt_s. A call shorter than ``min_step_s`` (MIN_STEP_FRACTION of Δt_max, e.g. a denormal dt)
+        takes no step: its time is carried into the next call. A call longer than max_substeps·Δt_max is
+        shortened to that (``plan``), so the field stays finite whatever the dt.
 
         reuse_tolerance (default 0: exact): when > 0, keep the current sub-step if a whole number of them is
         within that fraction of dt_s and carry the difference into the next call, so frame-time jitter does
@@ -308,6 +316,14 @@ class WaveSolver:
         tol = checks.number("reuse_tolerance", reuse_tolerance, 0.0, 0.5)
         if dt == 0.0 or self._asleep:
             return 0
+        if dt < self.min_step_s:
+            self._carry += dt
+            if self._carry < self.min_step_s:
+                return 0
+            dt, self._carry = self._carry, 0.0
+        elif self._carry:
+            dt, self._carry = dt + self._carry, 0.0
+        dt = min(dt, self.max_substeps * self.dt_max)  # what plan() would shorten it to anyway
         k, sub = self._schedule(dt, tol)
         if k == 0:
             return 0
@@ -354,6 +370,7 @@ class WaveSolver:
             self._set_state(np.zeros((self.n, self.n)), np.zeros((self.n, self.n)))
             self._dt = None
             self._debt = 0.0
+            self._carry = 0.0
             self._asleep = True
 
     def energy(self) -> float:
@@ -370,18 +387,25 @@ class WaveSolver:
                           + np.sum(np.diff(zp, axis=1) * np.diff(z, axis=1), dtype=f64))
         return kinetic + 0.5 * self.speed_m_s ** 2 * potential
 
+    @property
+    def max_radius_m(self) -> float:
+        """The largest impulse radius accepted (m): the field's span (a wider bump is no ripple, and its
+        footprint would be an allocation as large as the radius squared)."""
+        return self.length_m
+
     def add_impulse(self, x_m: float, z_m: float, radius_m: float, amount: float):
         """Displace the water by a raised-cosine bump of peak ``amount`` metres (negative: a dent) and radius
-        ``radius_m`` centred at (x_m, z_m), metres from cell (0, 0). The velocity is unchanged (both stored
-        levels move), so the bump is released from rest. A bump narrower than 1.5 cells is widened to that
-        with its volume kept. Held cells and edges receive nothing; a bump off the grid is ignored."""
+        ``radius_m`` (0 to ``max_radius_m``) centred at (x_m, z_m), metres from cell (0, 0). The velocity is
+        unchanged (both stored levels move), so the bump is released from rest. A bump narrower than 1.5 cells
+        is widened to that with its volume kept. Held cells and edges receive nothing; a bump off the grid is
+        ignored."""
         self.add_impulses([checks.number("x_m", x_m, unit="m")], [checks.number("z_m", z_m, unit="m")],
-                          checks.number("radius_m", radius_m, 0.0, math.inf, "m"),
+                          checks.number("radius_m", radius_m, 0.0, self.max_radius_m, "m"),
                           [checks.number("amount", amount, -MAX_IMPULSE_M, MAX_IMPULSE_M, "m")])
 
     def add_impulses(self, xs_m, zs_m, radius_m, amounts_m):
-        """Vectorised ``add_impulse``: arrays of centres (m) and peaks (m); radius_m (m, ≥ 0) one for all or
-        one per bump."""
+        """Vectorised ``add_impulse``: arrays of centres (m) and peaks (m); radius_m (m, 0 to ``max_radius_m``)
+        one for all or one per bump. Validates, then ``add_impulses_unchecked``."""
         xs = checks.finite_array("xs_m", xs_m).ravel()
         zs = checks.finite_array("zs_m", zs_m).ravel()
         amounts = checks.finite_array("amounts_m", amounts_m).ravel()
@@ -391,43 +415,102 @@ class WaveSolver:
         if radii.ndim and radii.size != xs.size:
             raise ValueError("radius_m must be a scalar or have one entry per impulse")
         radii = np.broadcast_to(radii.ravel() if radii.ndim else radii, xs.shape)
-        if np.any(radii < 0.0):
-            raise ValueError("radius_m must be >= 0 m")
+        if np.any(radii < 0.0) or np.any(radii > self.max_radius_m):
+            bad = radii[(radii < 0.0) | (radii > self.max_radius_m)][0]
+            raise ValueError(f"radius_m must be in [0, {self.max_radius_m:g}] m (the field's span), got {bad!r}")
         if np.any(np.abs(amounts) > MAX_IMPULSE_M):
             raise ValueError(f"impulse amounts must be within ±{MAX_IMPULSE_M:g} m")
+        self.add_impulses_unchecked(xs, zs, radii, amounts)
+
+    def add_impulses_unchecked(self, xs: np.ndarray, zs: np.ndarray, radii: np.ndarray, amounts: np.ndarray):
+        """``add_impulses`` for callers that validated at their own boundary (the ripple field, once a frame):
+        1-D float64 arrays of one length, finite, radii in [0, max_radius_m], |amounts| ≤ MAX_IMPULSE_M.
+        The whole batch is one deposit (on the GPU, one buffer write and one draw)."""
+        if xs.size == 0:
+            return
         flat, values = self._footprint(xs, zs, radii, amounts)
         if flat.size:
             self._deposit(flat, values)
             self._sourced = True
             self._asleep = False
 
-    def _footprint(self, xs, zs, radii, amounts) -> tuple[np.ndarray, np.ndarray]:
-        """Flat cell indices and values of the bumps (interior water cells only)."""
-        h, n = self.cell_m, self.n
-        r_eff = np.maximum(radii, MIN_FOOTPRINT_CELLS * h)
+    def _bumps(self, xs, zs, radii, amounts) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The bumps that touch the grid, widened to MIN_FOOTPRINT_CELLS with their volume kept: (x m, z m,
+        radius m, peak m), float64."""
+        r_eff = np.maximum(radii, MIN_FOOTPRINT_CELLS * self.cell_m)
         amounts = amounts * (radii / r_eff) ** 2  # bump volume ∝ peak·radius²: keep it when widening
         keep = (xs > -r_eff) & (xs < self.length_m + r_eff) & (zs > -r_eff) & (zs < self.length_m + r_eff) \
             & (amounts != 0.0)
-        xs, zs, amounts, r_eff = xs[keep], zs[keep], amounts[keep], r_eff[keep]
+        return xs[keep], zs[keep], r_eff[keep], amounts[keep]
+
+    def _footprint(self, xs, zs, radii, amounts) -> tuple[np.ndarray, np.ndarray]:
+        """Flat cell indices and values of the bumps (interior water cells only). Bumps are evaluated in
+        groups of equal reach, at most FOOTPRINT_BATCH_CELLS cells at a time, so the work and the temporaries
+        stay bounded whatever the batch mixes (raindrops of 1.5 cells with a wake of 20)."""
+        xs, zs, r_eff, amounts = self._bumps(xs, zs, radii, amounts)
         if xs.size == 0:
             return np.zeros(0, np.int64), np.zeros(0)
+        reach = np.ceil(r_eff / self.cell_m).astype(np.int64)  # cells from the centre's cell to the rim
+        order = np.argsort(reach, kind="stable")
+        levels, starts = np.unique(reach[order], return_index=True)
+        ends = np.append(starts[1:], order.size)
+        flats, values = [], []
+        for level, start, end in zip(levels.tolist(), starts.tolist(), ends.tolist(), strict=True):
+            width = 2 * level + 1
+            group = order[start:end]
+            if width * width > FOOTPRINT_BATCH_CELLS:  # a huge bump: clipped to the grid, rows in chunks
+                for i in group.tolist():
+                    self._footprint_clipped(xs[i], zs[i], r_eff[i], amounts[i], flats, values)
+                continue
+            per = max(1, FOOTPRINT_BATCH_CELLS // (width * width))
+            for lo in range(0, group.size, per):
+                sel = group[lo:lo + per]
+                self._footprint_group(xs[sel], zs[sel], r_eff[sel], amounts[sel], level, flats, values)
+        flat = np.concatenate(flats) if flats else np.zeros(0, np.int64)
+        vals = np.concatenate(values) if values else np.zeros(0)
+        if self._mask is not None and flat.size:
+            vals = vals * self._mask.ravel()[flat]
+        return flat, vals
+
+    def _footprint_group(self, xs, zs, r_eff, amounts, reach: int, flats: list, values: list) -> None:
+        """Bumps whose rims lie within ``reach`` cells of their centre's cell: one (K, W, W) distance test,
+        then the raised cosine only where a cell lies inside a rim (under a third of the square)."""
+        h, n = self.cell_m, self.n
         # Cells within r of x lie from floor(x/h) − floor(r/h) to floor(x/h) + ceil(r/h).
-        reach = r_eff.max() / h
-        offsets = np.arange(-math.floor(reach), math.ceil(reach) + 1)
+        offsets = np.arange(-reach, reach + 1)
         cols = np.floor(xs / h).astype(np.int64)[:, None] + offsets  # (K, W)
         rows = np.floor(zs / h).astype(np.int64)[:, None] + offsets
-        dx = cols * h - xs[:, None]
-        dz = rows * h - zs[:, None]
-        rel = np.sqrt(dx[:, None, :] ** 2 + dz[:, :, None] ** 2) / r_eff[:, None, None]  # (K, W rows, W cols)
-        bump = np.where(rel < 1.0, 0.5 * (1.0 + np.cos(np.pi * np.minimum(rel, 1.0))), 0.0)
-        values = bump * amounts[:, None, None]
-        inside = ((rows >= 1) & (rows <= n - 2))[:, :, None] & ((cols >= 1) & (cols <= n - 2))[:, None, :]
-        inside &= values != 0.0
-        flat = (rows[:, :, None] * n + cols[:, None, :])[inside]
-        values = values[inside]
-        if self._mask is not None:
-            values = values * self._mask.ravel()[flat]
-        return flat, values
+        dx2 = (cols * h - xs[:, None]) ** 2
+        dz2 = (rows * h - zs[:, None]) ** 2
+        d2 = dx2[:, None, :] + dz2[:, :, None]  # (K, W rows, W cols)
+        # Candidates by squared distance (with a hair of slack), then the exact rim test on them alone.
+        k, i, j = np.nonzero(d2 <= (r_eff * r_eff * (1.0 + 1e-9))[:, None, None])
+        row, col = rows[k, i], cols[k, j]
+        rel = np.sqrt(d2[k, i, j]) / r_eff[k]
+        keep = (rel < 1.0) & (row >= 1) & (row <= n - 2) & (col >= 1) & (col <= n - 2)
+        k, row, col, rel = k[keep], row[keep], col[keep], rel[keep]
+        vals = 0.5 * (1.0 + np.cos(np.pi * rel)) * amounts[k]
+        nonzero = vals != 0.0
+        flats.append(row[nonzero] * n + col[nonzero])
+        values.append(vals[nonzero])
+
+    def _footprint_clipped(self, x, z, r, amount, flats: list, values: list) -> None:
+        """One bump wider than a batch: only the interior cells it covers, a band of rows at a time."""
+        h, n = self.cell_m, self.n
+        c0, c1 = max(1, math.floor((x - r) / h)), min(n - 2, math.ceil((x + r) / h))
+        r0, r1 = max(1, math.floor((z - r) / h)), min(n - 2, math.ceil((z + r) / h))
+        if c0 > c1 or r0 > r1:
+            return
+        cols = np.arange(c0, c1 + 1)
+        dx2 = (cols * h - x) ** 2
+        band = max(1, FOOTPRINT_BATCH_CELLS // cols.size)
+        for lo in range(r0, r1 + 1, band):
+            rows = np.arange(lo, min(lo + band, r1 + 1))
+            rel = np.sqrt(dx2[None, :] + ((rows * h - z) ** 2)[:, None]) / r
+            vals = np.where(rel < 1.0, 0.5 * (1.0 + np.cos(np.pi * np.minimum(rel, 1.0))), 0.0) * amount
+            inside = vals != 0.0
+            flats.append((rows[:, None] * n + cols[None, :])[inside])
+            values.append(vals[inside])
 
     def set_water_mask(self, mask):
         """Where the water may move: an (n, n) bool array, or film depths (mm, finite, ≥ 0) where depth > 0

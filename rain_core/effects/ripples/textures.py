@@ -42,7 +42,8 @@ class RippleTextures:
         if self._version == field.version:
             return
         if self._height_tex is not None:
-            self._height_tex.write(np.ascontiguousarray(field.solver.height, dtype=np.float32).tobytes())
+            # Written from the array itself (buffer protocol): no 4n²-byte copy through tobytes() every frame.
+            self._height_tex.write(np.ascontiguousarray(field.solver.height, dtype=np.float32))
             height = self._height_tex
         else:
             height = field.solver.texture

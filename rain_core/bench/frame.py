@@ -1,0 +1,537 @@
+"""Whole frames at heavy rain: CPU ms outside the GL driver, GL calls and bytes uploaded per frame, by effect.
+
+``python -m rain_core.bench frame [--quick] [--size 320x180] [--budgets 10000,50000] [--frames 30]``
+
+Each case is a whole ``Scene`` (``rain_core.scene``) on a headless context: heavy rain 8 mm/h, wetness, cracks
+and puddles pinned at 1, the driver camera, noon, the default traffic, the ego car parked (braked, 0 km/h) or
+at 100 km/h (autopilot), for the streak budgets ``quality.particle_budget`` 10k, 50k, 200k and 1M. The frame is
+small (default 320×180) so llvmpipe's emulated GPU work stays small: what is measured is the CPU side.
+
+Method (also printed in the header):
+
+* Every moderngl method that enters the driver is wrapped, at class level, by a counting wrapper that adds to
+  the current bucket the call, the bytes written and the time spent inside it: ``VertexArray.render``,
+  ``Buffer.write/read/orphan``, ``Texture.write/read/use/build_mipmaps`` (and the 3D, array and cube kinds),
+  ``Framebuffer.use/clear/read`` and its viewport/scissor setters, ``Uniform.write/read`` (every uniform write,
+  ``prog[name].value = …`` included), ``Context.enable/disable/clear/finish/blend_func/…`` and object creation,
+  ``Query`` begin/end/elapsed (timer queries are counted apart from the other calls). A call made inside
+  another wrapped call counts once.
+* Buckets are the renderer's passes: ``Renderer._timed(name, fn)`` is wrapped to switch the bucket, so a GL
+  call lands in the pass that made it; ``Scene.step`` is its own bucket ("sim: scene.step"); what the renderer
+  does between passes is "renderer (between passes)".
+* CPU ms outside the driver of a pass = its CPU time — measured around its ``Renderer._timed`` call, i.e.
+  what the renderer's ``PassStat.cpu_ms`` covers plus the timer-query read-back — minus the time inside wrapped
+  GL calls of that pass (the read-back's stall included) minus the wrapper's own cost outside the time it
+  records (measured at start-up on a no-op, per call). ``Scene.step`` is timed alone the same way. The whole
+  frame is the time of ``Scene.step`` + ``Scene.render`` minus all time inside wrapped calls (and the wrapper
+  cost).
+* "llvmpipe %" is the pass's share of the frame's GPU time from the renderer's timer queries (llvmpipe emulates
+  the GPU on the CPU: only the ratios mean anything; they need ``--gpu-timing``, on by default here).
+* Clock (``--clock``): by default the main thread's CPU time (``time.thread_time_ns``), so time the process
+  spent waiting for a core — this machine is shared — and llvmpipe's own rasterizer threads do not count;
+  ``--clock wall`` uses wall time. "ms inside GL" is then the main thread's CPU time inside the driver; the
+  frame's wall time (step + render + ``ctx.finish()``) is always wall time.
+* Every figure is the median over the measured frames after a warm-up (shader compiles, the ripples' backend
+  choice and the rain's first fill happen there).
+
+It uses only APIs older trees have as well (``Scene``, ``set_value``, ``Renderer._timed``, ``PassStat``), so it
+measures another checkout when run as a file from that checkout's root:
+``cd /path/to/old && python /path/to/new/rain_core/bench/frame.py`` (the header prints which ``rain_core`` ran).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+if __name__ == "__main__":  # run as a file: measure the rain_core of the current directory, not this file's tree
+    _here = os.path.dirname(os.path.abspath(__file__))
+    sys.path[:] = [p for p in sys.path if os.path.abspath(p or ".") != _here]
+    sys.path.insert(0, os.getcwd())
+
+import moderngl
+
+BUDGETS = (10_000, 50_000, 200_000, 1_000_000)
+SPEEDS_KMH = (0.0, 100.0)
+RAIN_MM_H = 8.0
+STEP_BUCKET = "sim: scene.step"
+BETWEEN_BUCKET = "renderer (between passes)"
+# CPU time of the main thread (not counting time the process waited for a core: this machine is shared, and
+# llvmpipe's own threads do the emulated GPU work), or wall time.
+CLOCKS = {"thread": time.thread_time_ns, "wall": time.perf_counter_ns}
+
+# (class, attribute, kind, index of the data argument among the positional args (self = 0) or None)
+# kind: "draw" | "upload" | "uniform" | "read" | "state" | "create" | "query"
+_METHODS = [
+    ("VertexArray", "render", "draw", None), ("VertexArray", "render_indirect", "draw", None),
+    ("VertexArray", "transform", "draw", None),
+    ("Buffer", "write", "upload", 1), ("Buffer", "write_chunks", "upload", 1), ("Buffer", "read", "read", None),
+    ("Buffer", "read_into", "read", None), ("Buffer", "orphan", "state", None), ("Buffer", "clear", "state", None),
+    ("Buffer", "bind_to_uniform_block", "state", None), ("Buffer", "bind_to_storage_buffer", "state", None),
+    ("Framebuffer", "use", "state", None), ("Framebuffer", "clear", "state", None),
+    ("Framebuffer", "read", "read", None), ("Framebuffer", "read_into", "read", None),
+    ("Sampler", "use", "state", None),
+    ("Context", "enable", "state", None), ("Context", "disable", "state", None),
+    ("Context", "enable_only", "state", None), ("Context", "enable_direct", "state", None),
+    ("Context", "disable_direct", "state", None), ("Context", "clear", "state", None),
+    ("Context", "finish", "state", None), ("Context", "copy_buffer", "state", None),
+    ("Context", "copy_framebuffer", "state", None), ("Context", "detect_framebuffer", "state", None),
+    ("Context", "clear_samplers", "state", None), ("Context", "memory_barrier", "state", None),
+    ("Context", "buffer", "create", 1), ("Context", "texture", "create", 3), ("Context", "depth_texture", "create", 2),
+    ("Context", "texture_array", "create", 3), ("Context", "texture3d", "create", 3),
+    ("Context", "framebuffer", "create", None), ("Context", "vertex_array", "create", None),
+    ("Context", "simple_vertex_array", "create", None), ("Context", "program", "create", None),
+    ("Context", "query", "create", None), ("Context", "sampler", "create", None),
+    ("Context", "renderbuffer", "create", None), ("Context", "depth_renderbuffer", "create", None),
+    ("Query", "__enter__", "query", None), ("Query", "__exit__", "query", None),
+]
+for _tex in ("Texture", "Texture3D", "TextureArray"):
+    _METHODS += [(_tex, "write", "upload", 1), (_tex, "read", "read", None), (_tex, "read_into", "read", None),
+                 (_tex, "use", "state", None), (_tex, "build_mipmaps", "draw", None),
+                 (_tex, "bind_to_image", "state", None)]
+_METHODS += [("TextureCube", "write", "upload", 2), ("TextureCube", "read", "read", None),
+             ("TextureCube", "use", "state", None), ("TextureCube", "build_mipmaps", "draw", None)]
+# Property setters (and one getter) that enter the driver.
+_SETTERS = [
+    ("Context", n, "state") for n in ("blend_func", "blend_equation", "depth_func", "viewport", "scissor",
+                                      "front_face", "cull_face", "point_size", "line_width", "wireframe",
+                                      "polygon_offset", "multisample", "provoking_vertex")
+] + [("Framebuffer", n, "state") for n in ("viewport", "scissor", "color_mask", "depth_mask")] + [
+    (t, n, "state") for t in ("Texture", "Texture3D", "TextureArray", "TextureCube", "Sampler")
+    for n in ("filter", "repeat_x", "repeat_y", "repeat_z", "swizzle", "compare_func", "anisotropy")
+] + [("VertexArray", "vertices", "state"), ("VertexArray", "instances", "state")]
+_GETTERS = [("Query", "elapsed", "query")]
+
+
+def _nbytes(data) -> int:
+    """Bytes sent to the driver by a write of ``data`` (0 for a GPU-side source such as a moderngl Buffer)."""
+    if data is None or isinstance(data, moderngl.Buffer):
+        return 0
+    if isinstance(data, bytes | bytearray):
+        return len(data)
+    nbytes = getattr(data, "nbytes", None)
+    if nbytes is not None:
+        return int(nbytes)
+    try:
+        return memoryview(data).nbytes
+    except TypeError:
+        return 0
+
+
+class Tally:
+    """What one bucket's wrapped GL calls did: calls and ns by kind, bytes uploaded / as uniforms / read back."""
+
+    __slots__ = ("calls", "ns", "upload_bytes", "uniform_bytes", "read_bytes", "by_kind")
+
+    def __init__(self):
+        self.calls = 0
+        self.ns = 0
+        self.upload_bytes = 0
+        self.uniform_bytes = 0
+        self.read_bytes = 0
+        self.by_kind: dict[str, int] = defaultdict(int)
+
+    @property
+    def gl_calls(self) -> int:
+        """Calls other than timer queries."""
+        return self.calls - self.by_kind.get("query", 0)
+
+
+class GLCounter:
+    """Wraps the driver-entering moderngl methods while active (a context manager); see the module docstring.
+
+    ``bucket`` names where calls go now; ``tallies[bucket]`` is a ``Tally``. ``overhead_ns`` is the wrapper's
+    own cost per call outside the time it measures (subtract calls × it from CPU times that include calls)."""
+
+    def __init__(self, clock: str = "thread"):
+        if clock not in CLOCKS:
+            raise ValueError(f"clock must be one of {', '.join(CLOCKS)}, got {clock!r}")
+        self.clock = clock
+        self.clock_ns = CLOCKS[clock]
+        self.tallies: dict[str, Tally] = defaultdict(Tally)
+        self.pass_ms: dict[str, float] = {}  # wall ms of each Renderer._timed call this frame, by pass
+        self.bucket = BETWEEN_BUCKET
+        self._inside = False
+        self._saved: list[tuple[type, str, object]] = []
+        self.overhead_ns = 0.0
+
+    def reset(self) -> None:
+        self.tallies = defaultdict(Tally)
+        self.pass_ms: dict[str, float] = {}
+
+    def _wrap(self, fn, kind: str, data_index: int | None, data_kw: str = "data"):
+        counter = self
+        clock = self.clock_ns
+
+        def wrapper(*args, **kwargs):
+            if counter._inside:  # a wrapped call made by another: counted once, by the outer one
+                return fn(*args, **kwargs)
+            counter._inside = True
+            result = None
+            t0 = clock()
+            try:
+                result = fn(*args, **kwargs)
+                return result
+            finally:
+                dt = clock() - t0
+                counter._inside = False
+                tally = counter.tallies[counter.bucket]
+                tally.calls += 1
+                tally.ns += dt
+                tally.by_kind[kind] += 1
+                if kind == "read" and isinstance(result, bytes):
+                    tally.read_bytes += len(result)
+                if data_index is not None:
+                    data = args[data_index] if len(args) > data_index else kwargs.get(data_kw)
+                    n = _nbytes(data)
+                    if kind == "uniform":
+                        tally.uniform_bytes += n
+                    else:
+                        tally.upload_bytes += n
+
+        wrapper.__wrapped__ = fn
+        return wrapper
+
+    def _patch(self, cls, name: str, value) -> None:
+        self._saved.append((cls, name, cls.__dict__[name]))
+        setattr(cls, name, value)
+
+    def __enter__(self):
+        import _moderngl
+
+        for cls_name, attr, kind, data_index in _METHODS:
+            cls = getattr(moderngl, cls_name, None)
+            if cls is not None and attr in cls.__dict__:
+                self._patch(cls, attr, self._wrap(cls.__dict__[attr], kind, data_index))
+        for cls_name, attr, kind in _SETTERS:
+            cls = getattr(moderngl, cls_name, None)
+            prop = None if cls is None else cls.__dict__.get(attr)
+            if isinstance(prop, property) and prop.fset is not None:
+                self._patch(cls, attr, property(prop.fget, self._wrap(prop.fset, kind, None), prop.fdel))
+        for cls_name, attr, kind in _GETTERS:
+            cls = getattr(moderngl, cls_name, None)
+            prop = None if cls is None else cls.__dict__.get(attr)
+            if isinstance(prop, property):
+                self._patch(cls, attr, property(self._wrap(prop.fget, kind, None), prop.fset, prop.fdel))
+        uniform = _moderngl.Uniform  # prog[name].value = … goes through Uniform.write
+        self._patch(uniform, "write", self._wrap(uniform.__dict__["write"], "uniform", 1))
+        self._patch(uniform, "read", self._wrap(uniform.__dict__["read"], "read", None))
+        self.overhead_ns = self._calibrate()
+        return self
+
+    def __exit__(self, *exc):
+        while self._saved:
+            cls, name, value = self._saved.pop()
+            setattr(cls, name, value)
+        return False
+
+    def _calibrate(self, n: int = 50_000) -> float:
+        """The wrapper's cost per call outside the time it records (ns): wrap a no-op, time n calls."""
+        def noop(*args, **kwargs):
+            return None
+
+        wrapped = self._wrap(noop, "state", None)
+        saved_bucket, self.bucket = self.bucket, "_calibrate"
+        best = math.inf
+        for _ in range(3):
+            self.tallies.pop("_calibrate", None)
+            t0 = self.clock_ns()
+            for _ in range(n):
+                wrapped(1)
+            total = self.clock_ns() - t0
+            best = min(best, (total - self.tallies["_calibrate"].ns) / n)
+        self.tallies.pop("_calibrate", None)
+        self.bucket = saved_bucket
+        return max(best, 0.0)
+
+
+def heavy_rain_settings(budget: int, rate_mm_h: float = RAIN_MM_H, camera: str = "driver"):
+    """Settings of the benchmark: rate mm/h, wetness/cracks/puddles pinned at 1, the camera, the streak budget."""
+    from rain_core.settings import Settings, set_value
+
+    settings = Settings()
+    set_value(settings, "rain.rate_mm_h", rate_mm_h)
+    for level in ("wetness", "cracks", "puddles"):
+        set_value(settings, f"rain.{level}", 1.0)
+    set_value(settings, "camera.mode", camera)
+    set_value(settings, "time_of_day.hour", 12.0)
+    set_value(settings, "quality.particle_budget", int(budget))
+    return settings
+
+
+class _Brake:
+    """A drive input that holds the car still (the parked case)."""
+
+    throttle, brake, steer, reverse = 0.0, 1.0, 0.0, False
+
+
+def _effect_of(pass_name: str) -> str:
+    return pass_name.split(".", 1)[0] if "." in pass_name else pass_name
+
+
+def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 0.0, frames: int = 30,
+                 warmup: int = 8, gpu_timing: bool = True, dt_s: float = 1.0 / 30.0, seed: int = 1,
+                 counter: GLCounter | None = None, ripples_backend: str = "auto") -> dict:
+    """Render ``warmup + frames`` frames of one case; medians over the last ``frames``. ``ripples_backend``:
+    the ripples effect's solver ("auto" times the paths on this machine; on llvmpipe it picks numpy32).
+
+    Returns {"rows": {name: {cpu_ms, gl_ms, gl_calls, queries, upload_kb, uniform_kb, read_kb, gpu_share}},
+    "frame": {…the same for the whole frame…, wall_ms}, "passes": [pass names in order], …}. Rows are the
+    renderer's passes, the scene's step, what the renderer does between passes, and effect totals
+    ("effect: NAME")."""
+    from rain_core.gfx.renderer import Renderer
+    from rain_core.scene import Scene
+
+    own_counter = counter is None
+    counter = counter or GLCounter()
+    if own_counter:
+        counter.__enter__()
+    original_timed = Renderer._timed
+    clock = counter.clock_ns
+
+    def timed(self, name, fn):
+        saved, counter.bucket = counter.bucket, name
+        t0 = clock()
+        try:
+            return original_timed(self, name, fn)
+        finally:
+            counter.pass_ms[name] = counter.pass_ms.get(name, 0.0) + (clock() - t0) * 1e-6
+            counter.bucket = saved
+
+    Renderer._timed = timed
+    scene = None
+    try:
+        scene = Scene(ctx, size, settings=heavy_rain_settings(budget), seed=seed, gpu_timing=gpu_timing)
+        for effect in scene.effects:
+            if effect.name == "ripples":
+                effect.backend = ripples_backend  # read when the field is built, on the first active frame
+        speed = speed_kmh / 3.6
+        scene.ego.speed_m_s = speed
+        drive = _Brake() if speed == 0.0 else None
+        if speed > 0.0:
+            scene.autopilot.target_speed_m_s = speed
+        samples: dict[str, dict[str, list]] = defaultdict(lambda: defaultdict(list))
+        order: list[str] = []
+        for index in range(warmup + frames):
+            counter.reset()
+            counter.bucket = STEP_BUCKET
+            wall0 = time.perf_counter()
+            t0 = clock()
+            scene.step(dt_s, drive)
+            t1 = clock()
+            counter.bucket = BETWEEN_BUCKET
+            scene.render()
+            t2 = clock()
+            counter.bucket = "finish"
+            ctx.finish()
+            wall = (time.perf_counter() - wall0) * 1e3
+            counter.bucket = BETWEEN_BUCKET
+            if index < warmup:
+                continue
+            _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6, (t2 - t1) * 1e-6, wall)
+    finally:
+        Renderer._timed = original_timed
+        if scene is not None:
+            scene.release()
+        if own_counter:
+            counter.__exit__(None, None, None)
+    rows = {name: {key: statistics.median(values) for key, values in cols.items()} for name, cols in samples.items()}
+    frame = rows.pop("frame")
+    return {"size": tuple(size), "budget": int(budget), "speed_kmh": float(speed_kmh), "frames": frames,
+            "ripples_backend": ripples_backend,
+            "warmup": warmup, "gpu_timing": gpu_timing, "overhead_ns": counter.overhead_ns, "clock": counter.clock,
+            "passes": order,
+            "rows": rows, "frame": frame}
+
+
+def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_ms: float, wall_ms: float) -> None:
+    """Add one frame's figures to ``samples`` (name → column → list)."""
+    ovh_ms = counter.overhead_ns * 1e-6
+    tallies = counter.tallies
+    total_gpu = sum(s.gpu_ms for s in stats if s.ran and s.gpu_ms is not None) or math.nan
+
+    def row(tally: Tally, cpu_ms: float) -> dict:
+        gl_ms = tally.ns * 1e-6
+        return {"cpu_ms": max(cpu_ms - gl_ms - tally.calls * ovh_ms, 0.0), "gl_ms": gl_ms,
+                "gl_calls": tally.gl_calls, "queries": tally.calls - tally.gl_calls,
+                "upload_kb": tally.upload_bytes / 1024, "uniform_kb": tally.uniform_bytes / 1024,
+                "read_kb": tally.read_bytes / 1024}
+
+    def add(name: str, values: dict) -> None:
+        if name not in order and name != "frame":
+            order.append(name)
+        for key, value in values.items():
+            samples[name][key].append(value)
+
+    empty = Tally()
+    pass_cpu = 0.0
+    effects: dict[str, dict] = {}
+    for stat in stats:
+        if not stat.ran:
+            continue
+        wall = counter.pass_ms.get(stat.name, stat.cpu_ms)
+        pass_cpu += wall
+        values = row(tallies.get(stat.name, empty), wall)
+        values["gpu_share"] = (stat.gpu_ms or 0.0) / total_gpu * 100.0
+        add(stat.name, values)
+        effect = _effect_of(stat.name)
+        if effect != stat.name:
+            acc = effects.setdefault(effect, dict.fromkeys(values, 0.0))
+            for key, value in values.items():
+                acc[key] += value
+    add(STEP_BUCKET, {**row(tallies.get(STEP_BUCKET, empty), step_ms), "gpu_share": 0.0})
+    add(BETWEEN_BUCKET, {**row(tallies.get(BETWEEN_BUCKET, empty), render_ms - pass_cpu), "gpu_share": 0.0})
+    for effect, acc in effects.items():
+        add(f"effect: {effect}", acc)
+    total = Tally()
+    for name, tally in tallies.items():
+        if name == "finish":  # ctx.finish after the frame waits for llvmpipe: in the wall time, not the CPU
+            continue
+        total.calls += tally.calls
+        total.ns += tally.ns
+        total.upload_bytes += tally.upload_bytes
+        total.uniform_bytes += tally.uniform_bytes
+        total.read_bytes += tally.read_bytes
+        for kind, n in tally.by_kind.items():
+            total.by_kind[kind] += n
+    add("frame", {**row(total, step_ms + render_ms), "gpu_share": 100.0, "wall_ms": wall_ms})
+
+
+# --- report ------------------------------------------------------------------------------------------------
+
+_COLUMNS = (("CPU ms outside GL", "cpu_ms", "{:.2f}"), ("GL calls", "gl_calls", "{:.0f}"),
+            ("upload KB", "upload_kb", "{:.1f}"), ("uniform KB", "uniform_kb", "{:.1f}"),
+            ("ms inside GL", "gl_ms", "{:.2f}"), ("llvmpipe %", "gpu_share", "{:.0f}"))
+
+
+def _table(headers, rows) -> str:
+    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    lines += ["| " + " | ".join(str(v) for v in r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def case_label(result: dict) -> str:
+    return f"{result['speed_kmh']:g} km/h, budget {result['budget']:,}"
+
+
+def case_table(result: dict) -> str:
+    """One case: a row per pass, the step, the renderer between passes, the effect totals, the whole frame."""
+    names = [n for n in result["passes"] if not n.startswith("effect: ")]
+    names += [n for n in result["passes"] if n.startswith("effect: ")]
+    body = []
+    for name in names:
+        r = result["rows"][name]
+        body.append([name] + [fmt.format(r[key]) if key != "gpu_share" or result["gpu_timing"] else "-"
+                              for _, key, fmt in _COLUMNS])
+    f = result["frame"]
+    body.append(["**whole frame**"] + [fmt.format(f[key]) if key != "gpu_share" else "100"
+                                       for _, key, fmt in _COLUMNS])
+    return _table(["pass"] + [c[0] for c in _COLUMNS], body)
+
+
+def summary_table(results: list[dict]) -> str:
+    body = [[f"{r['speed_kmh']:g}", f"{r['budget']:,}", f"{r['frame']['cpu_ms']:.2f}",
+             f"{r['frame']['gl_calls']:.0f}", f"{r['frame']['upload_kb']:.1f}", f"{r['frame']['uniform_kb']:.1f}",
+             f"{r['frame']['gl_ms']:.1f}", f"{r['frame']['wall_ms']:.1f}"] for r in results]
+    return _table(["km/h", "streak budget", "CPU ms outside GL", "GL calls", "upload KB", "uniform KB",
+                   "ms inside GL", "frame wall ms (llvmpipe)"], body)
+
+
+def header(args, overhead_ns: float) -> str:
+    import rain_core
+
+    return (f"# Whole frames at heavy rain ({RAIN_MM_H:g} mm/h, wetness/cracks/puddles 1, driver camera, noon), "
+            f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}\n\n"
+            f"rain_core: {Path(rain_core.__file__).parent}\n\n"
+            "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
+            "framebuffer binds, uniform writes, context state, object creation, timer queries) are wrapped by "
+            "counters of calls, bytes written and time inside; CPU outside GL = the pass's CPU time (measured around "
+            "Renderer._timed: PassStat.cpu_ms + the timer-query read; or Scene.step timed alone) minus the time "
+            "inside wrapped calls minus the wrapper's own cost "
+            f"({overhead_ns / 1e3:.2f} µs a call, measured). Clock: {args.clock} "
+            f"({'main-thread CPU time' if args.clock == 'thread' else 'wall time'}). Medians over {args.frames} "
+            f"frames after "
+            f"{args.warmup} warm-up frames. GL calls exclude timer queries; llvmpipe % = share of the frame's "
+            "timer-query GPU time (llvmpipe emulates the GPU on the CPU: compare ratios only).\n")
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--size must be WxH, got {text!r}") from None
+    if not (1 <= w <= 8192 and 1 <= h <= 8192):
+        raise argparse.ArgumentTypeError(f"--size must be within 1..8192 per side, got {text!r}")
+    return w, h
+
+
+def parse_budgets(text: str) -> tuple[int, ...]:
+    try:
+        values = tuple(int(float(v)) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--budgets must be comma-separated integers, got {text!r}") from None
+    if not values or any(not 0 <= v <= 1_000_000 for v in values):
+        raise argparse.ArgumentTypeError(f"--budgets must be in [0, 1000000], got {text!r}")
+    return values
+
+
+def parse_args(argv=None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m rain_core.bench frame", description=__doc__.splitlines()[0])
+    p.add_argument("--out", default="bench_out", help="folder for frame.md and frame.json")
+    p.add_argument("--quick", action="store_true", help="budgets 10k and 1M, 6 frames after 4 warm-up frames")
+    p.add_argument("--size", type=parse_size, default=(320, 180), help="frame size WxH (default 320x180)")
+    p.add_argument("--budgets", type=parse_budgets, default=None, help="streak budgets, e.g. 10000,1000000")
+    p.add_argument("--speeds", default=None, help="ego speeds in km/h, e.g. 0,100 (default both)")
+    p.add_argument("--frames", type=int, default=None, help="measured frames per case (default 30)")
+    p.add_argument("--warmup", type=int, default=None, help="warm-up frames per case (default 8)")
+    p.add_argument("--clock", choices=tuple(CLOCKS), default="thread",
+                   help="thread: the main thread's CPU time (default; robust on a shared machine); wall: wall time")
+    p.add_argument("--ripples-backend", choices=("auto", "numpy32", "gpu", "reference"), default="auto",
+                   help="the ripples solver (auto: timed at start; on llvmpipe numpy32 wins)")
+    p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
+                   help="leave the renderer's timer queries off (no llvmpipe %% column)")
+    args = p.parse_args(argv)
+    args.budgets = args.budgets or ((10_000, 1_000_000) if args.quick else BUDGETS)
+    args.speeds = tuple(float(v) for v in args.speeds.split(",")) if args.speeds else SPEEDS_KMH
+    args.frames = args.frames or (6 if args.quick else 30)
+    args.warmup = args.warmup or (4 if args.quick else 8)
+    if args.frames < 1 or args.warmup < 0:
+        p.error("--frames must be >= 1 and --warmup >= 0")
+    return args
+
+
+def main(argv=None) -> int:
+    from rain_core.gl import create_headless_context
+
+    args = parse_args(argv)
+    ctx = create_headless_context()
+    results = []
+    with GLCounter(args.clock) as counter:
+        print(header(args, counter.overhead_ns), flush=True)
+        for speed in args.speeds:
+            for budget in args.budgets:
+                result = measure_case(ctx, args.size, budget, speed, args.frames, args.warmup, args.gpu_timing,
+                                      counter=counter, ripples_backend=args.ripples_backend)
+                results.append(result)
+                print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
+    md = header(args, counter.overhead_ns) + "\n## Summary\n\n" + summary_table(results) + "\n\n" + "\n\n".join(
+        f"## {case_label(r)}\n\n{case_table(r)}" for r in results)
+    print("## Summary\n\n" + summary_table(results))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "frame.md").write_text(md + "\n")
+    (out / "frame.json").write_text(json.dumps(results, indent=1, default=float) + "\n")
+    print(f"\nwrote {out / 'frame.md'} and {out / 'frame.json'}")
+    ctx.release()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

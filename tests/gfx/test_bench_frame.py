@@ -1,0 +1,37 @@
+"""The whole-frame benchmark's core (``python -m rain_core.bench frame``): two frames at a tiny size give
+positive, finite counters for the frame and its passes (no timing asserts: timings belong to the benchmark)."""
+
+from __future__ import annotations
+
+import math
+
+import moderngl
+
+from rain_core.bench.frame import GLCounter, measure_case, parse_args
+
+
+def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
+    with GLCounter() as counter:
+        result = measure_case(gl_ctx, (48, 27), budget=2000, speed_kmh=100.0, frames=2, warmup=1, counter=counter)
+    frame = result["frame"]
+    assert frame["gl_calls"] > 0 and frame["upload_kb"] + frame["uniform_kb"] > 0
+    for key in ("cpu_ms", "gl_ms", "wall_ms", "gl_calls", "upload_kb", "uniform_kb"):
+        assert math.isfinite(frame[key]) and frame[key] >= 0.0, key
+    assert frame["cpu_ms"] > 0.0 and frame["wall_ms"] >= frame["cpu_ms"]
+    assert "scene" in result["rows"] and result["rows"]["scene"]["gl_calls"] > 0
+    assert result["rows"]["sim: scene.step"]["cpu_ms"] > 0.0
+    for row in result["rows"].values():
+        assert all(math.isfinite(v) for v in row.values())
+    assert math.isfinite(counter.overhead_ns) and counter.overhead_ns >= 0.0
+
+
+def test_counter_restores_moderngl():
+    render = moderngl.VertexArray.render
+    with GLCounter():
+        assert moderngl.VertexArray.render is not render
+    assert moderngl.VertexArray.render is render
+
+
+def test_quick_options():
+    args = parse_args(["--quick", "--size", "64x36"])
+    assert args.size == (64, 36) and args.budgets == (10_000, 1_000_000) and args.frames < 30
