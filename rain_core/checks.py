@@ -19,17 +19,28 @@ def quote(value) -> str:
 
 
 def _bound(x: float) -> str:
-    return "inf" if math.isinf(x) else f"{x:g}"
+    return ("-inf" if x < 0 else "inf") if math.isinf(x) else f"{x:g}"
 
 
 def _range(lo: float, hi: float, lo_open: bool) -> str:
-    return f"{'(' if lo_open else '['}{_bound(lo)}, {_bound(hi)}{')' if math.isinf(hi) else ']'}"
+    return f"{'(' if lo_open or math.isinf(lo) else '['}{_bound(lo)}, {_bound(hi)}{')' if math.isinf(hi) else ']'}"
+
+
+def _float64(value) -> np.ndarray:
+    """``value`` as a float64 array; TypeError for text. NumPy would parse "1" or ["0"] as numbers, but a string
+    where a number belongs is a caller's mistake (a TOML value quoted by accident), not a number."""
+    if isinstance(value, str | bytes):
+        raise TypeError("text")
+    raw = np.asarray(value)
+    if raw.dtype.kind in "USV" or (raw.dtype.kind == "O" and any(isinstance(v, str | bytes) for v in raw.flat)):
+        raise TypeError("text")
+    return np.asarray(raw, dtype=np.float64)
 
 
 def array(name: str, value, lo: float = 0.0, hi: float = math.inf, unit: str = "", lo_open: bool = False):
-    """``value`` as a float64 array; ValueError naming ``name`` and the range if any entry is bad."""
+    """``value`` as a float64 array; ValueError naming ``name`` and the range if any entry is bad (or is text)."""
     try:
-        arr = np.asarray(value, dtype=np.float64)
+        arr = _float64(value)
     except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be a number{' in ' + unit if unit else ''}, got {quote(value)}") from None
     with np.errstate(invalid="ignore"):
@@ -58,23 +69,26 @@ def number(name: str, value, lo: float = -math.inf, hi: float = math.inf, unit: 
     return float(array(name, value, lo, hi, unit, lo_open))
 
 
-def vec3(name: str, value, unit: str = "m/s") -> np.ndarray:
-    """A finite (..., 3) float64 array."""
+def vec3(name: str, value, unit: str = "m/s", max_abs: float = math.inf) -> np.ndarray:
+    """A finite (..., 3) float64 array, each component within ±``max_abs``."""
     try:
-        arr = np.asarray(value, dtype=np.float64)
+        arr = _float64(value)
     except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be a 3-vector in {unit}, got {quote(value)}") from None
     if arr.ndim == 0 or arr.shape[-1] != 3:
         raise ValueError(f"{name} must have shape (..., 3) ({unit}), got shape {arr.shape}")
     if not np.isfinite(arr).all():
         raise ValueError(f"{name} must be finite ({unit}), got {quote(value)}")
+    if (np.abs(arr) > max_abs).any():
+        raise ValueError(f"{name} must have every component in [-{max_abs:g}, {max_abs:g}] {unit}, "
+                         f"got {quote(value)}")
     return arr
 
 
 def finite_array(name: str, value, shape=None) -> np.ndarray:
-    """A float64 array with no NaN or inf (and the given shape, if any)."""
+    """A float64 array with no NaN or inf (and the given shape, if any); text is refused."""
     try:
-        a = np.asarray(value, dtype=np.float64)
+        a = _float64(value)
     except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be an array of numbers, got {quote(value)}") from None
     if shape is not None and a.shape != shape:

@@ -30,6 +30,15 @@ streak length weights) uses that renormalised distribution. ``marshall_palmer`` 
 formula with N0 = 8000 (it reproduces the published table).
 
 Rates above ``R_MAX_MM_H`` = 500 mm/h are rejected everywhere: the world record one-hour rainfall is ~305 mm.
+
+Finite out for every finite input accepted
+------------------------------------------
+Besides the rate, every argument whose size scales a result has a generous physical ceiling, so a product of
+accepted inputs cannot overflow: speeds and velocity components ``MAX_SPEED_M_S`` (1000 m/s, three times the
+speed of sound, far above any car or wind), areas ``MAX_AREA_M2`` (1 km²), exposures ``MAX_EXPOSURE_S`` (1 h),
+the intercept ``MAX_N0`` and the splash inputs (tyre ≤ 5 m wide, film ≤ 1 m deep). Inside those ranges the
+sums are arranged so no intermediate overflows or underflows into 0/0 (normals scaled before their length is
+taken, the streak mean's weights taken relative to the smallest drop, the drop-size tail in closed form).
 """
 
 from __future__ import annotations
@@ -47,6 +56,12 @@ N0_MP = 8000.0  # m⁻³ mm⁻¹, Marshall & Palmer's intercept
 D_MIN_MM = 0.1  # mm, smallest drop the effects consider (sub-visual below)
 D_MAX_MM = 6.0  # mm, largest stable drop (break-up above)
 R_MAX_MM_H = 500.0  # mm/h, largest accepted rain rate
+MAX_SPEED_M_S = 1000.0  # m/s, largest accepted speed or velocity component (3× the speed of sound)
+MAX_AREA_M2 = 1e6  # m², largest accepted surface (1 km²)
+MAX_EXPOSURE_S = 3600.0  # s, longest accepted exposure
+MAX_N0 = 1e12  # m⁻³ mm⁻¹, largest accepted intercept (Marshall–Palmer's is 8000)
+MAX_TIRE_WIDTH_M = 5.0  # m (the widest mining-truck tyres are ~1.5 m)
+MAX_FILM_DEPTH_M = 1.0  # m; deeper is wading, not a film
 RHO_WATER = 1000.0  # kg/m³
 RHO_AIR = 1.2  # kg/m³, near sea level at 20 °C
 G_M_S2 = 9.81  # m/s², standard gravity
@@ -126,7 +141,8 @@ def marshall_palmer(d_mm, rate_mm_h):
     d, r = np.broadcast_arrays(d, r)
     out = np.zeros(d.shape)
     wet = r > 0
-    out[wet] = N0_MP * np.exp(-4.1 * r[wet] ** -0.21 * d[wet])
+    with np.errstate(over="ignore"):  # Λ·D overflows for D near the float limit: e^(−inf) is the right 0
+        out[wet] = N0_MP * np.exp(-4.1 * r[wet] ** -0.21 * d[wet])
     return _out(out, d_mm, rate_mm_h)
 
 
@@ -266,23 +282,45 @@ def _mp_shape(r: np.ndarray, nodes: np.ndarray) -> np.ndarray:
 _VOLUME_FLUX_TO_MM_H = math.pi / 6.0 * 1e-9 * 1000.0 * 3600.0
 
 
+def _cube_moment_tail(lam: np.ndarray, a: float, b: float) -> np.ndarray:
+    """∫_a^b D³·e^(−Λ·D) dD in mm⁴ for Λ > 0 (finite, may be huge) and a ≤ b (b may be inf), closed form.
+
+    The antiderivative is −e^(−Λ·D)·(D³/Λ + 3D²/Λ² + 6D/Λ³ + 6/Λ⁴). Λ ≥ Λ(500 mm/h) ≈ 1.1 mm⁻¹, so above
+    1000 mm e^(−Λ·D) is 0 in float64: the limits are cut there, which keeps D³ finite and the result exact.
+    """
+    def antiderivative(d: float) -> np.ndarray:
+        d = min(d, 1000.0)
+        return -np.exp(-lam * d) * (d**3 / lam + 3.0 * d**2 / lam**2 + 6.0 * d / lam**3 + 6.0 / lam**4)
+    return np.maximum(antiderivative(b) - antiderivative(a), 0.0)
+
+
 def implied_rate_mm_h(rate_mm_h, n0=N0_MP, d_min_mm=D_MIN_MM, d_max_mm=D_MAX_MM):
     """Rain rate in mm/h carried by a Marshall–Palmer distribution, ∫N(D)·v(D)·(π/6)·D³ dD on [d_min, d_max].
 
-    rate_mm_h sets Λ (mm/h, [0, 500]); n0 the intercept in m⁻³ mm⁻¹ (default Marshall–Palmer's 8000);
-    d_min_mm/d_max_mm the diameter range in mm (d_max_mm may be inf). With ``n0=effective_n0(R)`` and the
-    default range it returns R itself; with the default n0 it measures Marshall–Palmer's self-consistency.
+    rate_mm_h sets Λ (mm/h, [0, 500]); n0 the intercept in m⁻³ mm⁻¹ ([0, MAX_N0], default Marshall–Palmer's
+    8000); d_min_mm/d_max_mm the diameter range in mm (d_max_mm may be inf). With ``n0=effective_n0(R)`` and
+    the default range it returns R itself; with the default n0 it measures Marshall–Palmer's self-consistency.
+    Below the last Gunn & Kinzer point (5.8 mm) the integral is Gauss–Legendre quadrature; above it the fall
+    speed is constant, so that part is exact in closed form for any upper limit. R = 0 carries no water.
     """
     r = _check_rate(rate_mm_h)
-    n0a = checks.array("n0", n0, 0.0, math.inf, "m⁻³ mm⁻¹")
+    n0a = checks.array("n0", n0, 0.0, MAX_N0, "m⁻³ mm⁻¹")
     lo = float(checks.array("d_min_mm", d_min_mm, 0.0, math.inf, "mm"))
     if isinstance(d_max_mm, float | int) and d_max_mm == math.inf:
         hi = math.inf
     else:
         hi = float(checks.array("d_max_mm", d_max_mm, lo, math.inf, "mm"))
-    nodes, weights, speeds = _quadrature(lo, hi)
-    integral = (_mp_shape(r, nodes) * (speeds * nodes**3 * weights)).sum(axis=-1)
-    return _out(n0a * integral * _VOLUME_FLUX_TO_MM_H, rate_mm_h, n0)
+    wet = r > 0
+    safe = np.where(wet, r, 1.0)  # R = 0 (Λ = ∞) is masked below: e^(−∞·0) would be NaN at a node at D = 0
+    integral = np.zeros(np.shape(r))
+    d_break = float(GUNN_KINZER_D_MM[-1])
+    if lo < d_break:
+        nodes, weights, speeds = _quadrature(lo, min(hi, d_break))
+        integral = integral + (_mp_shape(safe, nodes) * (speeds * nodes**3 * weights)).sum(axis=-1)
+    if hi > d_break:
+        lam = 4.1 * safe**-0.21
+        integral = integral + float(GUNN_KINZER_V_M_S[-1]) * _cube_moment_tail(lam, max(lo, d_break), hi)
+    return _out(n0a * np.where(wet, integral, 0.0) * _VOLUME_FLUX_TO_MM_H, rate_mm_h, n0)
 
 
 def effective_n0(rate_mm_h):
@@ -324,9 +362,10 @@ def flux_horizontal_per_m2_s(rate_mm_h):
 def flux_on_surface_per_s(rate_mm_h, area_m2, normal, surface_velocity_m_s=(0.0, 0.0, 0.0), wind_m_s=None):
     """Drops per second hitting one face of a flat surface (e.g. a windshield) moving through the rain.
 
-    rate_mm_h: rain rate in mm/h ([0, 500]); area_m2: face area in m² (≥ 0); normal: outward normal of the
-    exposed face, (..., 3), any non-zero length (+Y up, world frame); surface_velocity_m_s: the surface's
-    velocity in m/s, (..., 3); wind_m_s: horizontal wind velocity in m/s, (..., 3), default none.
+    rate_mm_h: rain rate in mm/h ([0, 500]); area_m2: face area in m² ([0, MAX_AREA_M2]); normal: outward
+    normal of the exposed face, (..., 3), any finite non-zero length (+Y up, world frame); surface_velocity_m_s:
+    the surface's velocity in m/s, (..., 3); wind_m_s: horizontal wind velocity in m/s, (..., 3), default none
+    (velocity components within ±MAX_SPEED_M_S).
 
     A drop of diameter D moves with the wind horizontally and falls at v(D): v_rain = wind − v(D)·ŷ. Relative
     to the surface it moves at u = v_rain − v_surface and strikes the face when u·n̂ < 0, so the count is
@@ -334,14 +373,17 @@ def flux_on_surface_per_s(rate_mm_h, area_m2, normal, surface_velocity_m_s=(0.0,
     Inputs broadcast; the result has their common batch shape.
     """
     r = _check_rate(rate_mm_h)
-    area = checks.array("area_m2", area_m2, 0.0, math.inf, "m²")
+    area = checks.array("area_m2", area_m2, 0.0, MAX_AREA_M2, "m²")
     n = checks.vec3("normal", normal, "any length")
-    vs = checks.vec3("surface_velocity_m_s", surface_velocity_m_s)
-    w = checks.vec3("wind_m_s", (0.0, 0.0, 0.0) if wind_m_s is None else wind_m_s)
-    length = np.linalg.norm(n, axis=-1, keepdims=True)
-    if (length == 0).any():
+    vs = checks.vec3("surface_velocity_m_s", surface_velocity_m_s, max_abs=MAX_SPEED_M_S)
+    w = checks.vec3("wind_m_s", (0.0, 0.0, 0.0) if wind_m_s is None else wind_m_s, max_abs=MAX_SPEED_M_S)
+    # Scale by the largest component before taking the length: |n|² overflows above ~1e154 (and underflows
+    # below ~1e-162), which would turn a valid normal into 0 or 0/0.
+    biggest = np.abs(n).max(axis=-1, keepdims=True)
+    if (biggest == 0).any():
         raise ValueError("normal must be a non-zero 3-vector")
-    n = n / length
+    n = n / biggest
+    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
     a = ((w - vs) * n).sum(axis=-1)  # the D-independent part of u·n̂ (m/s)
     ny = n[..., 1]
     r, area, a, ny = np.broadcast_arrays(r, area, a, ny)
@@ -367,8 +409,9 @@ def mean_streak_length_m(rate_mm_h, exposure_s, camera_velocity_m_s=(0.0, 0.0, 0
                          wind_m_s=(0.0, 0.0, 0.0)):
     """Mean length in m of the streak a drop draws during an exposure, averaged over the drops in the air.
 
-    rate_mm_h: mm/h ([0, 500]); exposure_s: shutter or retinal persistence time in s (≥ 0, ~0.06–0.2 s for the
-    eye); camera_velocity_m_s and wind_m_s: (..., 3) in m/s (world frame, +Y up).
+    rate_mm_h: mm/h ([0, 500]); exposure_s: shutter or retinal persistence time in s ([0, MAX_EXPOSURE_S],
+    ~0.06–0.2 s for the eye); camera_velocity_m_s and wind_m_s: (..., 3) in m/s (world frame, +Y up; components
+    within ±MAX_SPEED_M_S).
 
     A drop of diameter D moves at u(D) = wind − v(D)·ŷ − v_camera relative to the camera, so its streak is
     |u(D)|·exposure long (in world metres, before projection). This returns the number-weighted mean,
@@ -376,12 +419,16 @@ def mean_streak_length_m(rate_mm_h, exposure_s, camera_velocity_m_s=(0.0, 0.0, 0
     R → 0, where every drop has D_MIN_MM (a streak length is a property of a drop, not of how many there are).
     """
     r = _check_rate(rate_mm_h)
-    t = checks.array("exposure_s", exposure_s, 0.0, math.inf, "s")
-    c = checks.vec3("wind_m_s", wind_m_s) - checks.vec3("camera_velocity_m_s", camera_velocity_m_s)
+    t = checks.array("exposure_s", exposure_s, 0.0, MAX_EXPOSURE_S, "s")
+    c = (checks.vec3("wind_m_s", wind_m_s, max_abs=MAX_SPEED_M_S)
+         - checks.vec3("camera_velocity_m_s", camera_velocity_m_s, max_abs=MAX_SPEED_M_S))
     r, t, cx, cy, cz = np.broadcast_arrays(r, t, c[..., 0], c[..., 1], c[..., 2])
     nodes, weights, speeds = _quadrature(D_MIN_MM, D_MAX_MM)
     speed = np.sqrt(cx[..., None] ** 2 + cz[..., None] ** 2 + (cy[..., None] - speeds) ** 2)
-    shape = _mp_shape(np.where(r > 0, r, 1.0), nodes) * weights
+    # Weights relative to the smallest node, e^(−Λ·(D − D₀)): the mean is unchanged, and at a tiny rate
+    # (Λ ≳ 7000 mm⁻¹) the first weight stays 1 where e^(−Λ·D) would underflow at every node (0/0).
+    safe = np.where(r > 0, r, 1.0)
+    shape = np.exp(-(4.1 * safe[..., None] ** -0.21) * (nodes - nodes[0])) * weights
     mean = (shape * speed).sum(axis=-1) / shape.sum(axis=-1)
     v_min = float(terminal_velocity(D_MIN_MM))
     at_dmin = np.sqrt(cx**2 + cz**2 + (cy - v_min) ** 2)
@@ -402,12 +449,12 @@ def rain_extinction_per_km(rate_mm_h):
 def splash_water_flux(speed_m_s, tire_width_m, film_depth_m):
     """Water a tyre meets per second in kg/s: M_w = v·b·WFD·ρ_w (Flintsch et al. 2012).
 
-    speed_m_s: vehicle speed in m/s; tire_width_m: tyre width b in m; film_depth_m: water film depth under the
-    tyre in m (puddles are ≤ 0.01 m). All ≥ 0 and finite; ρ_w = 1000 kg/m³.
+    speed_m_s: vehicle speed in m/s ([0, MAX_SPEED_M_S]); tire_width_m: tyre width b in m ([0, 5]);
+    film_depth_m: water film depth under the tyre in m ([0, 1]; puddles are ≤ 0.01 m). ρ_w = 1000 kg/m³.
     """
-    v = checks.array("speed_m_s", speed_m_s, 0.0, math.inf, "m/s")
-    b = checks.array("tire_width_m", tire_width_m, 0.0, math.inf, "m")
-    h = checks.array("film_depth_m", film_depth_m, 0.0, math.inf, "m")
+    v = checks.array("speed_m_s", speed_m_s, 0.0, MAX_SPEED_M_S, "m/s")
+    b = checks.array("tire_width_m", tire_width_m, 0.0, MAX_TIRE_WIDTH_M, "m")
+    h = checks.array("film_depth_m", film_depth_m, 0.0, MAX_FILM_DEPTH_M, "m")
     return _out(v * b * h * RHO_WATER, speed_m_s, tire_width_m, film_depth_m)
 
 

@@ -24,6 +24,11 @@ Model (piecewise linear, so every step is integrated exactly)
 Wind: mean speed (m/s), direction (rad, the heading the wind blows *toward*, measured in the ground plane from
 −Z towards +X) and gustiness in [0, 1]. Gusts are a seeded sum of sinusoids evaluated at absolute time, so they
 are smooth, reproducible and independent of how time was stepped. The wind velocity is horizontal (+Y up).
+Each sinusoid's time is reduced modulo its own period first (``fmod`` is exact), so the wind stays finite at any
+finite time (ω·t would overflow to inf, and sin(inf) is NaN, past ~1e307 s).
+
+Bounds: one step is at most ``MAX_STEP_S`` (1e9 s, ~32 years; the levels are exact for any dt, and the bound
+keeps the summed time finite); every argument is checked at the boundary (a number, finite, in its range).
 """
 
 from __future__ import annotations
@@ -50,6 +55,7 @@ DRY_PER_S = {"wetness": 0.2, "cracks": 0.1, "puddles": 0.05}
 GUST_COMPONENTS = 6  # sinusoids per gust signal
 GUST_FREQ_HZ = (0.03, 0.6)  # range of gust frequencies, log-uniform
 GUST_DIRECTION_SWING_RAD = 0.35  # largest direction swing at gustiness 1
+MAX_STEP_S = 1e9  # s, longest single step
 
 
 def fill_rates_per_s(rate_mm_h) -> np.ndarray:
@@ -111,9 +117,11 @@ class _GustSignal:
         self.phase = rng.uniform(0.0, 2 * np.pi, GUST_COMPONENTS)
         amp = self.omega**-0.5
         self.amp = amp / amp.sum()
+        self.period = 2 * np.pi / self.omega
 
     def __call__(self, t: float) -> float:
-        return float(np.dot(self.amp, np.sin(self.omega * t + self.phase)))
+        # fmod(t, period) is exact, so this equals sin(ω·t + φ) to rounding, and stays finite for huge t.
+        return float(np.dot(self.amp, np.sin(self.omega * np.fmod(t, self.period) + self.phase)))
 
 
 class Weather:
@@ -180,11 +188,10 @@ class Weather:
     def set_wind(self, speed_m_s: float, direction_rad: float, gustiness: float) -> None:
         """Mean wind speed in m/s (≥ 0, ≤ 100), heading in rad it blows toward (from −Z towards +X; any finite
         value), gustiness in [0, 1] (0 steady; 1 gusts swing the speed by up to ±100 %)."""
-        self._wind_speed = _check_nonneg("wind_speed_m_s", speed_m_s, "m/s", 100.0)
-        if isinstance(direction_rad, bool) or np.ndim(direction_rad) != 0 or not math.isfinite(direction_rad):
-            raise ValueError(f"wind_direction_rad must be a finite angle in rad, got {direction_rad!r}")
-        self._wind_direction = float(direction_rad)
-        self._gustiness = _check_nonneg("gustiness", gustiness, "", 1.0)
+        speed = _check_nonneg("wind_speed_m_s", speed_m_s, "m/s", 100.0)
+        direction = checks.number("wind_direction_rad", direction_rad, unit="rad")
+        gust = _check_nonneg("gustiness", gustiness, "", 1.0)
+        self._wind_speed, self._wind_direction, self._gustiness = speed, direction, gust
 
     # --- pinning ---
 
@@ -224,8 +231,8 @@ class Weather:
     # --- evolution ---
 
     def step(self, dt_s: float, rate_mm_h: float) -> WeatherState:
-        """Advance by dt_s seconds (finite, ≥ 0) at a constant rain rate in mm/h ([0, 500]); returns the state."""
-        dt = _check_nonneg("dt_s", dt_s, "s")
+        """Advance by dt_s seconds ([0, MAX_STEP_S]) at a constant rain rate in mm/h ([0, 500]); returns the state."""
+        dt = _check_nonneg("dt_s", dt_s, "s", MAX_STEP_S)
         rate = _check_nonneg("rate_mm_h", rate_mm_h, "mm/h", physics.R_MAX_MM_H)
         self._time_s += dt
         self._rate = rate
@@ -252,7 +259,11 @@ class Weather:
         return self.state
 
     def wind_at(self, time_s: float) -> WindState:
-        """The wind at absolute time time_s (s): mean settings plus the seeded gusts."""
+        """The wind at absolute time time_s (s, any finite value): mean settings plus the seeded gusts."""
+        if type(time_s) is not float:  # step passes its own float; a caller's value is checked once here
+            time_s = checks.number("time_s", time_s, unit="s")
+        elif not math.isfinite(time_s):
+            raise ValueError(f"time_s must be a finite time in s, got {time_s!r}")
         g = self._gustiness
         speed = self._wind_speed * (1.0 + g * self._gust_speed(time_s))
         heading = self._wind_direction + g * GUST_DIRECTION_SWING_RAD * self._gust_direction(time_s)

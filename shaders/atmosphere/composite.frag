@@ -1,7 +1,8 @@
 #version 330 core
 // Glow, step 3, and the light scattered by the rain from the nearest lamps and headlights.
 // Blending is (ONE, ONE_MINUS_SRC_ALPHA) onto the HDR colour: hdr·(1 − k·w) + k·blur(c·w) + in-scatter, so a
-// uniform region keeps its radiance (the halo only moves light) while bright lights spread into the mist.
+// uniform region keeps its radiance (the halo only moves light) while bright lights spread into the mist
+// (k is capped per pixel at 1/w so that never more than the pixel's own light is moved).
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
 #include "common/atmosphere.glsl"
@@ -98,10 +99,14 @@ void main() {
     float dist = atmosphere_pixel_ray(pixel, size, u_camera_pos, u_scatter_max_m, dir, sky);
     float w = 1.0 - exp(-u_medium_extinction_per_m * (sky ? atmosphere_sky_path_m(dir) : dist));
     vec2 uv = gl_FragCoord.xy / (float(u_glow_factor) * vec2(textureSize(u_glow, 0)));
-    vec3 glow = u_glow_strength > 0.0 ? u_glow_strength * texture(u_glow, uv).rgb : vec3(0.0);
+    // k·w is the share of this pixel's light moved into the halo; it cannot be more than all of it. Past
+    // k·w = 1 (glow > 2 in dense rain) hdr·(1 − k·w) would go negative: k_eff = min(k, 1/w) keeps the halo
+    // conservative (a uniform region still keeps its radiance) and the result ≥ 0 (glow.py's twin does the same).
+    float k = min(u_glow_strength, 1.0 / max(w, 1e-6));
+    vec3 glow = k > 0.0 ? k * texture(u_glow, uv).rgb : vec3(0.0);
     vec3 scatter = vec3(0.0);
     for (int i = 0; i < min(u_scatter_count, u_light_count); ++i) {
         scatter += light_inscatter(i, u_camera_pos, dir, dist);
     }
-    f_color = vec4(glow + scatter * u_exposure, u_glow_strength * w);
+    f_color = vec4(glow + scatter * u_exposure, k * w);
 }

@@ -26,7 +26,7 @@ vec3 env_brdf_approx(vec3 f0, float roughness, float NoV) {
     vec4 r = roughness * c0 + c1;
     float a004 = min(r.x * r.x, exp2(-9.28 * NoV)) * r.x + r.y;
     vec2 ab = vec2(-1.04, 1.04) * a004 + r.zw;
-    return f0 * ab.x + ab.y;
+    return max(f0 * ab.x + ab.y, 0.0);  // the fit dips below 0 for rough surfaces with f0 ≲ 0.005 (wet asphalt)
 }
 
 // Radiance reflected towards V from a light of illuminance E (perpendicular to L).

@@ -9,7 +9,7 @@ vec3 sky_radiance(vec3 dir, bool with_sun) {
     float up = dir.y;
     vec3 sky;
     if (up >= 0.0) {
-        float t = pow(1.0 - up, 3.0);
+        float t = pow(clamp(1.0 - up, 0.0, 1.0), 3.0);  // a normalised dir.y may round above 1: pow(<0) is NaN
         sky = mix(u_sky_zenith, u_sky_horizon, t);
     } else {
         // Below the horizon: the lit ground (Lambert, sun + sky), fading in from the horizon colour.

@@ -31,5 +31,7 @@ void main() {
         radiance = finish_surface_effects(s, V, radiance);
     }
     radiance = apply_atmosphere_dir(radiance, dist, -V);
-    f_color = vec4(radiance * u_exposure, 1.0);
+    // The HDR target is half float (largest 65504): a headlight's highlight seen on still water a few metres
+    // away can pass that and would be stored as inf. Clamp below it; radiance is never negative.
+    f_color = vec4(clamp(radiance * u_exposure, 0.0, 6.0e4), 1.0);
 }

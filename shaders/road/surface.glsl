@@ -142,7 +142,8 @@ float road_water_spec(vec3 N, vec3 V, vec3 L, float alpha) {
     vec3 H = normalize(V + L);
     float NoV = max(dot(N, V), 1e-4);
     float VoH = max(dot(V, H), 0.0);
-    float F = WATER_F0 + (1.0 - WATER_F0) * pow(1.0 - VoH, 5.0);
+    // VoH rounds above 1 when L ≈ V (a headlight right beside the eye, at night): pow of a negative is NaN.
+    float F = WATER_F0 + (1.0 - WATER_F0) * pow(clamp(1.0 - VoH, 0.0, 1.0), 5.0);
     return D_GGX(max(dot(N, H), 0.0), alpha) * V_SmithGGXCorrelated(NoV, NoL, alpha) * F * NoL;
 }
 

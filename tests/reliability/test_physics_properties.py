@@ -1,9 +1,9 @@
 """Property-based tests of the public physics functions (issue 18): random valid inputs give finite outputs in
 their documented range; NaN, infinite, negative or too-large inputs raise ValueError naming the argument.
 
-Where a function returns inf or NaN for huge *finite* input, the test is ``xfail(strict=True)`` with the failing
-input as an explicit ``@example`` (so it fails the same way every run) — the fix belongs in rain_core/physics.py.
-The contract those tests state: a finite result, or a ValueError naming an argument.
+Huge *finite* inputs (up to the largest float) once returned inf or NaN (issue 18); the tests at the end state the
+contract — a finite result, or a ValueError naming an argument — with the inputs that used to fail as explicit
+``@example``s, so they are checked the same way every run.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, example, given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
 from rain_core import physics as P
@@ -23,8 +23,8 @@ F_MAX = float(np.finfo(np.float64).max)
 rates = st.floats(0.0, R_MAX)
 positive_rates = st.floats(0.0, R_MAX, exclude_min=True)
 diameters = st.floats(0.0, F_MAX)  # any finite diameter ≥ 0
-moderate = st.floats(0.0, 1e6)
-vectors = st.tuples(*[st.floats(-1e6, 1e6)] * 3)
+moderate = st.floats(0.0, P.MAX_AREA_M2)
+vectors = st.tuples(*[st.floats(-P.MAX_SPEED_M_S, P.MAX_SPEED_M_S)] * 3)
 any_vectors = st.tuples(*[st.floats(-F_MAX, F_MAX)] * 3)
 normals = st.tuples(*[st.floats(-1e3, 1e3)] * 3).filter(lambda n: math.hypot(*n) > 1e-6)
 BAD_NUMBERS = st.sampled_from([math.nan, math.inf, -math.inf]) | st.floats(max_value=-1e-300)
@@ -38,7 +38,7 @@ def _not_a_number(text: str) -> bool:
     return False
 
 
-# Numeric strings ("1", ["0"]) are accepted today: see test_numeric_strings_are_refused (xfail).
+# Numeric strings ("1", ["0"]) are refused too: see test_numeric_strings_are_refused.
 NON_NUMERIC_TEXT = st.text(max_size=5).filter(_not_a_number)
 WRONG_TYPES = NON_NUMERIC_TEXT | st.lists(NON_NUMERIC_TEXT, min_size=1, max_size=2) | st.dictionaries(
     st.text(max_size=2), st.integers(), min_size=1, max_size=2)
@@ -103,10 +103,9 @@ def test_terminal_velocities(d):
     assert math.isfinite(a) and 0 <= a <= 9.65
 
 
-@given(r=rates, n0=st.floats(0.0, 1e12), lo=st.floats(0.0, P.D_MAX_MM), width=st.floats(0.0, 20.0),
+@given(r=rates, n0=st.floats(0.0, P.MAX_N0), lo=st.floats(0.0, P.D_MAX_MM), width=st.floats(0.0, 20.0),
        open_top=st.booleans())
 def test_implied_rate_moderate_inputs(r, n0, lo, width, open_top):
-    assume(r > 0 or lo > 0)  # R = 0 with a node at D = 0: test_implied_rate_at_a_zero_diameter (xfail)
     out = P.implied_rate_mm_h(r, n0=n0, d_min_mm=lo, d_max_mm=math.inf if open_top else lo + width)
     assert math.isfinite(out) and out >= 0
 
@@ -119,13 +118,13 @@ def test_flux_on_surface_moderate_inputs(r, area, normal, velocity, wind):
     assert scaled == pytest.approx(out, rel=1e-9, abs=1e-300)  # any length of normal
 
 
-@given(r=st.just(0.0) | st.floats(1e-6, R_MAX), exposure=st.floats(0.0, 1e3), camera=vectors, wind=vectors)
+@given(r=rates, exposure=st.floats(0.0, P.MAX_EXPOSURE_S), camera=vectors, wind=vectors)
 def test_mean_streak_length_moderate_inputs(r, exposure, camera, wind):
     out = P.mean_streak_length_m(r, exposure, camera, wind)
     assert math.isfinite(out) and out >= 0
 
 
-@given(v=st.floats(0.0, 1e100), b=st.floats(0.0, 1e100), h=st.floats(0.0, 1e100))
+@given(v=st.floats(0.0, P.MAX_SPEED_M_S), b=st.floats(0.0, P.MAX_TIRE_WIDTH_M), h=st.floats(0.0, P.MAX_FILM_DEPTH_M))
 def test_splash_water_flux_moderate_inputs(v, b, h):
     out = P.splash_water_flux(v, b, h)
     assert math.isfinite(out) and out >= 0
@@ -217,11 +216,9 @@ def test_sample_drop_diameters_refuses_bad_counts(n):
         P.sample_drop_diameters(5.0, n, 0)
 
 
-# --- huge finite inputs: known failures, for rain_core/physics.py ----------------------------------------
+# --- huge finite inputs (issue 18): a finite result or a ValueError naming the argument --------------------
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: splash_water_flux(1e308, ...) overflows to inf (and inf·0 to "
-                   "NaN); physics.py should bound or reject the inputs")
 @given(v=diameters, b=diameters, h=diameters)
 @example(v=1e308, b=1e308, h=1.0)
 @example(v=1e200, b=1e200, h=0.0)
@@ -229,8 +226,6 @@ def test_splash_water_flux_any_finite_input(v, b, h):
     finite_or_value_error(P.splash_water_flux, v, b, h)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: flux_on_surface_per_s overflows to inf for a huge area or "
-                   "velocity; physics.py should bound or reject the inputs")
 @given(r=rates, area=diameters, normal=normals, velocity=any_vectors)
 @example(r=500.0, area=F_MAX, normal=(0.0, 1.0, 0.0), velocity=(0.0, 0.0, 0.0))
 @example(r=500.0, area=1.0, normal=(0.0, 1.0, 0.0), velocity=(0.0, F_MAX, 0.0))
@@ -238,66 +233,84 @@ def test_flux_on_surface_any_finite_input(r, area, normal, velocity):
     finite_or_value_error(P.flux_on_surface_per_s, r, area, normal, velocity)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: flux_on_surface_per_s treats a normal longer than ~1e154 as "
-                   "zero (its norm overflows) and returns 0 instead of the flux through that face")
-@given(normal=any_vectors.filter(lambda n: math.hypot(*n) > 1e-6))
+@given(normal=any_vectors.filter(lambda n: math.hypot(*n) > 1e-6) | st.tuples(*[st.floats(-1e-300, 1e-300)] * 3))
 @example(normal=(0.0, F_MAX, 0.0))
+@example(normal=(F_MAX, F_MAX, -F_MAX))
+@example(normal=(0.0, 5e-324, 0.0))
 def test_flux_on_surface_any_normal_length(normal):
-    unit = np.array(normal) / math.hypot(*normal)
-    try:
-        out = P.flux_on_surface_per_s(5.0, 1.0, normal)
-    except ValueError as exc:
-        assert "normal" in str(exc)
+    """Any finite non-zero normal is a direction: the flux equals that through its unit vector."""
+    if not any(normal):
+        with pytest.raises(ValueError, match="normal"):
+            P.flux_on_surface_per_s(5.0, 1.0, normal)
         return
-    assert out == pytest.approx(P.flux_on_surface_per_s(5.0, 1.0, unit), rel=1e-9, abs=1e-300)
+    n = np.array(normal)
+    n = n / np.abs(n).max()
+    unit = n / np.linalg.norm(n)
+    out = P.flux_on_surface_per_s(5.0, 1.0, normal, (0.0, 0.0, -20.0))
+    assert out == pytest.approx(P.flux_on_surface_per_s(5.0, 1.0, unit, (0.0, 0.0, -20.0)), rel=1e-9, abs=1e-300)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: mean_streak_length_m returns inf for a huge exposure or "
-                   "velocity and NaN for exposure 0 with a huge velocity (0·inf)")
 @given(r=rates, exposure=diameters, camera=any_vectors)
 @example(r=500.0, exposure=F_MAX, camera=(0.0, 0.0, 0.0))
 @example(r=5.0, exposure=0.0, camera=(F_MAX, F_MAX, 0.0))
 @example(r=0.0, exposure=1.0, camera=(F_MAX, 0.0, 0.0))
+@example(r=500.0, exposure=P.MAX_EXPOSURE_S, camera=(P.MAX_SPEED_M_S, -P.MAX_SPEED_M_S, P.MAX_SPEED_M_S))
 def test_mean_streak_length_any_finite_input(r, exposure, camera):
     finite_or_value_error(P.mean_streak_length_m, r, exposure, camera)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: implied_rate_mm_h returns inf for a huge n0 and a negative "
-                   "rate for d_min_mm above 30 mm with d_max_mm = inf (the quadrature's cut at 30 mm)")
-@given(r=rates, n0=diameters, lo=st.floats(0.0, 1e3))
-@example(r=500.0, n0=F_MAX, lo=0.1)
-@example(r=500.0, n0=8000.0, lo=40.0)
-def test_implied_rate_any_finite_input(r, n0, lo):
-    finite_or_value_error(P.implied_rate_mm_h, r, n0, lo, math.inf)
+@given(r=rates, n0=diameters, lo=st.floats(0.0, 1e3), hi=st.just(math.inf) | st.floats(0.0, F_MAX))
+@example(r=500.0, n0=F_MAX, lo=0.1, hi=math.inf)
+@example(r=500.0, n0=8000.0, lo=40.0, hi=math.inf)
+@example(r=500.0, n0=8000.0, lo=0.1, hi=1e12)  # once allocated 7 TiB of quadrature nodes
+@example(r=500.0, n0=P.MAX_N0, lo=0.0, hi=F_MAX)
+def test_implied_rate_any_finite_input(r, n0, lo, hi):
+    finite_or_value_error(P.implied_rate_mm_h, r, n0, lo, max(lo, hi))
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: mean_streak_length_m returns NaN for a tiny positive rate "
-                   "(R ≲ 1e-20 mm/h: exp(−Λ·D) underflows at every node and the mean is 0/0)")
+def test_implied_rate_tail_is_exact():
+    """Above 5.8 mm the closed form agrees with brute-force quadrature, and the tail keeps shrinking."""
+    lam = 4.1 * 50.0**-0.21
+    d = np.linspace(5.8, 60.0, 2_000_001)
+    brute = np.trapezoid(d**3 * np.exp(-lam * d), d) * P.GUNN_KINZER_V_M_S[-1] * 8000.0 * P._VOLUME_FLUX_TO_MM_H
+    assert P.implied_rate_mm_h(50.0, 8000.0, 5.8, math.inf) == pytest.approx(brute, rel=1e-9)
+    far = [P.implied_rate_mm_h(500.0, 8000.0, lo, math.inf) for lo in (10.0, 20.0, 40.0, 80.0)]
+    assert all(a >= b >= 0 for a, b in zip(far, far[1:], strict=False))
+    assert far[2] > 0  # drops above 40 mm at 500 mm/h carry almost nothing, but not a negative amount
+
+
 @given(r=st.floats(0.0, 1e-6, exclude_min=True))
 @example(r=3.172481815796753e-32)
+@example(r=5e-324)
 def test_mean_streak_length_at_tiny_rates(r):
-    finite_or_value_error(P.mean_streak_length_m, r, 0.02)
+    """As R → 0 every drop is among the smallest, so the streak tends to the smallest drop's (within the
+    quadrature's resolution: its first node lies just above D_MIN_MM, where v(D) is steep, ~3 % faster)."""
+    out = P.mean_streak_length_m(r, 0.02)
+    assert math.isfinite(out)
+    assert 0.95 * P.mean_streak_length_m(0.0, 0.02) <= out <= P.mean_streak_length_m(1e-6, 0.02) * (1 + 1e-12)
+    if r < 1e-20:  # Λ > 6·10⁴ mm⁻¹: the drops all sit at the smallest size
+        assert out == pytest.approx(P.mean_streak_length_m(0.0, 0.02), rel=0.05)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: implied_rate_mm_h(0, d_min_mm=0, d_max_mm≈0) is NaN "
-                   "(a quadrature node at D = 0 gives exp(−inf·0) for R = 0)")
 @given(width=st.floats(0.0, 1e-300))
 @example(width=0.0)
 @example(width=5e-324)
 def test_implied_rate_at_a_zero_diameter(width):
-    finite_or_value_error(P.implied_rate_mm_h, 0.0, 8000.0, 0.0, width)
+    assert P.implied_rate_mm_h(0.0, 8000.0, 0.0, width) == 0.0
+    finite_or_value_error(P.implied_rate_mm_h, 1.0, 8000.0, 0.0, width)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18: checks.array accepts numeric strings (\"1\", [\"0\"]) "
-                   "because np.asarray(..., dtype=float64) parses them; strings should be refused")
 @pytest.mark.parametrize("call", [
     lambda: P.terminal_velocity("1"),
     lambda: P.rain_extinction_per_km("5"),
     lambda: P.splash_water_flux(["10"], 0.2, 0.001),
     lambda: P.flux_on_surface_per_s(5.0, "1", (0.0, 1.0, 0.0)),
+    lambda: P.flux_on_surface_per_s(5.0, 1.0, ("0", "1", "0")),
+    lambda: P.flux_on_surface_per_s(5.0, 1.0, (0.0, 1.0, 0.0), [0.0, b"1", 0.0]),
     lambda: P.sample_drop_diameters("5", 3, 0),
+    lambda: P.ks_distance([1.0, "2"], 5.0),
 ], ids=["terminal_velocity", "rain_extinction_per_km", "splash_water_flux", "flux_on_surface_per_s",
-        "sample_drop_diameters"])
+        "normal", "wind_bytes", "sample_drop_diameters", "ks_distance_mixed"])
 def test_numeric_strings_are_refused(call):
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="must be"):
         call()

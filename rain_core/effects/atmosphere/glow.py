@@ -4,8 +4,8 @@ the shaders (``shaders/atmosphere/glow_down.frag``, ``blur.frag``, ``composite.f
 A pixel at distance d loses 1 − exp(−β_m·d) of its light to scattering; the share ``GLOW_SHARE``·glow of that
 reaches the eye from nearby directions. So: c·w box-downsampled to the glow resolution, Gaussian-blurred with an
 angular σ that widens with β_m (``model.glow_sigma_rad``: multiple scattering broadens the atmospheric
-point-spread function), and blended back as hdr·(1 − k·w) + k·blur(c·w): a uniform region is unchanged, bright
-lights spread into mist.
+point-spread function), and blended back as hdr·(1 − k·w) + k·blur(c·w) (k at most 1/w, so no pixel loses more
+than its own light): a uniform region is unchanged, bright lights spread into mist.
 """
 
 from __future__ import annotations
@@ -33,7 +33,9 @@ def gaussian_weights(sigma_px: float) -> np.ndarray:
 def glow_reference(color, weight, strength: float, sigma_px: float) -> np.ndarray:
     """The glow at full resolution in NumPy: color·(1 − k·w) + k·G_σ * (color·w), edges clamped.
 
-    color (H, W, 3) pre-exposed HDR; weight (H, W) the scattered share w = 1 − exp(−β_m·d); σ in pixels."""
+    color (H, W, 3) pre-exposed HDR; weight (H, W) the scattered share w = 1 − exp(−β_m·d); σ in pixels.
+    k is capped per pixel at 1/w (as in composite.frag): the halo never takes more than a pixel's own light, so
+    the result stays ≥ 0 for a glow above 2 in dense rain."""
     c = np.asarray(color, dtype=np.float64)
     w = np.asarray(weight, dtype=np.float64)[..., None]
     src = c * w
@@ -45,4 +47,5 @@ def glow_reference(color, weight, strength: float, sigma_px: float) -> np.ndarra
         p = np.pad(src, pad, mode="edge")
         n = src.shape[axis]
         src = sum(g[i] * np.take(p, np.arange(i, i + n), axis=axis) for i in range(len(g)))
-    return c * (1.0 - strength * w) + strength * src
+    k = np.minimum(strength, 1.0 / np.maximum(w, 1e-6))
+    return c * (1.0 - k * w) + k * src

@@ -50,6 +50,24 @@ def test_glow_matches_the_numpy_reference_and_only_moves_light(gl_ctx, shaders, 
     assert (after @ LUMA).sum() == pytest.approx((before @ LUMA).sum(), rel=0.01)
 
 
+def test_strong_glow_in_dense_rain_is_never_negative(gl_ctx, shaders, kit):
+    """Glow 4× (k = 2) in 500 mm/h rain: k·w passes 1, where hdr·(1 − k·w) once went negative (issue 18)."""
+    before, after, w, sigma, k = _glow_scene(gl_ctx, shaders, kit, 500.0, 4.0)
+    assert k * w.max() > 1.0  # the cap is in play
+    assert np.isfinite(after).all() and after.min() >= 0.0
+    reference = atm.glow_reference(before, w, k, sigma)
+    assert reference.min() >= 0.0
+    halo = (reference - before) @ LUMA
+    assert np.abs((after - reference) @ LUMA).max() < 0.02 * np.abs(halo).max()
+
+
+def test_glow_reference_keeps_a_uniform_region_at_any_strength():
+    color = np.full((9, 9, 3), 2.0)
+    for k, w in ((0.5, 0.3), (2.0, 0.9), (2.0, 1.0)):
+        out = atm.glow_reference(color, np.full((9, 9), w), k, 1.5)
+        np.testing.assert_allclose(out, color, rtol=1e-12)
+
+
 def test_halo_grows_in_size_and_strength_with_the_rain(gl_ctx, shaders, kit):
     profiles = {}
     for rate in (3.0, 50.0):

@@ -1,0 +1,154 @@
+"""The soak (issue 18): a long headless run at a tiny size with the weather, camera and speed changing every few
+seconds, watching memory and every state for NaN/inf. Deselected by default; run it with
+
+    RAINROAD_SOAK_FRAMES=5000 python -m pytest -m soak -s
+
+(the default is 100,000 frames). It prints frames, resident memory at the start (after a warm-up) and at the end,
+growth per 1,000 frames (a least-squares slope over the samples) and any non-finite state it met: NaN, inf or a
+negative value in the HDR target after every frame; NaN or inf in the weather and the vehicles every frame; NaN
+in any float array the effects hold every CHECK_EVERY frames (there inf is left alone: effects use it on purpose
+as a sentinel, e.g. "no occluder above this cell", "empty slot"). It fails on any of those, or on memory growing
+faster than GROWTH_LIMIT_MB_PER_1000.
+
+Quality is turned down (QUALITY): at 64×36 the frame is the simulations' CPU work and llvmpipe's fixed costs,
+and the soak is about leaks and stability over many frames, not about the picture.
+"""
+
+from __future__ import annotations
+
+import gc
+import math
+import os
+import time
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from rain_core.scene import Scene
+from rain_core.settings import Settings, set_value
+
+FRAMES = int(os.environ.get("RAINROAD_SOAK_FRAMES", "100000"))
+SIZE = (64, 36)
+DT_S = 1.0 / 30.0
+CHANGE_EVERY = 90  # frames (3 s) between changes of weather, camera and driving
+CHECK_EVERY = 100  # frames between full walks over the effects' state
+WARMUP_FRAMES = 300  # caches, pools and the ripples' field fill up first; memory is measured from here
+SAMPLE_EVERY = 250  # frames between memory samples
+GROWTH_LIMIT_MB_PER_1000 = 0.5
+QUALITY = {"quality.particle_budget": 4000, "quality.ripple_grid": 64, "quality.windshield_resolution": 64,
+           "spray.budget": 2000, "road.reflection_scale": 0.125}
+
+
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def nan_arrays(obj, path: str, seen: set, depth: int = 4) -> list[str]:
+    """Paths of the float arrays (and floats) under ``obj``'s attributes that hold NaN."""
+    if id(obj) in seen or depth < 0:
+        return []
+    seen.add(id(obj))
+    if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "fc" and obj.size and np.isnan(obj).any():
+            return [f"{path} ({int(np.isnan(obj).sum())} NaN of {obj.size})"]
+        return []
+    if isinstance(obj, float):
+        return [f"{path} = nan"] if math.isnan(obj) else []
+    if isinstance(obj, (list, tuple)):
+        return [p for i, v in enumerate(obj[:64]) for p in nan_arrays(v, f"{path}[{i}]", seen, depth - 1)]
+    if isinstance(obj, dict):
+        return [p for k, v in list(obj.items())[:64] for p in nan_arrays(v, f"{path}[{k!r}]", seen, depth - 1)]
+    module = type(obj).__module__ or ""
+    if not module.startswith("rain_core") or not hasattr(obj, "__dict__"):
+        return []  # GL wrappers, NumPy generators, settings' own types
+    return [p for k, v in vars(obj).items() for p in nan_arrays(v, f"{path}.{k}", seen, depth - 1)]
+
+
+def scene_state_problems(scene: Scene, with_effects: bool) -> list[str]:
+    problems = []
+    w = scene.weather_state
+    values = [w.wetness, w.cracks, w.puddles, w.rate_mm_h, *w.wind.velocity_m_s, scene.time_s]
+    if not all(math.isfinite(v) for v in values):
+        problems.append(f"weather {w}")
+    for i, v in enumerate(scene.vehicles):
+        if not (np.isfinite(v.position).all() and math.isfinite(v.yaw) and math.isfinite(v.speed_m_s)):
+            problems.append(f"vehicle {i}: position {v.position}, yaw {v.yaw}, speed {v.speed_m_s}")
+    if with_effects:
+        for effect in scene.effects:
+            problems += nan_arrays(effect, type(effect).__name__, set())
+    return problems
+
+
+def change(scene: Scene, rng: np.random.Generator, step: int) -> SimpleNamespace | None:
+    """New weather, time of day, camera and driving; returns the drive input (None: the autopilot)."""
+    s = scene.settings
+    rate = float(rng.choice([0.0, 0.3, 4.0, 30.0, 120.0, 500.0, rng.uniform(0.0, 500.0)]))
+    set_value(s, "rain.rate_mm_h", rate)
+    set_value(s, "time_of_day.hour", float(rng.uniform(0.0, 24.0)))
+    set_value(s, "wind.speed_m_s", float(rng.uniform(0.0, 40.0)))
+    set_value(s, "wind.direction_deg", float(rng.uniform(0.0, 360.0)))
+    set_value(s, "wind.gustiness", float(rng.uniform(0.0, 1.0)))
+    set_value(s, "camera.mode", str(rng.choice(["driver", "chase"])))
+    set_value(s, "traffic.count", int(rng.integers(0, 8)))
+    mode = step % 4
+    if mode == 0:
+        return None  # autopilot
+    if mode == 1:
+        return SimpleNamespace(throttle=1.0, brake=0.0, steer=float(rng.uniform(-0.05, 0.05)), reverse=False)
+    if mode == 2:
+        return SimpleNamespace(throttle=0.0, brake=float(rng.uniform(0.2, 1.0)), steer=0.0, reverse=False)
+    return SimpleNamespace(throttle=float(rng.uniform(0.0, 1.0)), brake=0.0, steer=0.0, reverse=False)
+
+
+@pytest.mark.soak
+def test_soak(gl_ctx, capsys):
+    rng = np.random.default_rng(18)
+    settings = Settings()
+    for path, value in QUALITY.items():
+        set_value(settings, path, value)
+    scene = Scene(gl_ctx, SIZE, settings, seed=18, gpu_timing=False)
+    samples: list[tuple[int, float]] = []
+    problems: list[str] = []
+    drive = None
+    start = time.perf_counter()
+    rss_start = rss_end = math.nan
+    try:
+        for i in range(FRAMES):
+            if i % CHANGE_EVERY == 0:
+                drive = change(scene, rng, i // CHANGE_EVERY)
+            scene.step(DT_S, drive)
+            scene.render()
+            hdr = scene.renderer.hdr_image()
+            found = [] if np.isfinite(hdr).all() and hdr.min() >= 0.0 else [
+                f"HDR: {int((~np.isfinite(hdr)).any(-1).sum())} non-finite, {int((hdr < 0).any(-1).sum())} negative"]
+            found += scene_state_problems(scene, with_effects=i % CHECK_EVERY == 0)
+            problems += [f"frame {i}: {p}" for p in found]
+            if i == WARMUP_FRAMES:
+                gc.collect()
+                rss_start = rss_mb()
+            if i >= WARMUP_FRAMES and i % SAMPLE_EVERY == 0:
+                samples.append((i, rss_mb()))
+            if len(problems) > 50:
+                break
+        gc.collect()
+        rss_end = rss_mb()
+        samples.append((FRAMES, rss_end))
+    finally:
+        scene.release()
+    wall = time.perf_counter() - start
+    frames, mem = np.array(samples, dtype=float).T if samples else (np.zeros(0), np.zeros(0))
+    slope = float(np.polyfit(frames, mem, 1)[0] * 1000.0) if len(samples) >= 3 else math.nan
+    report = (f"soak: {FRAMES} frames at {SIZE[0]}x{SIZE[1]} in {wall:.0f} s ({1000 * wall / FRAMES:.1f} ms a frame); "
+              f"RSS {rss_start:.1f} MB after {WARMUP_FRAMES} frames, {rss_end:.1f} MB at the end "
+              f"({rss_end - rss_start:+.1f} MB), growth {slope:+.3f} MB per 1,000 frames; "
+              f"non-finite or negative states: {len(problems)}; RSS (MB) by frame: "
+              + ", ".join(f"{int(f)}: {m:.0f}" for f, m in samples[::max(1, len(samples) // 12)]))
+    with capsys.disabled():
+        print("\n" + report)
+        for p in problems[:20]:
+            print("  " + p)
+    assert not problems, report
+    if len(samples) >= 3:
+        assert slope < GROWTH_LIMIT_MB_PER_1000, report
