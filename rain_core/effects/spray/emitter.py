@@ -10,7 +10,12 @@ import numpy as np
 
 from rain_core import checks, layout, physics
 from rain_core.effects.spray.body import body_hit_time, body_hit_time_fast
-from rain_core.effects.spray.flight import drag_time_constant, flight_position, flight_velocity, ground_time
+from rain_core.effects.spray.flight import (
+    drag_time_constant_unchecked,
+    flight_position,
+    flight_velocity,
+    ground_time,
+)
 from rain_core.effects.spray.launch import (
     MIST_LIFE_S,
     MIST_SIGMA_MAX,
@@ -347,7 +352,7 @@ class SprayEmitter:
         excess = v0 - u
         speed = np.sqrt(np.einsum("nc,nc->n", excess, excess))
         tau = np.empty(n)
-        tau[:nd] = drag_time_constant(d_mm[:nd], speed[:nd], vt[:nd])
+        tau[:nd] = drag_time_constant_unchecked(d_mm[:nd], speed[:nd], vt[:nd])
         tau[nd:] = WAKE_TAU_S
         t_ground = ground_time(p0, v0, u, tau, reference=ref)
         fate = np.full(n, FATE_ROAD)

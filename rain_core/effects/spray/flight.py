@@ -17,17 +17,28 @@ from __future__ import annotations
 
 import numpy as np
 
-from rain_core import layout, physics
+from rain_core import checks, layout, physics
 from rain_core.physics import G_M_S2
 
 DRAG_TAIL_FIT = 1.4  # fitted: drops 0.2–5 mm launched at 5–30 m/s, 10–45° up (python -m rain_core.bench spray)
 
 
 def drag_time_constant(d_mm, launch_speed_m_s, terminal_m_s=None) -> np.ndarray:
-    """Time constant τ (s) of the linear-drag flight model for drops of d_mm (mm) launched at launch_speed_m_s
-    (m/s) relative to their drift velocity: quadratic drag's distance from s0 down to v_t, v_t²·ln(s0/v_t) /
-    (g·(s0 − v_t)), divided by (s0 − v_t) — stretched for fast launches by up to DRAG_TAIL_FIT.
-    ``terminal_m_s``: physics.terminal_velocity(d_mm) if the caller has it already."""
+    """Time constant τ (s) of the linear-drag flight model for drops of d_mm (mm, > 0) launched at
+    launch_speed_m_s (m/s, a speed: ≥ 0) relative to their drift velocity: quadratic drag's distance from s0 down
+    to v_t, v_t²·ln(s0/v_t) / (g·(s0 − v_t)), divided by (s0 − v_t) — stretched for fast launches by up to
+    DRAG_TAIL_FIT. ``terminal_m_s``: physics.terminal_velocity(d_mm) if the caller has it already (m/s, > 0).
+    Checks its arguments (ValueError naming the one out of range); the emitter's per-frame loop calls the
+    unchecked ``drag_time_constant_unchecked`` with values it made itself."""
+    d_mm = checks.array("d_mm", d_mm, 0.0, 10.0, unit="mm", lo_open=True)
+    launch_speed_m_s = checks.array("launch_speed_m_s", launch_speed_m_s, 0.0, 1000.0, unit="m/s")
+    if terminal_m_s is not None:
+        terminal_m_s = checks.array("terminal_m_s", terminal_m_s, 0.0, 100.0, unit="m/s", lo_open=True)
+    return drag_time_constant_unchecked(d_mm, launch_speed_m_s, terminal_m_s)
+
+
+def drag_time_constant_unchecked(d_mm, launch_speed_m_s, terminal_m_s=None) -> np.ndarray:
+    """``drag_time_constant`` without the argument checks (the emitter's hot path; its inputs are its own)."""
     if terminal_m_s is None:
         terminal_m_s = physics.terminal_velocity(np.asarray(d_mm, dtype=np.float64))
     vt = np.maximum(np.asarray(terminal_m_s, dtype=np.float64), 1e-3)

@@ -177,3 +177,27 @@ def test_random_valid_inputs_give_finite_bounded_parcels(reference):
         _finite_state(em)
         drops, mist = em.alive_counts(t)
         assert drops <= em.rings[0].capacity and mist <= em.rings[1].capacity
+
+
+@pytest.mark.parametrize("args, field", [
+    ((1.0, -1.0), "launch_speed_m_s"),  # issue 18: a negative speed was accepted
+    ((0.0, 5.0), "d_mm"),
+    ((float("nan"), 5.0), "d_mm"),
+    ((1.0, float("inf")), "launch_speed_m_s"),
+    ((1.0, "5"), "launch_speed_m_s"),
+    ((1.0, 5.0, -4.0), "terminal_m_s"),
+])
+def test_drag_time_constant_refuses_invalid_arguments(args, field):
+    from rain_core.effects.spray.flight import drag_time_constant
+
+    with pytest.raises(ValueError, match=field):
+        drag_time_constant(*args)
+
+
+def test_drag_time_constant_checked_equals_unchecked():
+    from rain_core.effects.spray.flight import drag_time_constant, drag_time_constant_unchecked
+
+    d = np.array([0.2, 1.0, 3.0])
+    s = np.array([0.0, 5.0, 30.0])
+    np.testing.assert_array_equal(drag_time_constant(d, s), drag_time_constant_unchecked(d, s))
+    assert np.all(np.isfinite(drag_time_constant(d, s))) and np.all(drag_time_constant(d, s) > 0)
