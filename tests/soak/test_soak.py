@@ -4,11 +4,16 @@ seconds, watching memory and every state for NaN/inf. Deselected by default; run
     RAINROAD_SOAK_FRAMES=5000 python -m pytest -m soak -s
 
 (the default is 100,000 frames). It prints frames, resident memory at the start (after a warm-up) and at the end,
-growth per 1,000 frames (a least-squares slope over the samples) and any non-finite state it met: NaN, inf or a
+growth per 1,000 frames and any non-finite state it met: NaN, inf or a
 negative value in the HDR target after every frame; NaN or inf in the weather and the vehicles every frame; NaN
 in any float array the effects hold every CHECK_EVERY frames (there inf is left alone: effects use it on purpose
 as a sentinel, e.g. "no occluder above this cell", "empty slot"). It fails on any of those, or on memory growing
 faster than GROWTH_LIMIT_MB_PER_1000.
+
+The changes repeat with a period of CYCLE_CHANGES changes (the generator is reseeded at the start of every
+cycle), so memory is compared at the same point of the same sequence: a pool that grows to the largest state the
+sequence reaches levels off after the first cycle, a leak keeps growing by the same amount every cycle. The first
+cycle is the warm-up; growth is the least-squares slope over the cycle boundaries after it.
 
 Quality is turned down (QUALITY): at 64×36 the frame is the simulations' CPU work and llvmpipe's fixed costs,
 and the soak is about leaks and stability over many frames, not about the picture.
@@ -33,8 +38,9 @@ SIZE = (64, 36)
 DT_S = 1.0 / 30.0
 CHANGE_EVERY = 90  # frames (3 s) between changes of weather, camera and driving
 CHECK_EVERY = 100  # frames between full walks over the effects' state
-WARMUP_FRAMES = 300  # caches, pools and the ripples' field fill up first; memory is measured from here
-SAMPLE_EVERY = 250  # frames between memory samples
+CYCLE_CHANGES = 12  # changes before the sequence repeats
+CYCLE_FRAMES = CYCLE_CHANGES * CHANGE_EVERY  # 1,080 frames (36 s)
+WARMUP_FRAMES = CYCLE_FRAMES  # the first cycle fills caches and pools; memory is measured from its end
 GROWTH_LIMIT_MB_PER_1000 = 0.5
 QUALITY = {"quality.particle_budget": 4000, "quality.ripple_grid": 64, "quality.windshield_resolution": 64,
            "spray.budget": 2000, "road.reflection_scale": 0.125}
@@ -104,7 +110,6 @@ def change(scene: Scene, rng: np.random.Generator, step: int) -> SimpleNamespace
 
 @pytest.mark.soak
 def test_soak(gl_ctx, capsys):
-    rng = np.random.default_rng(18)
     settings = Settings()
     for path, value in QUALITY.items():
         set_value(settings, path, value)
@@ -116,8 +121,10 @@ def test_soak(gl_ctx, capsys):
     rss_start = rss_end = math.nan
     try:
         for i in range(FRAMES):
+            if i % CYCLE_FRAMES == 0:
+                rng = np.random.default_rng(18)  # the same sequence every cycle
             if i % CHANGE_EVERY == 0:
-                drive = change(scene, rng, i // CHANGE_EVERY)
+                drive = change(scene, rng, (i % CYCLE_FRAMES) // CHANGE_EVERY)
             scene.step(DT_S, drive)
             scene.render()
             hdr = scene.renderer.hdr_image()
@@ -128,22 +135,22 @@ def test_soak(gl_ctx, capsys):
             if i == WARMUP_FRAMES:
                 gc.collect()
                 rss_start = rss_mb()
-            if i >= WARMUP_FRAMES and i % SAMPLE_EVERY == 0:
+            if i >= WARMUP_FRAMES and i % CYCLE_FRAMES == 0:
+                gc.collect()
                 samples.append((i, rss_mb()))
             if len(problems) > 50:
                 break
         gc.collect()
         rss_end = rss_mb()
-        samples.append((FRAMES, rss_end))
     finally:
         scene.release()
     wall = time.perf_counter() - start
     frames, mem = np.array(samples, dtype=float).T if samples else (np.zeros(0), np.zeros(0))
     slope = float(np.polyfit(frames, mem, 1)[0] * 1000.0) if len(samples) >= 3 else math.nan
     report = (f"soak: {FRAMES} frames at {SIZE[0]}x{SIZE[1]} in {wall:.0f} s ({1000 * wall / FRAMES:.1f} ms a frame); "
-              f"RSS {rss_start:.1f} MB after {WARMUP_FRAMES} frames, {rss_end:.1f} MB at the end "
+              f"RSS {rss_start:.1f} MB after the first cycle ({WARMUP_FRAMES} frames), {rss_end:.1f} MB at the end "
               f"({rss_end - rss_start:+.1f} MB), growth {slope:+.3f} MB per 1,000 frames; "
-              f"non-finite or negative states: {len(problems)}; RSS (MB) by frame: "
+              f"non-finite or negative states: {len(problems)}; RSS (MB) at each cycle's start: "
               + ", ".join(f"{int(f)}: {m:.0f}" for f, m in samples[::max(1, len(samples) // 12)]))
     with capsys.disabled():
         print("\n" + report)
