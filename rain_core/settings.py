@@ -338,7 +338,7 @@ class SpraySection(_Section):
     enabled: bool = field(True, doc="wheel splash and spray")
     strength: float = field(1.0, range=(0.0, 4.0), unit="×", doc="spray relative to the physical water flux")
     budget: int = field(12_000, range=(0, 200_000), unit="droplets",
-                        doc="spray droplet parcels alive at most (mist puffs get another eighth)")
+                        doc="spray droplet parcels alive at most (mist puffs get another 1/32)")
 
 
 @dataclass
