@@ -20,6 +20,7 @@ import numpy as np
 from rain_core.bench._common import markdown_table, parser, write_output
 from rain_core.effects.ripples.backend import choose_backend, make_field
 from rain_core.effects.ripples.constants import CAPILLARY_SPEED_M_S, DEFAULT_DAMPING_PER_S
+from rain_core.effects.ripples.field import RippleField
 from rain_core.effects.ripples.gpu import WaveSolverGPU
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
@@ -180,6 +181,39 @@ def sleep_and_retime_table(ctx, n: int, frames: int) -> str:
                            "asleep"], rows)
 
 
+def mask_upkeep_table(n: int, frames: int) -> str:
+    """ms per frame that ``RippleField.update`` spends following the road's film depth (no rain, no wheels:
+    the solver sleeps), with the default road at full flood, parked and at 100 km/h, for a film function
+    with and without a ``cache_key``: with one, unchanged levels ask only the strips that scroll in; without,
+    a band of rows is re-asked every frame. Min over frames, after one warm-up frame."""
+    from rain_core.water_film import film_depth_mm
+
+    def film(keyed: bool):
+        def fn(x_m, z_m):
+            return film_depth_mm(x_m, z_m, 1.0, 1.0)
+        if keyed:
+            fn.cache_key = ("bench film", 1.0, 1.0)
+        return fn
+
+    rows = []
+    dt = 1 / 30
+    for speed_kmh in (0.0, 100.0):
+        for keyed in (False, True):
+            field = RippleField(n=n, extent_m=EXTENT_M, backend="numpy32")
+            z = 0.0
+            field.update(dt, center_xz=(0.0, z), film_depth_fn=film(keyed))
+            best = math.inf
+            for _ in range(frames):
+                z += speed_kmh / 3.6 * dt
+                fn = film(keyed)  # a new function object every frame, as the road publishes it
+                t0 = time.perf_counter()
+                field.update(dt, center_xz=(0.0, z), film_depth_fn=fn)
+                best = min(best, time.perf_counter() - t0)
+            rows.append((n, f"{speed_kmh:g}", "yes" if keyed else "no", f"{best * 1e3:.2f}"))
+            field.release()
+    return markdown_table(["N", "km/h", "film function has cache_key", "ms per frame (min)"], rows)
+
+
 def _plot(path, series: dict[str, list[tuple[int, float, float]]], ref_slope_points) -> bool:
     """Log-log plot: run time to T (ms) against error vs the continuous mode, one line per backend."""
     try:
@@ -303,6 +337,8 @@ def main(argv: list[str] | None = None) -> int:
     print(choice_tab)
     sleep_tab = sleep_and_retime_table(ctx, 128 if args.quick else 512, 20 if args.quick else 60)
     print(sleep_tab)
+    upkeep_tab = mask_upkeep_table(512, 10 if args.quick else 30)
+    print(upkeep_tab)
 
     plot_path = None
     ref = series["reference"]
@@ -322,6 +358,7 @@ def main(argv: list[str] | None = None) -> int:
         f"## GPU and float32 vs the float64 reference after {steps} steps (C² = 0.45, light damping)", gpu_tab,
         "## Backend choice at start-up (choose_backend)", choice_tab,
         "## Sleep and retiming, per frame of RippleField.update (+ normals when there is a context)", sleep_tab,
+        "## Water-mask upkeep: following the road's film depth, per frame of RippleField.update", upkeep_tab,
         f"Plot: {plot_path.name if plot_path else 'none'}",
     ])
     path = write_output(args.out, "ripples", md)

@@ -70,7 +70,9 @@ class RainRings:
     tile_m: float
 
 
-FilmDepthFn = Callable[[np.ndarray, np.ndarray], np.ndarray]  # (x m, z m world) → standing water depth, mm
+# (x m, z m world) → standing water depth, mm. It may carry a hashable ``cache_key``: equal keys mean equal depths,
+# so a consumer may keep depths it asked for while the key is unchanged.
+FilmDepthFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 @dataclass

@@ -5,6 +5,7 @@
 //   RIPPLES_RETIME  change the sub-step dt, keeping the synchronous velocity (scaled by the energy guard)
 //   RIPPLES_REDUCE  per-block sums (u^2, z*Az, (Az)^2) for the discrete energy and the retime guard
 //   RIPPLES_SHIFT   scroll the window by whole cells (cells that enter are at rest), or apply a new mask
+//   RIPPLES_MASK_SHIFT  scroll the water mask itself (cells that enter count as water until told otherwise)
 #include "ripples/stencil.glsl"
 
 #if defined(RIPPLES_RETIME) || defined(RIPPLES_REDUCE)
@@ -21,7 +22,16 @@ void ripples_sync(ivec2 p, out float z, out float az, out float u) {
 }
 #endif
 
-#if defined(RIPPLES_REDUCE)
+#if defined(RIPPLES_MASK_SHIFT)
+uniform ivec2 u_shift;    // cells: new(p) = old(p + shift)
+out float f_out;          // R8 target: exactly 0 or 1, as uploaded
+void main() {
+    ivec2 q = ivec2(gl_FragCoord.xy) + u_shift;
+    bool inside = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(u_n)));
+    f_out = inside ? texelFetch(u_mask, q, 0).r : 1.0;
+}
+
+#elif defined(RIPPLES_REDUCE)
 out vec4 f_out;
 void main() {
     ivec2 base = ivec2(gl_FragCoord.xy) * RIPPLES_BLOCK;

@@ -107,6 +107,16 @@ class WheelBatch:
 _NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
 
 
+def _runs(index: np.ndarray):
+    """(start, stop) of each run of consecutive values in a sorted index array."""
+    if index.size == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(index) != 1) + 1
+    starts = np.concatenate([[0], breaks])
+    stops = np.concatenate([breaks, [index.size]])
+    return [(int(index[a]), int(index[b - 1]) + 1) for a, b in zip(starts, stops, strict=True)]
+
+
 def field_grid(n: int, extent_m: float) -> tuple[int, float, float]:
     """(n, extent in m, cell size in m) of a field of n cells per side (≥ 8) spanning extent_m; ValueError if
     either is bad."""
@@ -159,11 +169,18 @@ class RippleField:
         self._anchor = (-half, -half)  # world lattice index of cell (0, 0); the window starts centred on 0
         self._centred = False
         self._water_cells: np.ndarray | None = None  # flat indices of water cells (None: all interior)
+        self._water_cells_stale = False  # the mask or the window moved since _water_cells was built
         self._film_fn: FilmDepthFn | None = None
+        self._film_key = None  # the film function's ``cache_key`` (None: unknown, keep re-asking)
+        self._rows_to_renew = 0  # rows still to re-ask since the function last changed
         self._depth_mm: np.ndarray | None = None  # film depth of each cell from _film_fn (NaN: not yet asked)
+        # Whole rows / columns whose depth is not asked yet (after a scroll, the strips that entered): a cell is
+        # unknown iff its row or its column is, so the strips are found without scanning n² NaNs.
+        self._unknown_rows = np.zeros(self.n, bool)
+        self._unknown_cols = np.zeros(self.n, bool)
         self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
         self._batch: list | None = None  # the frame's bumps while ``update`` gathers them
-        self._cdf_table = None  # (rate, grid, cdf) of the arriving drop diameters
+        self._cdf_table = None  # (rate, grid, cdf, flux) of the arriving drops (see _drop_table)
         self.version = 0
 
     # -- geometry --
@@ -205,9 +222,11 @@ class RippleField:
             self._anchor = target
             if self._depth_mm is not None:  # keep what is known, ask only about the cells that entered
                 self._depth_mm = shifted(self._depth_mm, dx, dz, np.nan)
+                self._unknown_rows = shifted(self._unknown_rows[:, None], 0, dz, True)[:, 0]
+                self._unknown_cols = shifted(self._unknown_cols[None, :], dx, 0, True)[0]
                 if fill:
                     self._fill_unknown_depths()
-            self._update_water_cells()
+            self._water_cells_stale = True
             self.version += 1
         return dx, dz
 
@@ -217,12 +236,13 @@ class RippleField:
         """(n, n) bool, or film depth in mm (> 0: water), indexed [iz, ix] over the window; None: all water.
         Replaces any film-depth function given to ``update``."""
         self._film_fn = None
+        self._film_key = None
         self._depth_mm = None
         self._set_mask(mask)
 
     def _set_mask(self, mask):
         self.solver.set_water_mask(mask)
-        self._update_water_cells()
+        self._water_cells_stale = True
         self.version += 1
 
     def refresh_water_mask(self, film_depth_fn: FilmDepthFn):
@@ -230,14 +250,24 @@ class RippleField:
         every cell now, hold the cells without water at rest, and keep following the function: after a
         scroll only the cells that enter are asked, and ``update`` re-asks a band of rows each frame so the
         whole window is renewed every ``mask_refresh_s`` (puddles fill and dry over seconds; one full
-        evaluation of the road's film depth at 512² costs tens of ms)."""
+        evaluation of the road's film depth at 512² costs tens of ms). A function with a hashable
+        ``cache_key`` attribute promises that functions with equal keys give equal depths: once every row has
+        been asked under the current key, the bands stop until the key changes (only scrolled-in strips are
+        asked); without one the bands roll on every frame."""
         self._film_fn = film_depth_fn
+        self._film_key = getattr(film_depth_fn, "cache_key", None)
+        self._rows_to_renew = 0
         self._depth_mm = np.full((self.n, self.n), np.nan)
+        self._unknown_rows[:] = True
+        self._unknown_cols[:] = True
         self._fill_unknown_depths()
 
     def _ask_depths(self, rows, cols) -> np.ndarray:
-        ox, oz = self.origin_xz
-        xs, zs = np.meshgrid(ox + np.asarray(cols) * self.cell_m, oz + np.asarray(rows) * self.cell_m)
+        # Positions from the world lattice index (anchor + cell): a lattice point gets the same coordinates,
+        # hence the same depth, whichever window asks about it (so strips asked after scrolls agree exactly
+        # with a full evaluation).
+        ax, az = self._anchor
+        xs, zs = np.meshgrid((ax + np.asarray(cols)) * self.cell_m, (az + np.asarray(rows)) * self.cell_m)
         depth = np.asarray(self._film_fn(xs, zs), dtype=np.float64)
         depth = np.broadcast_to(depth, xs.shape)
         if not np.all(np.isfinite(depth)) or np.any(depth < 0.0):
@@ -246,30 +276,47 @@ class RippleField:
 
     def _fill_unknown_depths(self, extra_rows=None):
         """Ask the film-depth function about the rows and columns not known yet (after a scroll, whole strips)
-        and about extra_rows, in at most two calls, and update the mask."""
-        unknown = np.isnan(self._depth_mm)
-        rows = np.flatnonzero(unknown.all(axis=1))
-        if extra_rows is not None:
+        and about extra_rows, in at most two calls, and update the mask over what was asked."""
+        rows = np.flatnonzero(self._unknown_rows)
+        if extra_rows is not None and len(extra_rows):
             rows = np.union1d(rows, extra_rows)
-        if rows.size == 0 and not unknown.any():
+        cols = np.flatnonzero(self._unknown_cols)
+        if rows.size == 0 and cols.size == 0:
             return
         if rows.size:
             self._depth_mm[rows, :] = self._ask_depths(rows, np.arange(self.n))
-            unknown[rows, :] = False
-        cols = np.flatnonzero(unknown.any(axis=0))
-        if cols.size:
-            self._depth_mm[:, cols] = self._ask_depths(np.arange(self.n), cols)
-        self._apply_depth_mask()
+        if cols.size:  # the columns' cells outside the rows just asked
+            others = np.ones(self.n, bool)
+            others[rows] = False
+            others = np.flatnonzero(others)
+            if others.size:
+                self._depth_mm[np.ix_(others, cols)] = self._ask_depths(others, cols)
+        self._unknown_rows[:] = False
+        self._unknown_cols[:] = False
+        self._apply_depth_mask(rows, cols)
 
-    def _apply_depth_mask(self):
-        water = self._depth_mm > 0.0
+    def _apply_depth_mask(self, rows: np.ndarray, cols: np.ndarray):
+        """Bring the solver's mask up to date where depths were just asked (whole ``rows``, whole ``cols``):
+        the rest of the mask already matches the depths."""
         current = self.solver.water_mask
-        if current is None or not np.array_equal(water, current > 0.5):
-            self._set_mask(water)
+        if current is None:
+            self._set_mask(self._depth_mm > 0.0)
+            return
+        blocks = []
+        for axis, index in ((0, rows), (1, cols)):
+            for lo, hi in _runs(index):
+                region = (slice(lo, hi), slice(None)) if axis == 0 else (slice(None), slice(lo, hi))
+                water = self._depth_mm[region] > 0.0
+                if not np.array_equal(water, current[region] > 0.5):
+                    blocks.append((lo, 0, water) if axis == 0 else (0, lo, water))
+        if blocks:
+            self.solver.set_water_mask_blocks(blocks)
+            self._water_cells_stale = True
+            self.version += 1
 
-    def _refresh_depth_band(self, dt: float):
+    def _refresh_depth_band(self, dt: float) -> int:
         """Re-ask the film depth of the next band of rows (the whole window every mask_refresh_s), together
-        with any cells that scrolled in."""
+        with any cells that scrolled in. Returns the rows of the band."""
         if self.mask_refresh_s == 0.0:
             rows = np.arange(self.n)
         else:
@@ -279,8 +326,12 @@ class RippleField:
             rows = np.arange(start, max(stop, start)) % self.n
             self._refresh_row %= self.n
         self._fill_unknown_depths(rows)
+        return rows.size
 
     def _update_water_cells(self):
+        """Rebuild the flat indices of the water cells (lazily: once per frame that rains, after the mask or
+        the window moved, not once per change)."""
+        self._water_cells_stale = False
         mask = self.solver.water_mask
         if mask is None:
             self._water_cells = None
@@ -377,11 +428,13 @@ class RippleField:
     def _raindrops(self, rate: float, dt: float) -> int:
         if rate == 0.0 or dt == 0.0 or self.rain_gain == 0.0:
             return 0
+        if self._water_cells_stale:
+            self._update_water_cells()
         interior = (self.n - 2) ** 2
         cells = interior if self._water_cells is None else self._water_cells.size
         if cells == 0:
             return 0
-        expected = physics.flux_horizontal_per_m2_s(rate) * cells * self.cell_m ** 2 * dt
+        expected = self._drop_table(rate)[3] * cells * self.cell_m ** 2 * dt
         count = int(self.rng.poisson(min(expected, 1e15)))
         if count == 0:
             return 0
@@ -428,6 +481,12 @@ class RippleField:
         airborne N(D), ``physics.drop_diameter_cdf``) weighted by the fall speed v(D), since faster drops of a
         size class arrive more often; inverse-CDF sampling on a 512-point table built for this rate (kept
         while the rate stays the same: it costs more than the sampling)."""
+        _, grid, cdf, _ = self._drop_table(rate)
+        return np.interp(self.rng.random(count), cdf, grid)
+
+    def _drop_table(self, rate: float):
+        """(rate, diameter grid mm, flux-weighted CDF, drop flux per m² per s) for a rate in mm/h, kept while
+        the rate stays the same (the drop-size law costs more than a frame's sampling)."""
         if self._cdf_table is None or self._cdf_table[0] != rate:
             grid = np.linspace(physics.D_MIN_MM, physics.D_MAX_MM, 513)
             mass = np.diff(np.asarray(physics.drop_diameter_cdf(grid, rate), dtype=np.float64))
@@ -435,9 +494,8 @@ class RippleField:
             weights = mass * np.asarray(physics.terminal_velocity(mid), dtype=np.float64)
             cdf = np.concatenate([[0.0], np.cumsum(weights)])
             cdf /= cdf[-1]
-            self._cdf_table = (rate, grid, cdf)
-        _, grid, cdf = self._cdf_table
-        return np.interp(self.rng.random(count), cdf, grid)
+            self._cdf_table = (rate, grid, cdf, float(physics.flux_horizontal_per_m2_s(rate)))
+        return self._cdf_table
 
     # -- time --
 
@@ -453,7 +511,8 @@ class RippleField:
                film_depth_fn: FilmDepthFn | None = None, impacts=None) -> dict:
         """One frame: recenter on center_xz (world m; None keeps the window), follow the water mask of
         film_depth_fn(x_m, z_m) -> mm (see ``refresh_water_mask``: evaluated in full the first time, then in
-        strips and bands, so it may be a new function object every frame), lay raindrops for
+        strips and bands, so it may be a new function object every frame; its ``cache_key``, if any, stops
+        the bands while the levels stay the same), lay raindrops for
         rate_mm_h (mm/h), the wheel sweeps and the droplet ``impacts`` (as ``add_droplet_impacts``), then step
         by dt_s (s). ``wheels``: a ``WheelBatch``, or ``WheelSweep``s or 5-tuples in ``add_wheel_sweep`` order
         (p0, p1, speed, film depth mm or None, tyre width). Everything is validated here, once; the frame's
@@ -471,7 +530,14 @@ class RippleField:
                 self.refresh_water_mask(film_depth_fn)
             else:  # a new function object each frame (the weather moves on): keep rolling, no full re-ask
                 self._film_fn = film_depth_fn
-                self._refresh_depth_band(dt)
+                key = getattr(film_depth_fn, "cache_key", None)
+                if key is None or key != self._film_key:
+                    self._rows_to_renew = self.n  # the depths may have changed: renew every row once more
+                self._film_key = key
+                if self._rows_to_renew > 0:
+                    self._rows_to_renew -= self._refresh_depth_band(dt)
+                else:  # the same depths as when every row was last asked: only the strips that entered
+                    self._fill_unknown_depths()
         self._batch = []
         try:
             drops = self._raindrops(rate, dt)

@@ -43,8 +43,10 @@ class WaveSolverGPU(WaveSolver):
         self.state = PingPong(ctx, (n, n), components=2, dtype="f4", filter_linear=False)
         for target in self.state.targets:
             target.fbo.clear(0.0, 0.0, 0.0, 0.0)
-        self.mask_texture = ctx.texture((n, n), 1, np.full(n * n, 255, np.uint8).tobytes(), dtype="f1")
-        self.mask_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        # The water mask (R8, 1 water / 0 held) ping-pongs too: a scroll shifts it on the GPU (no n² upload),
+        # and the field then writes only the strips that entered.
+        self.mask = PingPong(ctx, (n, n), components=1, dtype="f1", filter_linear=False)
+        self.mask.src.color.write(np.full(n * n, 255, np.uint8))
         nb = -(-n // REDUCE_BLOCK)
         self.reduce_target = float_target(ctx, (nb, nb), 4, "f4", filter_linear=False)
         prog = self.shaders.program
@@ -54,6 +56,7 @@ class WaveSolverGPU(WaveSolver):
             "reduce": prog("common/fullscreen.vert", "ripples/step.frag",
                            defines={"RIPPLES_REDUCE": 1, "RIPPLES_BLOCK": REDUCE_BLOCK}),
             "shift": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_SHIFT": 1}),
+            "mask_shift": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_MASK_SHIFT": 1}),
             "impulse": prog("ripples/impulse.vert", "ripples/impulse.frag"),
         }
         self._vaos = {name: fullscreen_triangle(ctx, p) for name, p in self._progs.items() if name != "impulse"}
@@ -75,6 +78,11 @@ class WaveSolverGPU(WaveSolver):
         self._bump_buffer = self.ctx.buffer(reserve=capacity * 16, dynamic=True)
         self._bump_vao = self.ctx.vertex_array(self._progs["impulse"], [(self._bump_buffer, "4f/i", "in_bump")])
         self._bump_capacity = capacity
+
+    @property
+    def mask_texture(self):
+        """The current water-mask texture (R8: 1 water, 0 held), [iz, ix] = row, column."""
+        return self.mask.src.color
 
     def _own(self, prog) -> None:
         """Write this solver's constant uniforms into ``prog`` unless they are already there."""
@@ -186,6 +194,14 @@ class WaveSolverGPU(WaveSolver):
         m = np.ones((self.n, self.n)) if self._mask is None else self._mask
         self.mask_texture.write((np.asarray(m) > 0.5).astype(np.uint8).__mul__(255).tobytes())
 
+    def _apply_mask_to_blocks(self, regions):
+        self._flush()
+        for rows, cols in regions:  # only the blocks travel; one pass then holds their dry cells
+            data = (self._mask[rows, cols] > 0.5).astype(np.uint8) * np.uint8(255)
+            self.mask_texture.write(data, viewport=(cols.start, rows.start, data.shape[1], data.shape[0]),
+                                    alignment=1)
+        self._pass("shift", u_shift=(0, 0))
+
     def _apply_mask_to_state(self):
         self._flush()
         self._upload_mask()
@@ -203,7 +219,8 @@ class WaveSolverGPU(WaveSolver):
         self._flush()
         if self._mask is not None:
             self._mask = shifted(self._mask, dx, dz, 1.0)
-            self._upload_mask()
+            self._draw("mask_shift", self.mask.dst, u_shift=(dx, dz))
+            self.mask.swap()
         if not self._asleep:
             self._pass("shift", u_shift=(dx, dz))
 
@@ -213,8 +230,9 @@ class WaveSolverGPU(WaveSolver):
             if _CONSTANTS_IN.get(prog.glo) is self._constants:
                 del _CONSTANTS_IN[prog.glo]
         self.state.release()
+        self.mask.release()
         self.reduce_target.release()
-        for obj in (self.mask_texture, self._bump_vao, self._bump_buffer, *self._vaos.values()):
+        for obj in (self._bump_vao, self._bump_buffer, *self._vaos.values()):
             obj.release()
         if self._owns_shaders:
             self.shaders.release()

@@ -49,6 +49,7 @@ class RainRippleTexture:
         # Set before each draw: the library's cached program may be shared with another tile.
         self._constants = {"u_size": (float(self.size), float(self.size)), "u_cycle_s": RAIN_TILE_CYCLE_S,
                            "u_layers": self.layers, "u_seed": self.seed}
+        self._uniforms_for: tuple[float, dict] | None = None  # (rate, its uniforms): the rate rarely changes
 
     @property
     def texture(self):
@@ -79,13 +80,19 @@ class RainRippleTexture:
     def render(self, time_s: float, rate_mm_h: float):
         """Draw the rings at time_s (s) for rate_mm_h (mm/h); a flat map without rain."""
         t = checks.number("time_s", time_s, 0.0, math.inf, "s")
-        density, strength = self.parameters(rate_mm_h)
+        rate = checks.number("rate_mm_h", rate_mm_h, 0.0, 500.0, "mm/h")
+        if self._uniforms_for is None or self._uniforms_for[0] != rate:
+            # The drop-size law behind them costs more than the draw's CPU side: evaluated once per rate.
+            density, strength = self.parameters(rate)
+            self._uniforms_for = (rate, {"u_strength": strength,
+                                         "u_density": tuple(density) + (0.0,) * (8 - self.layers)})
+        uniforms = self._uniforms_for[1]
         fbo = self.target.fbo
-        if strength == 0.0:
+        if uniforms["u_strength"] == 0.0:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
         else:
-            set_uniforms(self._prog, self._constants, u_time=t, u_strength=strength,
-                         u_density=tuple(density) + (0.0,) * (8 - self.layers))
+            set_uniforms(self._prog, self._constants)
+            set_uniforms(self._prog, uniforms, u_time=t)
             fbo.use()
             self._vao.render(vertices=3)
         self.texture.build_mipmaps()

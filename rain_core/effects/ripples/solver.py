@@ -529,6 +529,27 @@ class WaveSolver:
         self._mask = a.astype(self.dtype)
         self._apply_mask_to_state()
 
+    def set_water_mask_blocks(self, blocks):
+        """Replace the mask over some blocks, each (row0, col0, block): the rows row0… and columns col0… take
+        ``block`` ((rows, cols) bool, True: water; trusted, no validation), and hold the cells that turned dry:
+        what ``set_water_mask`` of the whole updated mask does, for the cost of the blocks (the field renews
+        strips of its mask every frame)."""
+        if self._mask is None:
+            self._mask = np.ones((self.n, self.n), self.dtype)
+        regions = []
+        for row0, col0, block in blocks:
+            region = (slice(row0, row0 + block.shape[0]), slice(col0, col0 + block.shape[1]))
+            self._mask[region] = block
+            regions.append(region)
+        if regions:
+            self._apply_mask_to_blocks(regions)
+
+    def _apply_mask_to_blocks(self, regions):
+        # Cells outside the blocks keep their mask, and held cells already store 0: zeroing the blocks suffices.
+        for region in regions:
+            self._z[region] *= self._mask[region]
+            self._zp[region] *= self._mask[region]
+
     def shift(self, dx_cells: int, dz_cells: int):
         """Scroll the window by whole cells: new[iz, ix] = old[iz + dz, ix + dx]; cells that enter are at rest,
         edges stay 0, the mask scrolls with the water (entering cells count as water until a new mask)."""

@@ -157,6 +157,9 @@ class RoadEffect(Effect):
         def standing(x_m, z_m):
             return film_depth_mm(x_m, z_m, c, p, amount, seed, world)
 
+        # Everything the depths depend on besides (x, z): consumers may cache depths while the key is unchanged
+        # (the ripples then ask only for cells that scrolled into their field).
+        standing.cache_key = ("film", c, p, amount, seed, id(world))
         rc.shared.film_depth_fn = standing
         self._reflection_valid = False
 
