@@ -164,14 +164,20 @@ def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=
     x = np.asarray(x_m, dtype=np.float64)
     z = np.asarray(z_m, dtype=np.float64)
     x, z = np.broadcast_arrays(x, z)
-    h = sample_heightmap(world.road_heightmap, world.heightmap_extent_m, x, z)
-    h_smooth = sample_heightmap(smooth_heightmap_for(world), world.heightmap_extent_m, x, z)
-    n = sample_road_map(puddle_noise(int(seed)), x, z)
-    shelter = sample_road_map(shelter_map_for(world), x, z)
+    standing = np.zeros(x.shape)
+    film = np.zeros(x.shape)
+    # Only the asphalt holds water: sample the maps there alone (callers such as the ripples ask for whole strips
+    # of cells, about half of them over the pavements).
     on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
-    standing = np.where(on_road, _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount),
-                        0.0)
-    film = np.where(on_road, WET_FILM_MM * wetness * (1.0 - shelter), 0.0)
+    if not on_road.any():
+        return standing, film
+    xr, zr = x[on_road], z[on_road]
+    h = sample_heightmap(world.road_heightmap, world.heightmap_extent_m, xr, zr)
+    h_smooth = sample_heightmap(smooth_heightmap_for(world), world.heightmap_extent_m, xr, zr)
+    n = sample_road_map(puddle_noise(int(seed)), xr, zr)
+    shelter = sample_road_map(shelter_map_for(world), xr, zr)
+    standing[on_road] = _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount)
+    film[on_road] = WET_FILM_MM * wetness * (1.0 - shelter)
     return standing, film
 
 
