@@ -4,7 +4,7 @@ The model, the bookkeeping and every formula are those of ``WindshieldSimReferen
 class extends; it computes the same state with far fewer NumPy calls (issue 13: 2,000 drops at 120 km/h in
 ≤ 1 ms a step), and bounds its work per step whatever the input (issue 18). How:
 
-* **One array of drops.** Position, velocity, mass, trail run, contact radius and the film cell under the drop
+* **One array of drops**. Position, velocity, mass, trail run, contact radius and the film cell under the drop
   are the columns of one preallocated (capacity, 8) array: appending writes rows, removing drops is one
   compaction of whole rows, sorting one gather. ``pos``, ``vel``, ``mass``, ``trail`` and ``fresh`` are views of
   it, as the reference's arrays were (assign ``pos`` or ``mass`` whole, through their setters, to keep the cell
@@ -15,14 +15,17 @@ class extends; it computes the same state with far fewer NumPy calls (issue 13: 
   ≲ 1e-8 for the smallest drops, not accumulating: each step restarts from the current mass).
 * **Only what moves is moved.** Forces are evaluated for every drop (they decide which start), the sliding update
   only for the drops that are moving or starting.
-* **Arrivals without binary searches.** The flux-weighted size law is sampled through a bucket table over its
+* **Arrivals without binary searches**. The flux-weighted size law is sampled through a bucket table over its
   cumulative distribution (a gather instead of ``np.interp``'s search; only the far tail searches), and the
   impact speed comes from the same interval. What the effect draws of a step (impacts, trails) is kept as
   columns and assembled only when asked.
-* **Merging through tables.** ``grid.PairFinder`` keeps the occupied cells in tables so a neighbour lookup is a
+* **Merging through tables**. ``grid.PairFinder`` keeps the occupied cells in tables so a neighbour lookup is a
   gather; the merge groups are formed on the few drops that touch, not on all of them.
-* **Wiping a sector, not the glass.** A blade's sweep first keeps the drops inside its wedge (two half-planes),
+* **Wiping a sector, not the glass**. A blade's sweep first keeps the drops inside its wedge (two half-planes),
   then tests those exactly as the reference does; film cells come from a per-blade table sorted by angle.
+
+Modules: ``drop_rows`` (the array's columns), ``arrivals`` (the bucket table), ``fast_merging`` and
+``fast_wiping`` (mixins ahead of the reference's ``merging`` and ``wiping``).
 
 Work bounds per sub-step (``constants``): MAX_ARRIVALS_PER_SUBSTEP arrivals, MERGE_CELLS_MAX / MERGE_PAIRS_MAX
 merge work, the drop budget of the inputs. ``tests/effects/windshield/test_fast_path.py`` compares this class
@@ -39,10 +42,10 @@ import numpy as np
 
 from rain_core import checks
 from rain_core.effects.windshield.airflow import air_velocity
+from rain_core.effects.windshield.arrivals import ArrivalTable
 from rain_core.effects.windshield.constants import (
     BEAD_BINS,
     BL_RUN_UP_M,
-    BLADE_HALF_WIDTH_M,
     CROSSWIND_GAIN,
     DRAG_CD,
     DROP_EVAP_KG_M_S,
@@ -74,61 +77,31 @@ from rain_core.effects.windshield.constants import (
     drop_radius,
     norm2,
 )
-from rain_core.effects.windshield.grid import GRID_CELL_M, PairFinder, _grid_shape, components
+from rain_core.effects.windshield.drop_rows import CELL as _CELL
+from rain_core.effects.windshield.drop_rows import COLS as _COLS
+from rain_core.effects.windshield.drop_rows import ROW as _ROW
+from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
+from rain_core.effects.windshield.drop_rows import VS as _VS
+from rain_core.effects.windshield.drop_rows import VT as _VT
+from rain_core.effects.windshield.drop_rows import A as _A
+from rain_core.effects.windshield.drop_rows import M as _M
+from rain_core.effects.windshield.drop_rows import S as _S
+from rain_core.effects.windshield.drop_rows import T as _T
+from rain_core.effects.windshield.fast_merging import FastMerging
+from rain_core.effects.windshield.fast_wiping import FastWiping
+from rain_core.effects.windshield.grid import GRID_CELL_M, PairFinder, _grid_shape
 from rain_core.effects.windshield.inputs import GlassInputs
-from rain_core.effects.windshield.reference import _D_GRID_MM, WindshieldSimReference, _check_inputs
-from rain_core.effects.windshield.wipers import Blade
+from rain_core.effects.windshield.reference import WindshieldSimReference, _check_inputs
 from rain_core.physics import G_M_S2, RHO_AIR, RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
-# Columns of the drop array (_CELL: the film cell under the drop, kept with its position).
-_S, _T, _VS, _VT, _M, _TRAIL, _A, _CELL = range(8)
-_COLS = 8
-_ROW = np.dtype((np.void, 8 * _COLS))
 _MASS_PER_A3 = RHO_WATER * VOLUME_PER_RADIUS3  # kg / m³: a drop's mass over its contact radius cubed
-_CDF_BUCKETS = 4096
 _EMPTY2 = np.zeros((0, 2))
 _GRID_O = (-1.0, -0.2)  # grid._GRID_ORIGIN, as floats for the sort key
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 
 
-class _ArrivalTable:
-    """The flux-weighted size law of one rain rate and glass motion, ready to sample without a search: the
-    reference's (closing speed, CDF) over the diameter grid, the slopes ``np.interp`` would use, and for each of
-    _CDF_BUCKETS equal slices of the CDF the first grid interval it meets."""
-
-    def __init__(self, closing: np.ndarray, cdf: np.ndarray):
-        self.total = float(cdf[-1])
-        self.cdf = cdf
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.d_slope = np.diff(_D_GRID_MM) / np.diff(cdf)  # inf on flat stretches: never selected
-        self.c_slope = np.diff(closing) / np.diff(_D_GRID_MM)
-        self.closing = closing
-        edges = np.arange(_CDF_BUCKETS + 1) * (self.total / _CDF_BUCKETS)
-        j = np.searchsorted(cdf, edges, "right") - 1
-        self.first = np.minimum(np.maximum(j[:-1] - 1, 0), len(cdf) - 2)  # one interval of slack for rounding
-        self.span = j[1:] - self.first  # intervals a bucket may need to step over
-        self.steps = int(min(self.span.max(), 3))
-        self.cdf_next = np.append(cdf[1:], np.inf)
-
-    def sample(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Diameters (mm) at the CDF quantiles ``u`` ∈ [0, 1) (as np.interp on the CDF gives them), and their
-        closing speeds (m/s)."""
-        x = u * self.total
-        k = np.minimum((u * _CDF_BUCKETS).astype(np.int64), _CDF_BUCKETS - 1)
-        j = self.first[k]
-        for _ in range(self.steps):
-            j += x >= self.cdf_next[j]
-        wide = self.span[k] > self.steps
-        if wide.any():  # the far tail of the law, where one bucket spans many grid intervals
-            j[wide] = np.searchsorted(self.cdf, x[wide], "right") - 1
-        j = np.minimum(j, len(self.cdf) - 2)
-        d = self.d_slope[j] * (x - self.cdf[j]) + _D_GRID_MM[j]
-        closing = self.c_slope[j] * (d - _D_GRID_MM[j]) + self.closing[j]
-        return d, closing
-
-
-class WindshieldSim(WindshieldSimReference):
+class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
     """Water on the windshield: drops, film, wiper beads and the wipers (the fast path; see the module
     docstring). Same constructor, state and queries as ``WindshieldSimReference``."""
 
@@ -138,7 +111,7 @@ class WindshieldSim(WindshieldSimReference):
         self._pairs = PairFinder()
         self._sensor: float | None = 0.0
         self._inputs_seen: GlassInputs | None = None
-        self._table: _ArrivalTable | None = None
+        self._table: ArrivalTable | None = None
         self._air_key: bytes | None = None
         self._w0, self._dw, self._height = g.width_bottom, g._dw, g.height
         # Gravity along the curved glass (GlassGeometry.gravity), its constants folded.
@@ -322,7 +295,7 @@ class WindshieldSim(WindshieldSimReference):
         if self._rate_cache is None or self._rate_cache[0] != key:
             rate, closing, cdf = self.arrival_rate_per_s(inputs)
             self._rate_cache = (key, (rate, closing, cdf))
-            self._table = _ArrivalTable(closing, cdf) if rate > 0 else None
+            self._table = ArrivalTable(closing, cdf) if rate > 0 else None
         air_local = inputs.relative_air_local()
         air_key = air_local.tobytes()
         if air_key != self._air_key:
@@ -621,154 +594,3 @@ class WindshieldSim(WindshieldSimReference):
         if tiny.any():
             np.add.at(self.film.ravel(), self._cells(d[tiny, _S], d[tiny, _T]), d[tiny, _M])
             self._keep(~tiny)
-
-    # --- merging (merging.Merging._merge) -------------------------------------------------------------------
-    def _merge(self, start: np.ndarray, disp: np.ndarray) -> None:
-        """Join drops that touched during the step (closest approach of their motions ≤ sum of radii); see
-        ``merging``. Candidate pairs come from ``grid.PairFinder``; the groups are formed on the drops that
-        touch only."""
-        n = self._n
-        fresh = self._fresh_buf[:n]
-        if n < 2:
-            fresh[:] = False
-            return
-        n_moved = len(start)
-        if n_moved < n:  # trail droplets born during the step: tested from the next sub-step on
-            start = np.concatenate([start, self.pos[n_moved:]])
-            disp = np.concatenate([disp, np.zeros((n - n_moved, 2))])
-        s0, t0, ds, dt_ = start[:, 0], start[:, 1], disp[:, 0], disp[:, 1]
-        active = (ds != 0.0) | (dt_ != 0.0) | fresh
-        active[n_moved:] = False
-        fresh[:n_moved] = False
-        fresh[n_moved:] = True
-        if not active.any():
-            return
-        d = self._buf[:n]
-        a = d[:, _A]
-        reach = a + 0.5 * np.sqrt(ds * ds + dt_ * dt_)
-        i, j, deferred = self._pairs.pairs(s0 + 0.5 * ds, t0 + 0.5 * dt_, reach, active, d[:, _S], d[:, _T], a)
-        if deferred is not None:  # over the work budget: those drops are tested again next sub-step
-            deferred[n_moved:] = False
-            fresh |= deferred
-        if n_moved < n:
-            keep = (i < n_moved) & (j < n_moved)
-            i, j = i[keep], j[keep]
-        if len(i) == 0:
-            return
-        # Closest approach of the two straight motions within the step.
-        ps, pt = s0[i] - s0[j], t0[i] - t0[j]
-        qs, qt = ds[i] - ds[j], dt_[i] - dt_[j]
-        dd = qs * qs + qt * qt
-        tau = np.minimum(np.maximum(-(ps * qs + pt * qt) / np.maximum(dd, 1e-300), 0.0), 1.0)
-        ps += tau * qs
-        pt += tau * qt
-        rr = a[i] + a[j]
-        touch = np.flatnonzero(ps * ps + pt * pt <= rr * rr)
-        if len(touch) == 0:
-            return
-        i, j = i[touch], j[touch]
-        # Groups among the touching drops only, each labelled by its smallest member (grid.components).
-        both = np.concatenate([i, j])
-        both.sort()
-        nodes = both[np.concatenate(([True], both[1:] != both[:-1]))]
-        k = len(i)
-        ij = np.searchsorted(nodes, np.concatenate([i, j]))
-        slot = components(len(nodes), ij[:k], ij[k:])  # the root's place in ``nodes``
-        grown = np.flatnonzero(np.bincount(slot, minlength=len(nodes)) > 1)
-        if len(grown) == 0:
-            return
-        # Sums over each group in index order, as the reference's bincount adds them.
-        rows = d[nodes]
-        wm = rows[:, _M]
-        g_mass = np.bincount(slot, weights=wm, minlength=len(nodes))[grown]
-        r = nodes[grown]
-        for c in (_S, _T, _VS, _VT, _TRAIL):
-            d[r, c] = np.bincount(slot, weights=wm * rows[:, c], minlength=len(nodes))[grown] / g_mass
-        d[r, _M] = g_mass
-        d[r, _A] = drop_radius(g_mass)
-        d[r, _CELL] = self._cells(d[r, _S], d[r, _T])
-        self._fresh_buf[r] = True
-        gone = nodes[slot != np.arange(len(nodes))]
-        keep = np.ones(n, bool)
-        keep[gone] = False
-        self._keep(keep)
-        self.merges += len(gone)
-
-    # --- wiping (wiping.Wiping) -----------------------------------------------------------------------------
-    def _sweep_drops(self, b: int, blade: Blade, ta: float, tb: float) -> None:
-        """The reference's drop sweep, on the drops inside the blade's wedge only."""
-        n = self._n
-        if n == 0:
-            return
-        lo, hi = min(ta, tb), max(ta, tb)
-        d = self._buf[:n]
-        px, py = blade.pivot
-        rs, rt = d[:, _S] - px, d[:, _T] - py
-        a = d[:, _A]
-        # The widest angular margin any drop in the blade's reach can have, and the wedge it widens.
-        a_max = float(a.max())
-        margin = (a_max + BLADE_HALF_WIDTH_M) / max(blade.r_inner_m - a_max, 1e-3) + 1e-6
-        w_lo, w_hi = (lo - 1e-6, hi + margin) if tb > ta else (lo - margin, hi + 1e-6)
-        if w_hi - w_lo < 0.9 * math.pi:
-            # Two half-planes through the pivot bound the wedge (it is narrower than π).
-            in_wedge = (rt * math.cos(w_lo) - rs * math.sin(w_lo) >= 0.0) & (
-                rs * math.sin(w_hi) - rt * math.cos(w_hi) >= 0.0
-            )
-            cand = np.flatnonzero(in_wedge)
-            if len(cand) == 0:
-                return
-        else:
-            cand = np.arange(n)
-        rel_s, rel_t = rs[cand], rt[cand]
-        r = np.hypot(rel_s, rel_t)
-        phi = np.arctan2(rel_t, rel_s)
-        ac = a[cand]
-        margin_c = (ac + BLADE_HALF_WIDTH_M) / np.maximum(r, 1e-3)
-        in_r = (r + ac >= blade.r_inner_m) & (r - ac <= blade.r_outer_m)
-        if tb > ta:
-            in_phi = (phi >= lo) & (phi <= hi + margin_c)
-        else:
-            in_phi = (phi >= lo - margin_c) & (phi <= hi)
-        swept = in_r & in_phi
-        if swept.any():
-            gone = cand[swept]
-            np.add.at(self.beads[b], self._bin_of(blade, r[swept]), d[gone, _M])
-            keep = np.ones(n, bool)
-            keep[gone] = False
-            self._keep(keep)
-
-    def _sweep(self, seg, wear: float) -> None:
-        """wiping.Wiping._sweep, with the blade angles in scalar math (Blade.angle, without NumPy)."""
-        c0 = 1.0 - math.cos(math.pi * min(max(seg.p_start, 0.0), 1.0))
-        c1 = 1.0 - math.cos(math.pi * min(max(seg.p_end, 0.0), 1.0))
-        for b, blade in enumerate(self.blades):
-            span = blade.top_rad - blade.park_rad
-            ta, tb = blade.park_rad + span * 0.5 * c0, blade.park_rad + span * 0.5 * c1
-            if ta != tb:
-                self._sweep_blade(b, blade, ta, tb, wear)
-                rng = self._sweep_ranges[b]
-                rng[0] = min(rng[0], ta, tb)
-                rng[1] = max(rng[1], ta, tb)
-            self._bead_off_glass(b, blade, tb)
-        if seg.event is not None:
-            for b, blade in enumerate(self.blades):
-                self._end_of_stroke(b, blade, float(blade.angle(seg.p_end)), seg.event)
-
-    def _swept_cells(self, b: int, blade: Blade, lo: float, hi: float) -> np.ndarray:
-        order, phi_sorted, r_c = self._cells_by_angle[b]
-        cand = order[np.searchsorted(phi_sorted, lo, "left") : np.searchsorted(phi_sorted, hi, "right")]
-        r = r_c[cand]
-        return np.sort(cand[(r >= blade.r_inner_m) & (r <= blade.r_outer_m)])
-
-    def _bead_off_glass(self, b: int, blade: Blade, angle: float) -> None:
-        """Water pushed past an edge of the glass leaves it: wiped (the reference's, on cached bin radii)."""
-        bead = self.beads[b]
-        if not bead.any():
-            return
-        r = self._bin_r[b]
-        s = blade.pivot[0] + r * math.cos(angle)
-        t = blade.pivot[1] + r * math.sin(angle)
-        off = ~self._inside(s, t)
-        if off.any():
-            self.wiped += float(bead[off].sum())
-            bead[off] = 0.0

@@ -1,0 +1,47 @@
+"""Sampling raindrop arrivals on the glass without a search (the fast path, ``sim.WindshieldSim``): the
+flux-weighted size law of one rain rate and glass motion as a bucket table over its cumulative distribution, so a
+sample is a gather instead of ``np.interp``'s binary search; only the far tail searches."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rain_core.effects.windshield.reference import _D_GRID_MM
+
+_CDF_BUCKETS = 4096
+
+
+class ArrivalTable:
+    """The flux-weighted size law of one rain rate and glass motion, ready to sample without a search: the
+    reference's (closing speed, CDF) over the diameter grid, the slopes ``np.interp`` would use, and for each of
+    _CDF_BUCKETS equal slices of the CDF the first grid interval it meets."""
+
+    def __init__(self, closing: np.ndarray, cdf: np.ndarray):
+        self.total = float(cdf[-1])
+        self.cdf = cdf
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.d_slope = np.diff(_D_GRID_MM) / np.diff(cdf)  # inf on flat stretches: never selected
+        self.c_slope = np.diff(closing) / np.diff(_D_GRID_MM)
+        self.closing = closing
+        edges = np.arange(_CDF_BUCKETS + 1) * (self.total / _CDF_BUCKETS)
+        j = np.searchsorted(cdf, edges, "right") - 1
+        self.first = np.minimum(np.maximum(j[:-1] - 1, 0), len(cdf) - 2)  # one interval of slack for rounding
+        self.span = j[1:] - self.first  # intervals a bucket may need to step over
+        self.steps = int(min(self.span.max(), 3))
+        self.cdf_next = np.append(cdf[1:], np.inf)
+
+    def sample(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Diameters (mm) at the CDF quantiles ``u`` ∈ [0, 1) (as np.interp on the CDF gives them), and their
+        closing speeds (m/s)."""
+        x = u * self.total
+        k = np.minimum((u * _CDF_BUCKETS).astype(np.int64), _CDF_BUCKETS - 1)
+        j = self.first[k]
+        for _ in range(self.steps):
+            j += x >= self.cdf_next[j]
+        wide = self.span[k] > self.steps
+        if wide.any():  # the far tail of the law, where one bucket spans many grid intervals
+            j[wide] = np.searchsorted(self.cdf, x[wide], "right") - 1
+        j = np.minimum(j, len(self.cdf) - 2)
+        d = self.d_slope[j] * (x - self.cdf[j]) + _D_GRID_MM[j]
+        closing = self.c_slope[j] * (d - _D_GRID_MM[j]) + self.closing[j]
+        return d, closing

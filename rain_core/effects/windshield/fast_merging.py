@@ -1,0 +1,93 @@
+"""Merging drops on the fast path (mixed into ``sim.WindshieldSim`` ahead of the reference's ``merging.Merging``):
+the same rule and sums, with candidate pairs from ``grid.PairFinder``'s tables and the groups formed on the
+drops that touch only."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rain_core.effects.windshield.constants import drop_radius
+from rain_core.effects.windshield.drop_rows import CELL as _CELL
+from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
+from rain_core.effects.windshield.drop_rows import VS as _VS
+from rain_core.effects.windshield.drop_rows import VT as _VT
+from rain_core.effects.windshield.drop_rows import A as _A
+from rain_core.effects.windshield.drop_rows import M as _M
+from rain_core.effects.windshield.drop_rows import S as _S
+from rain_core.effects.windshield.drop_rows import T as _T
+from rain_core.effects.windshield.grid import components
+
+
+class FastMerging:
+    """``merging.Merging._merge`` on the drop array (its state: ``_buf``, ``_n``, ``_pairs``, ``_fresh_buf``)."""
+
+    def _merge(self, start: np.ndarray, disp: np.ndarray) -> None:
+        """Join drops that touched during the step (closest approach of their motions ≤ sum of radii); see
+        ``merging``. Candidate pairs come from ``grid.PairFinder``; the groups are formed on the drops that
+        touch only."""
+        n = self._n
+        fresh = self._fresh_buf[:n]
+        if n < 2:
+            fresh[:] = False
+            return
+        n_moved = len(start)
+        if n_moved < n:  # trail droplets born during the step: tested from the next sub-step on
+            start = np.concatenate([start, self.pos[n_moved:]])
+            disp = np.concatenate([disp, np.zeros((n - n_moved, 2))])
+        s0, t0, ds, dt_ = start[:, 0], start[:, 1], disp[:, 0], disp[:, 1]
+        active = (ds != 0.0) | (dt_ != 0.0) | fresh
+        active[n_moved:] = False
+        fresh[:n_moved] = False
+        fresh[n_moved:] = True
+        if not active.any():
+            return
+        d = self._buf[:n]
+        a = d[:, _A]
+        reach = a + 0.5 * np.sqrt(ds * ds + dt_ * dt_)
+        i, j, deferred = self._pairs.pairs(s0 + 0.5 * ds, t0 + 0.5 * dt_, reach, active, d[:, _S], d[:, _T], a)
+        if deferred is not None:  # over the work budget: those drops are tested again next sub-step
+            deferred[n_moved:] = False
+            fresh |= deferred
+        if n_moved < n:
+            keep = (i < n_moved) & (j < n_moved)
+            i, j = i[keep], j[keep]
+        if len(i) == 0:
+            return
+        # Closest approach of the two straight motions within the step.
+        ps, pt = s0[i] - s0[j], t0[i] - t0[j]
+        qs, qt = ds[i] - ds[j], dt_[i] - dt_[j]
+        dd = qs * qs + qt * qt
+        tau = np.minimum(np.maximum(-(ps * qs + pt * qt) / np.maximum(dd, 1e-300), 0.0), 1.0)
+        ps += tau * qs
+        pt += tau * qt
+        rr = a[i] + a[j]
+        touch = np.flatnonzero(ps * ps + pt * pt <= rr * rr)
+        if len(touch) == 0:
+            return
+        i, j = i[touch], j[touch]
+        # Groups among the touching drops only, each labelled by its smallest member (grid.components).
+        both = np.concatenate([i, j])
+        both.sort()
+        nodes = both[np.concatenate(([True], both[1:] != both[:-1]))]
+        k = len(i)
+        ij = np.searchsorted(nodes, np.concatenate([i, j]))
+        slot = components(len(nodes), ij[:k], ij[k:])  # the root's place in ``nodes``
+        grown = np.flatnonzero(np.bincount(slot, minlength=len(nodes)) > 1)
+        if len(grown) == 0:
+            return
+        # Sums over each group in index order, as the reference's bincount adds them.
+        rows = d[nodes]
+        wm = rows[:, _M]
+        g_mass = np.bincount(slot, weights=wm, minlength=len(nodes))[grown]
+        r = nodes[grown]
+        for c in (_S, _T, _VS, _VT, _TRAIL):
+            d[r, c] = np.bincount(slot, weights=wm * rows[:, c], minlength=len(nodes))[grown] / g_mass
+        d[r, _M] = g_mass
+        d[r, _A] = drop_radius(g_mass)
+        d[r, _CELL] = self._cells(d[r, _S], d[r, _T])
+        self._fresh_buf[r] = True
+        gone = nodes[slot != np.arange(len(nodes))]
+        keep = np.ones(n, bool)
+        keep[gone] = False
+        self._keep(keep)
+        self.merges += len(gone)

@@ -1,0 +1,99 @@
+"""The blades on the fast path (mixed into ``sim.WindshieldSim`` ahead of the reference's ``wiping.Wiping``):
+a sweep first keeps the drops inside the blade's wedge (two half-planes through the pivot), then tests those
+exactly as the reference does; film cells come from a per-blade table sorted by angle."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rain_core.effects.windshield.constants import BLADE_HALF_WIDTH_M
+from rain_core.effects.windshield.drop_rows import A as _A
+from rain_core.effects.windshield.drop_rows import M as _M
+from rain_core.effects.windshield.drop_rows import S as _S
+from rain_core.effects.windshield.drop_rows import T as _T
+from rain_core.effects.windshield.wipers import Blade
+
+
+class FastWiping:
+    """The reference's drop sweep and bead bookkeeping on the drop array (its state: ``_buf``, ``_n``,
+    ``beads``, ``blades``, the per-blade tables)."""
+
+    def _sweep_drops(self, b: int, blade: Blade, ta: float, tb: float) -> None:
+        """The reference's drop sweep, on the drops inside the blade's wedge only."""
+        n = self._n
+        if n == 0:
+            return
+        lo, hi = min(ta, tb), max(ta, tb)
+        d = self._buf[:n]
+        px, py = blade.pivot
+        rs, rt = d[:, _S] - px, d[:, _T] - py
+        a = d[:, _A]
+        # The widest angular margin any drop in the blade's reach can have, and the wedge it widens.
+        a_max = float(a.max())
+        margin = (a_max + BLADE_HALF_WIDTH_M) / max(blade.r_inner_m - a_max, 1e-3) + 1e-6
+        w_lo, w_hi = (lo - 1e-6, hi + margin) if tb > ta else (lo - margin, hi + 1e-6)
+        if w_hi - w_lo < 0.9 * math.pi:
+            # Two half-planes through the pivot bound the wedge (it is narrower than π).
+            in_wedge = (rt * math.cos(w_lo) - rs * math.sin(w_lo) >= 0.0) & (
+                rs * math.sin(w_hi) - rt * math.cos(w_hi) >= 0.0
+            )
+            cand = np.flatnonzero(in_wedge)
+            if len(cand) == 0:
+                return
+        else:
+            cand = np.arange(n)
+        rel_s, rel_t = rs[cand], rt[cand]
+        r = np.hypot(rel_s, rel_t)
+        phi = np.arctan2(rel_t, rel_s)
+        ac = a[cand]
+        margin_c = (ac + BLADE_HALF_WIDTH_M) / np.maximum(r, 1e-3)
+        in_r = (r + ac >= blade.r_inner_m) & (r - ac <= blade.r_outer_m)
+        if tb > ta:
+            in_phi = (phi >= lo) & (phi <= hi + margin_c)
+        else:
+            in_phi = (phi >= lo - margin_c) & (phi <= hi)
+        swept = in_r & in_phi
+        if swept.any():
+            gone = cand[swept]
+            np.add.at(self.beads[b], self._bin_of(blade, r[swept]), d[gone, _M])
+            keep = np.ones(n, bool)
+            keep[gone] = False
+            self._keep(keep)
+
+    def _sweep(self, seg, wear: float) -> None:
+        """wiping.Wiping._sweep, with the blade angles in scalar math (Blade.angle, without NumPy)."""
+        c0 = 1.0 - math.cos(math.pi * min(max(seg.p_start, 0.0), 1.0))
+        c1 = 1.0 - math.cos(math.pi * min(max(seg.p_end, 0.0), 1.0))
+        for b, blade in enumerate(self.blades):
+            span = blade.top_rad - blade.park_rad
+            ta, tb = blade.park_rad + span * 0.5 * c0, blade.park_rad + span * 0.5 * c1
+            if ta != tb:
+                self._sweep_blade(b, blade, ta, tb, wear)
+                rng = self._sweep_ranges[b]
+                rng[0] = min(rng[0], ta, tb)
+                rng[1] = max(rng[1], ta, tb)
+            self._bead_off_glass(b, blade, tb)
+        if seg.event is not None:
+            for b, blade in enumerate(self.blades):
+                self._end_of_stroke(b, blade, float(blade.angle(seg.p_end)), seg.event)
+
+    def _swept_cells(self, b: int, blade: Blade, lo: float, hi: float) -> np.ndarray:
+        order, phi_sorted, r_c = self._cells_by_angle[b]
+        cand = order[np.searchsorted(phi_sorted, lo, "left") : np.searchsorted(phi_sorted, hi, "right")]
+        r = r_c[cand]
+        return np.sort(cand[(r >= blade.r_inner_m) & (r <= blade.r_outer_m)])
+
+    def _bead_off_glass(self, b: int, blade: Blade, angle: float) -> None:
+        """Water pushed past an edge of the glass leaves it: wiped (the reference's, on cached bin radii)."""
+        bead = self.beads[b]
+        if not bead.any():
+            return
+        r = self._bin_r[b]
+        s = blade.pivot[0] + r * math.cos(angle)
+        t = blade.pivot[1] + r * math.sin(angle)
+        off = ~self._inside(s, t)
+        if off.any():
+            self.wiped += float(bead[off].sum())
+            bead[off] = 0.0
