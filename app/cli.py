@@ -36,9 +36,14 @@ accepted values:
                its flag with a space or '=' (--seconds=-1) and is refused with the flag's range
   --size       WIDTHxHEIGHT in pixels, 'x' or 'X' between them (1280x720, 1280X720), each in [16, 8192]
   --screenshot a .png file in an existing, writable folder; not a folder itself
-  --record     a folder (created if missing) in an existing, writable folder
+  --record     a folder (created if missing) in an existing, writable folder: PNG frames; or a
+               FILE.mp4: H.264 video (needs PyAV: pip install 'rainroad[video]'; even width and height)
+  --labels     with --record: depth, masks and labels of every frame (NPZ + one JSON line a frame) in
+               the record folder, or in FILE.labels/ beside FILE.mp4 (layout: rain_core/session/dataset.py)
   file names   every part of a path at most 255 bytes long
-  --seconds    a long run prints its frame count and a time estimate on stderr, then its progress
+  --quality    offline: each frame averages --subframes renders across the shutter (camera.exposure_s)
+  --seconds    on a terminal a run shows its progress (frames, frames/s, time left) on stderr;
+               not on a terminal (logs) it stays quiet
 """
 
 
@@ -102,7 +107,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="headless: simulation and recording frame rate, in [1, 240] frames/s")
     p.add_argument("--seed", type=_int_in(0, 2**31 - 1), default=1, help="world, traffic and rain seed")
     p.add_argument("--screenshot", type=_path, help="headless: write the last frame to this PNG")
-    p.add_argument("--record", type=_path, metavar="DIR", help="headless: write every frame as DIR/frame_00000.png")
+    p.add_argument("--record", type=_path, metavar="DIR|FILE.mp4",
+                   help="headless: write every frame as DIR/frame_00000.png, or as H.264 video to FILE.mp4")
+    p.add_argument("--quality", choices=("realtime", "offline"), default="realtime",
+                   help="headless: offline averages --subframes sub-frames across the shutter per frame "
+                        "(motion blur, anti-aliasing; N times slower)")
+    p.add_argument("--subframes", type=_int_in(1, 256), default=16,
+                   help="headless, --quality offline: sub-frames per frame, in [1, 256] (see rain_core.bench offline)")
+    p.add_argument("--labels", action="store_true",
+                   help="headless, with --record: write depth, masks and labels of every frame beside it")
     p.add_argument("--camera", choices=CAMERA_MODES, help="camera mode (default: driver)")
     p.add_argument("--hour", type=_finite(0.0, 24.0, "h"), help="time of day in hours, in [0, 24] (12 noon, 22 night)")
     p.add_argument("--traffic", type=_int_in(0, 20), help="number of traffic vehicles, in [0, 20]")
@@ -174,10 +187,10 @@ def _probe_folder(folder: Path) -> str | None:
     return None
 
 
-def check_output_file(path: Path) -> str | None:
-    """Why a PNG cannot be written at ``path``, or None. Creates nothing (a probe file is removed again)."""
-    if path.suffix.lower() != ".png":
-        return f"must end in .png, got {quote(str(path))}"
+def check_output_file(path: Path, suffix: str = ".png") -> str | None:
+    """Why a ``suffix`` file cannot be written at ``path``, or None. Creates nothing (a probe file is removed)."""
+    if path.suffix.lower() != suffix:
+        return f"must end in {suffix}, got {quote(str(path))}"
     problem = _name_problem(path)
     if problem:
         return problem
@@ -189,7 +202,7 @@ def check_output_file(path: Path) -> str | None:
         return f"cannot use {path}: {exc.strerror or exc}"
     if st is not None:
         if stat.S_ISDIR(st.st_mode):
-            return f"{path} is a folder; name a .png file"
+            return f"{path} is a folder; name a {suffix} file"
         if not stat.S_ISREG(st.st_mode):
             return f"{path} exists and is not a regular file"
         try:
@@ -228,6 +241,24 @@ def check_input_file(path: Path) -> str | None:
     return None
 
 
+def check_record(args) -> str | None:
+    """Why ``--record`` cannot be written (see check_output_file / check_output_folder), or None. An .mp4 needs
+    PyAV and an even frame size; its labels go to a folder beside it, checked too."""
+    from app.recording import VIDEO_INSTALL, have_pyav, is_video_path, labels_folder
+
+    if not is_video_path(args.record):
+        return check_output_folder(args.record)
+    if not have_pyav():
+        return f"writing {args.record.suffix} video needs PyAV, which is not installed: {VIDEO_INSTALL}"
+    w, h = args.size
+    if w % 2 or h % 2:
+        return f"H.264 video needs an even width and height, got --size {w}x{h}"
+    problem = check_output_file(args.record, args.record.suffix.lower())
+    if problem is None and args.labels:
+        problem = check_output_folder(labels_folder(args.record))
+    return problem
+
+
 def parse_args(argv=None) -> argparse.Namespace:
     """Parse and validate; on bad input argparse prints the flag and the reason and exits with code 2."""
     parser = build_parser()
@@ -239,7 +270,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     # Output paths are checked before minutes of rendering, not after.
     if args.screenshot is not None and (problem := check_output_file(args.screenshot)):
         parser.error(f"argument --screenshot: {problem}")
-    if args.record is not None and (problem := check_output_folder(args.record)):
+    if args.record is not None and (problem := check_record(args)):
         parser.error(f"argument --record: {problem}")
+    if args.labels and args.record is None:
+        parser.error("argument --labels: only with --record (the labels are written beside the frames)")
     args.parser = parser
     return args

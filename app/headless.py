@@ -1,39 +1,30 @@
-"""``python -m app --headless``: the same scene without a window, autopilot driving, frames to PNG.
+"""``python -m app --headless``: the same scene without a window, autopilot driving, frames to PNG or MP4.
 
-A long run (more than LONG_RUN_FRAMES frames) prints one line on stderr after its first few frames — the frame
-count and an estimate of the time it will take, from the pace of frames 2–5 (the first one compiles shaders) —
-then a progress line every PROGRESS_EVERY_S seconds. Ctrl-C stops it
-cleanly (the frames written so far stay).
+A thin user of ``rain_core.Session``: step, capture (with the label images under ``--labels``), write. On a
+terminal a progress line (frames, frames/s, ETA) is rewritten in place, and a long run (more than
+LONG_RUN_FRAMES frames) first says how long it will take from the pace of frames 2–5 (the first one compiles
+shaders); not on a terminal (logs, CI) it stays quiet. Ctrl-C stops it cleanly: the PNGs and label lines written
+so far stay, and a video is finalised with every frame written so far (exit 130). ``--quality offline`` steps
+each frame's shutter in ``--subframes`` slices and records their average (rain_core.session.offline).
 """
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 
-from app.recording import Recorder, save_png
-from rain_core.gl import GLUnavailableError, create_headless_context
-from rain_core.scene import MAX_FRAME_DT_S, Scene
+from app.recording import Progress, describe_duration, is_video_path, labels_folder, open_recorder, save_png
+from rain_core.gl import GLUnavailableError
 
-LONG_RUN_FRAMES = 300  # above this many frames a run says how long it will take and shows its progress
-PROGRESS_EVERY_S = 30.0  # s of wall time between progress lines
+LONG_RUN_FRAMES = 300  # above this many frames a run on a terminal says how long it will take
 PACE_FRAMES = 4  # frames after the first one that set the estimate
+
+__all__ = ["LONG_RUN_FRAMES", "describe_duration", "frame_count", "plan_line", "run_headless"]
 
 
 def frame_count(seconds: float, fps: float) -> int:
     """Frames a run of ``seconds`` simulated seconds renders at ``fps`` (at least one)."""
     return max(1, round(seconds * fps))
-
-
-def describe_duration(seconds: float) -> str:
-    """A wall time in words: "45 s", "12 min 5 s", "3 h 20 min"."""
-    s = max(0, round(seconds))
-    if s < 60:
-        return f"{s} s"
-    if s < 3600:
-        return f"{s // 60} min {s % 60} s"
-    return f"{s // 3600} h {s % 3600 // 60} min"
 
 
 def plan_line(frames: int, fps: float, size: tuple[int, int], seconds_per_frame: float) -> str:
@@ -47,62 +38,86 @@ def _say(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
+def _close_all(*things) -> None:
+    for thing in things:
+        if thing is not None:
+            thing.close()
+
+
 def run_headless(args, settings) -> int:
+    from rain_core.session import DatasetWriter, Session
+
+    mode = settings.camera.mode
     try:
-        ctx = create_headless_context()
+        # "free" needs a user at the keys; headless it is the chase view, as in the window without input.
+        sim = Session(args.size, seed=args.seed, camera="chase" if mode == "free" else mode, settings=settings)
     except GLUnavailableError as exc:
-        print(f"rainroad: {exc}", file=sys.stderr)
+        _say(f"rainroad: {exc}")
         return 1
-    # No GPU timer queries: nobody reads them here (--panel turns them on while its table is drawn).
-    scene = Scene(ctx, args.size, settings=settings, seed=args.seed, gpu_timing=False)
+    with sim:
+        return _run(args, sim, DatasetWriter)
+
+
+def _run(args, sim, DatasetWriter) -> int:
+    record, labels = args.record, getattr(args, "labels", False)
+    recorder = writer = None
+    try:
+        if record is not None:
+            recorder = open_recorder(record, args.fps, args.size, labels=labels)
+            if labels:
+                video = record if is_video_path(record) else None
+                writer = DatasetWriter(labels_folder(record), args.fps, images=video is None, video=video)
+    except (OSError, ValueError) as exc:  # checked by the command line; this is a folder that changed since
+        _say(f"rainroad: argument --record: cannot write {record}: {getattr(exc, 'strerror', None) or exc}")
+        _close_all(recorder, writer)
+        return 1
     panel = None
     if args.panel:
         from app.panel import RainManagerPanel
 
-        panel = RainManagerPanel(ctx, args.size, scene)
-    try:
-        recorder = Recorder(args.record) if args.record else None
-    except OSError as exc:  # checked by the command line; this is a folder that changed since
-        _say(f"rainroad: argument --record: cannot create {args.record}: {exc.strerror or exc}")
-        scene.release()
-        return 1
+        panel = RainManagerPanel(sim.ctx, args.size, sim.scene)
     dt = 1.0 / args.fps
+    subframes = args.subframes if getattr(args, "quality", "realtime") == "offline" else 1
     frames = frame_count(args.seconds, args.fps)
-    substeps = max(1, math.ceil(dt / MAX_FRAME_DT_S))  # Scene.step clamps a frame to MAX_FRAME_DT_S
-    long_run = frames > LONG_RUN_FRAMES
+    progress = Progress(frames)
     status = 0
-    start = last_report = first_done = time.perf_counter()
+    done = 0
+    first_done = time.perf_counter()
     try:
         for index in range(frames):
-            for _ in range(substeps):
-                scene.step(dt / substeps)
-            # Effects keep GPU state (ripples, glass water), so every simulated frame is rendered.
-            scene.render()
+            sim.step(dt, subframes=subframes)
             if panel is not None:
-                panel.draw(dt, scene.renderer.ldr)
+                panel.draw(dt, sim.scene.renderer.ldr)
+            cap = sim.capture(labels=labels)
             if recorder is not None:
-                recorder.add(scene.image())
+                recorder.add(cap.rgb)
+            if writer is not None:
+                writer.add(cap)
             if index == frames - 1 and args.screenshot:
-                path = save_png(scene.image(), args.screenshot)
+                path = save_png(cap.rgb, args.screenshot)
                 print(f"rainroad: wrote {path}")
-            now = time.perf_counter()
+            done = index + 1
             if index == 0:
-                first_done = now
-            elif long_run and index == PACE_FRAMES:
-                _say(plan_line(frames, args.fps, args.size, (now - first_done) / PACE_FRAMES))
-            elif long_run and now - last_report >= PROGRESS_EVERY_S:
-                left = (now - start) / (index + 1) * (frames - index - 1)
-                _say(f"rainroad: frame {index + 1}/{frames}, about {describe_duration(left)} left")
-                last_report = now
+                first_done = time.perf_counter()
+            elif progress.enabled and frames > LONG_RUN_FRAMES and index == PACE_FRAMES:
+                progress.finish()
+                _say(plan_line(frames, args.fps, args.size, (time.perf_counter() - first_done) / PACE_FRAMES))
+            progress.update(done)
     except KeyboardInterrupt:
-        _say(f"rainroad: stopped after {index} of {frames} frames")
+        progress.finish()
+        _say(f"rainroad: stopped after {done} of {frames} frames")
         status = 130
     except OSError as exc:  # the disk filled up, or a folder changed under the run
+        progress.finish()
         _say(f"rainroad: cannot write a frame: {exc.strerror or exc}")
         status = 1
-    if recorder is not None:
-        print(f"rainroad: wrote {recorder.count} frames to {recorder.folder}")
-    if panel is not None:
-        panel.layer.shutdown()
-    scene.release()
+    finally:
+        progress.finish()
+        _close_all(recorder, writer)  # finalises the video: every frame written so far decodes
+        if panel is not None:
+            panel.layer.shutdown()
+    if recorder is not None or writer is not None:
+        count = (writer or recorder).count
+        print(f"rainroad: wrote {count} frames to {record}" + (f" (labels in {labels_folder(record)})"
+                                                               if writer is not None else ""))
     return status

@@ -206,3 +206,74 @@ def test_long_runs_announce_frames_and_an_estimate():
     assert "30000 frames" in line and "1000 s at 30 frames/s" in line and "about 2 h 5 min" in line
     assert "\n" not in line
     assert describe_duration(59.6) == "1 min 0 s" and describe_duration(3) == "3 s"
+
+
+# --- issue 15: --record FILE.mp4 and --labels are checked before any rendering ---------------------------
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--record", "{tmp}/folder.mp4"], "is a folder; name a .mp4 file"),
+    (["--record", "{tmp}/missing/out.mp4"], "does not exist"),
+    (["--record", "{tmp}/file.txt/out.mp4"], "not a folder"),
+    (["--record", "{tmp}/" + "a" * 252 + ".mp4"], "at most 255"),
+    (["--record", "/proc/out.mp4"], "cannot write"),
+    (["--record", "{tmp}/out.mp4", "--size", "65x48"], "even width and height"),
+    (["--record", "{tmp}/taken.mp4", "--labels"], "not a folder"),  # taken.labels is a file
+])
+def test_bad_video_paths_exit_2_before_rendering(tmp_path, capsys, argv, fragment):
+    pytest.importorskip("av", reason="PyAV not installed: the .mp4 checks start with it")
+    (tmp_path / "folder.mp4").mkdir()
+    (tmp_path / "file.txt").write_text("x")
+    (tmp_path / "taken.labels").write_text("x")
+    before = sorted(tmp_path.rglob("*"))
+    code, err = parse_error(["--headless", *(a.format(tmp=tmp_path) for a in argv)], capsys)
+    assert code == 2 and "argument --record" in err and fragment in err, err
+    assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_mp4_without_pyav_exits_2_naming_the_flag_and_the_install(tmp_path, capsys, monkeypatch):
+    import app.recording
+
+    monkeypatch.setattr(app.recording, "have_pyav", lambda: False)
+    code, err = parse_error(["--headless", "--record", str(tmp_path / "out.mp4")], capsys)
+    assert code == 2 and "argument --record" in err and "PyAV" in err and "pip install 'rainroad[video]'" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_labels_need_record(capsys, tmp_path):
+    code, err = parse_error(["--headless", "--labels"], capsys)
+    assert code == 2 and "argument --labels: only with --record" in err
+    code, err = parse_error(["--labels", "--record", str(tmp_path / "r")], capsys)
+    assert code == 2 and "only with --headless" in err
+
+
+def test_good_video_paths_pass_and_create_nothing(tmp_path):
+    pytest.importorskip("av", reason="PyAV not installed: the .mp4 checks start with it")
+    from app.cli import parse_args
+
+    args = parse_args(["--headless", "--record", str(tmp_path / "out.MP4"), "--labels", "--size", "64x48"])
+    assert args.labels and args.record.name == "out.MP4"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_headless_mp4_decodes_to_n_frames(tmp_path):
+    av = pytest.importorskip("av", reason="PyAV not installed (pip install 'rainroad[video]')")
+    out = tmp_path / "out.mp4"
+    result = run_app("--headless", "--size", "64x48", "--seconds", "0.4", "--fps", "10", "--traffic", "0",
+                     "--record", str(out))
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""  # not a terminal: no progress lines in logs
+    with av.open(str(out)) as container:
+        assert sum(1 for _ in container.decode(video=0)) == 4
+
+
+def test_quality_and_subframes_are_checked(capsys):
+    from app.cli import parse_args
+
+    for argv, fragment in ((["--quality", "best"], "argument --quality: invalid choice"),
+                           (["--subframes", "0"], "argument --subframes: must be in [1, 256]"),
+                           (["--subframes", "2.5"], "argument --subframes")):
+        code, err = parse_error(["--headless", *argv], capsys)
+        assert code == 2 and fragment in err, err
+    args = parse_args(["--headless", "--quality", "offline", "--subframes", "8"])
+    assert args.quality == "offline" and args.subframes == 8
