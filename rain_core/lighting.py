@@ -58,11 +58,27 @@ def sun_elevation_deg(hour: float) -> float:
         -35.0 * math.sin(math.pi * ((hour - 18.0) % 24.0) / 12.0)
 
 
+_LIGHTING_CACHE: dict[tuple[float, float], Lighting] = {}
+
+
 def lighting_for_hour(hour: float, overcast: float = 0.0) -> Lighting:
     """Sun and sky for ``hour`` in [0, 24) (12 = noon, 22 = night). ``overcast`` in [0, 1] dims and greys the sun
-    and sky (the atmosphere effect drives it from the rain)."""
+    and sky (the atmosphere effect drives it from the rain). The result's arrays are read-only: a frame's
+    lighting is the same object while the hour and the overcast stay (every frame at a fixed hour)."""
     if not math.isfinite(hour):
         raise ValueError(f"hour must be finite, got {hour!r}")
+    key = (float(hour), float(overcast))
+    lighting = _LIGHTING_CACHE.get(key)
+    if lighting is None:
+        if len(_LIGHTING_CACHE) > 64:
+            _LIGHTING_CACHE.clear()
+        lighting = _LIGHTING_CACHE[key] = _lighting_for_hour(*key)
+        for array in (lighting.sun_direction, lighting.sun_illuminance, lighting.sky_zenith, lighting.sky_horizon):
+            array.flags.writeable = False
+    return lighting
+
+
+def _lighting_for_hour(hour: float, overcast: float) -> Lighting:
     hour = hour % 24.0
     elev = math.radians(sun_elevation_deg(hour))
     azim = math.pi * (hour - 6.0) / 12.0  # east (+X) at 6 h, south (+Z) at noon, west at 18 h
@@ -160,16 +176,41 @@ def _lens_table(spec) -> np.ndarray:
     return table[1]
 
 
-def light_set_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift_z: float, period_m: float,
-                        headlights_on: bool, max_lights: int = MAX_LIGHTS) -> LightSet:
-    """``lights_for_frame`` as a ``LightSet`` (arrays, vectorised): what the renderer uses every frame."""
-    cam = np.asarray(camera_position, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
+_VEHICLE_TABLES: dict = {}
+
+
+def _vehicle_table(vehicles) -> tuple:
+    """What the lights of a vehicle list hold whatever the vehicles do, built once per list of specs: local lens
+    centres (n, 4, 3) and, per light (4n: two heads then two tails per vehicle), cd, colour, cones and kind."""
+    specs = tuple(v.spec for v in vehicles)
+    key = tuple(id(spec) for spec in specs)
+    entry = _VEHICLE_TABLES.get(key)
+    if entry is None or any(a is not b for a, b in zip(entry[0], specs, strict=True)):
+        if len(_VEHICLE_TABLES) > 8:
+            _VEHICLE_TABLES.clear()
+        n = len(specs)
+        is_head = np.tile([True, True, False, False], n)
+        entry = _VEHICLE_TABLES[key] = (
+            specs, np.stack([_lens_table(spec) for spec in specs]), is_head,
+            np.where(is_head, _HEAD_CD, _TAIL_CD), np.where(is_head[:, None], _HEAD_COLOR, _TAIL_COLOR),
+            np.where(is_head, _HEAD_CONE[0], _TAIL_CONE[0]), np.where(is_head, _HEAD_CONE[1], _TAIL_CONE[1]),
+            np.where(is_head, _HEAD_CONE[2], _TAIL_CONE[2]))
+        for array in entry[1:]:
+            array.flags.writeable = False  # shared by every frame's light set
+    return entry[1:]
+
+
+def light_candidates(lamps, vehicles, camera_z_m: float, lighting: Lighting, shift_z: float, period_m: float,
+                     headlights_on: bool) -> LightSet:
+    """Every light that may reach the camera's surroundings, in the wrapped frame (world z − ``shift_z``), before
+    the nearest are chosen: street lamps of the tiles within 250 m along z of ``camera_z_m`` (wrapped) at night,
+    and the vehicles' head and tail lights when ``headlights_on``."""
     parts: list[LightSet] = []
     if lighting.night_factor > 0.01 and len(lamps):
         pos, dirs, cd, color = _lamp_table(lamps)
         offsets = np.array([[0.0, 0.0, k * period_m] for k in (-1, 0, 1)])
         tiles = (pos[:, None, :] + offsets[None, :, :]).reshape(-1, 3)  # lamp-major, as the list was built
-        index = np.flatnonzero(np.abs(tiles[:, 2] - cam[2]) < 250.0)
+        index = np.flatnonzero(np.abs(tiles[:, 2] - camera_z_m) < 250.0)
         lamp = index // 3
         parts.append(_kind(tiles[index], dirs[lamp], cd[lamp] * lighting.night_factor, color[lamp], _LAMP_CONE,
                            False))
@@ -177,9 +218,9 @@ def light_set_for_frame(lamps, vehicles, camera_position, lighting: Lighting, sh
         from rain_core.vehicles import HEADLIGHT_PITCH_RAD
 
         n = len(vehicles)
-        yaw = np.array([v.yaw for v in vehicles], dtype=np.float64)
+        local, is_head, cd, color, cos_outer, cos_inner, range_m = _vehicle_table(vehicles)
+        yaw = np.fromiter((v.yaw for v in vehicles), dtype=np.float64, count=n)
         centre = np.array([v.position for v in vehicles], dtype=np.float64).reshape(n, 3)
-        local = np.stack([_lens_table(v.spec) for v in vehicles])  # (n, 4, 3): 2 heads then 2 tails
         c, s_ = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
         # Vehicle.model_matrix: rotation about +Y by yaw, [[c, 0, s], [0, 1, 0], [−s, 0, c]], then the position.
         lx, ly, lz = local[..., 0], local[..., 1], local[..., 2]
@@ -190,18 +231,26 @@ def light_set_for_frame(lamps, vehicles, camera_position, lighting: Lighting, sh
         pitch_c, pitch_s = math.cos(HEADLIGHT_PITCH_RAD), math.sin(HEADLIGHT_PITCH_RAD)
         head_dir = fwd * pitch_c + np.array([0.0, pitch_s, 0.0])
         dirs = np.stack([head_dir, head_dir, -fwd, -fwd], axis=1).reshape(4 * n, 3)
-        is_head = np.tile([True, True, False, False], n)
-        parts.append(LightSet(pos, dirs, np.where(is_head, _HEAD_CD, _TAIL_CD),
-                              np.where(is_head[:, None], _HEAD_COLOR, _TAIL_COLOR),
-                              np.where(is_head, _HEAD_CONE[0], _TAIL_CONE[0]),
-                              np.where(is_head, _HEAD_CONE[1], _TAIL_CONE[1]),
-                              np.where(is_head, _HEAD_CONE[2], _TAIL_CONE[2]), is_head))
+        parts.append(LightSet(pos, dirs, cd, color, cos_outer, cos_inner, range_m, is_head))
     if not parts:
         return _kind(np.zeros((0, 3)), np.zeros((0, 3)), 0.0, (0.0, 0.0, 0.0), (-1.0, -1.0, 0.0), False)
-    lights = parts[0] if len(parts) == 1 else LightSet(
+    return parts[0] if len(parts) == 1 else LightSet(
         *(np.concatenate([getattr(part, name) for part in parts]) for name in LightSet.__slots__))
+
+
+def nearest_lights(lights: LightSet, camera_position_wrapped, max_lights: int = MAX_LIGHTS) -> LightSet:
+    """The ``max_lights`` of ``lights`` nearest to the camera (wrapped frame), nearest first (stable order)."""
+    cam = np.asarray(camera_position_wrapped, dtype=np.float64)
     order = np.argsort(np.sum((lights.position - cam) ** 2, axis=1), kind="stable")[:max_lights]
     return lights.take(order)
+
+
+def light_set_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift_z: float, period_m: float,
+                        headlights_on: bool, max_lights: int = MAX_LIGHTS) -> LightSet:
+    """``lights_for_frame`` as a ``LightSet`` (arrays, vectorised): what the renderer uses every frame."""
+    cam = np.asarray(camera_position, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
+    candidates = light_candidates(lamps, vehicles, float(cam[2]), lighting, shift_z, period_m, headlights_on)
+    return nearest_lights(candidates, cam, max_lights)
 
 
 def lights_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift_z: float, period_m: float,
@@ -231,7 +280,8 @@ def pack_lights(lights, max_lights: int = MAX_LIGHTS) -> tuple[bytes, bytes, byt
     count = min(len(lights), max_lights)
     packed = np.zeros((3, max_lights, 4), np.float32)
     if count:
-        lights = lights.take(np.arange(count))
+        if count < len(lights):
+            lights = lights.take(np.arange(count))
         packed[0, :count, :3] = lights.position
         packed[0, :count, 3] = np.where(lights.low_beam, -lights.range_m, lights.range_m)
         packed[1, :count, :3] = lights.direction

@@ -361,6 +361,7 @@ def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_m
         gl_ms = tally.ns * 1e-6
         return {"cpu_ms": max(cpu_ms - gl_ms - tally.calls * ovh_ms, 0.0), "gl_ms": gl_ms,
                 "gl_calls": tally.gl_calls, "queries": tally.calls - tally.gl_calls,
+                "uniform_writes": tally.by_kind.get("uniform", 0),
                 "upload_kb": tally.upload_bytes / 1024, "uniform_kb": tally.uniform_bytes / 1024,
                 "read_kb": tally.read_bytes / 1024}
 
@@ -407,6 +408,7 @@ def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_m
 # --- report ------------------------------------------------------------------------------------------------
 
 _COLUMNS = (("CPU ms outside GL", "cpu_ms", "{:.2f}"), ("GL calls", "gl_calls", "{:.0f}"),
+            ("uniform writes", "uniform_writes", "{:.0f}"),
             ("upload KB", "upload_kb", "{:.1f}"), ("uniform KB", "uniform_kb", "{:.1f}"),
             ("ms inside GL", "gl_ms", "{:.2f}"), ("llvmpipe %", "gpu_share", "{:.0f}"))
 
@@ -438,10 +440,11 @@ def case_table(result: dict) -> str:
 
 def summary_table(results: list[dict]) -> str:
     body = [[f"{r['speed_kmh']:g}", f"{r['budget']:,}", f"{r['frame']['cpu_ms']:.2f}",
-             f"{r['frame']['gl_calls']:.0f}", f"{r['frame']['upload_kb']:.1f}", f"{r['frame']['uniform_kb']:.1f}",
+             f"{r['frame']['gl_calls']:.0f}", f"{r['frame'].get('uniform_writes', 0):.0f}",
+             f"{r['frame']['upload_kb']:.1f}", f"{r['frame']['uniform_kb']:.1f}",
              f"{r['frame']['gl_ms']:.1f}", f"{r['frame']['wall_ms']:.1f}"] for r in results]
-    return _table(["km/h", "streak budget", "CPU ms outside GL", "GL calls", "upload KB", "uniform KB",
-                   "ms inside GL", "frame wall ms (llvmpipe)"], body)
+    return _table(["km/h", "streak budget", "CPU ms outside GL", "GL calls", "uniform writes", "upload KB",
+                   "uniform KB", "ms inside GL", "frame wall ms (llvmpipe)"], body)
 
 
 def header(args, overhead_ns: float) -> str:

@@ -15,9 +15,10 @@ import moderngl
 import numpy as np
 
 from rain_core.camera import Camera
+from rain_core.gfx import frame_block
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import RenderTarget
-from rain_core.gfx.uniforms import mat4_bytes, set_uniform
+from rain_core.gfx.uniforms import mat4_bytes
 from rain_core.lighting import Lighting
 
 
@@ -118,6 +119,8 @@ class RenderContext:
     # (Effect.frame_uniforms) over the clear-air defaults, and the sun shadow map's.
     uniforms: dict = field(default_factory=dict)
     active: tuple = ()  # the effects that run this frame
+    # The renderer's uniform buffers for the frame block (rain_core.gfx.frame_block): set_frame_uniforms binds one.
+    frame_blocks: frame_block.FrameBlocks | None = None
 
     @property
     def view_proj(self) -> np.ndarray:
@@ -137,9 +140,9 @@ class RenderContext:
     def _frame_values(self) -> dict:
         """Camera, exposure, sun/sky and light values of this context, computed once (every program of the frame
         gets the same; ``view``/``projection`` replaced means a new context, see dataclasses.replace)."""
-        key = (id(self.view), id(self.projection), id(self.frame), id(self.lights))
+        key = (self.view, self.projection, self.frame, self.lights)
         cached = self.__dict__.get("_frame_cache")
-        if cached is not None and cached[0] == key:
+        if cached is not None and all(a is b for a, b in zip(cached[0], key, strict=True)):
             return cached[1]
         lighting = self.frame.lighting
         values = {
@@ -161,11 +164,44 @@ class RenderContext:
         self.__dict__["_frame_cache"] = (key, values)
         return values
 
+    def _frame_state(self) -> tuple[dict, bytes]:
+        """(every frame uniform: the frame's own values under ``uniforms``, the frame block's bytes), recomputed
+        only when the frame values or an entry of ``uniforms`` changed (compared by identity: cheap)."""
+        base = self._frame_values()
+        items = tuple(self.uniforms.items())
+        cached = self.__dict__.get("_state_cache")
+        if (cached is not None and cached[0] is base and len(cached[1]) == len(items)
+                and all(a[0] == b[0] and a[1] is b[1] for a, b in zip(cached[1], items, strict=True))):
+            return cached[2], cached[3]
+        merged = {**base, **self.uniforms}  # the frame's own uniforms (medium, shadow) take precedence
+        data = frame_block.pack(merged)
+        self.__dict__["_state_cache"] = (base, items, merged, data)
+        return merged, data
+
     def set_frame_uniforms(self, program: moderngl.Program) -> None:
-        """Camera, exposure, sun/sky, lights, atmosphere and shadow uniforms, where the program has them."""
-        values = self._frame_values()
-        for name, value in values.items():
-            if name not in self.uniforms:  # the frame's own uniforms (medium, shadow) take precedence
-                set_uniform(program, name, value)
-        for name, value in self.uniforms.items():
-            set_uniform(program, name, value)
+        """Camera, exposure, sun/sky, lights, atmosphere and shadow uniforms, where the program has them: the
+        frame block (shaders/common/frame.glsl) is bound, and names the program declares as plain uniforms
+        (samplers, a program's own light list, names outside the block) are written."""
+        values, data = self._frame_state()
+        blocks = self.frame_blocks
+        if blocks is None:
+            raise RuntimeError("this RenderContext has no frame_blocks: make it with Renderer.render_context")
+        info = blocks.program_info(program)
+        if info.has_block:
+            blocks.use(data)
+        for target, value in info.plain_values(values):
+            if isinstance(value, bytes):
+                target.write(value)
+            elif isinstance(value, np.ndarray):
+                target.write(np.ascontiguousarray(value, dtype=np.float32).tobytes())
+            else:
+                target.value = value
+
+    @property
+    def inv_view_proj(self) -> np.ndarray:
+        """inverse(projection @ view), computed once per context (sky and depth reconstruction passes)."""
+        key = (self.view, self.projection)
+        cached = self.__dict__.get("_inv_cache")
+        if cached is None or cached[0][0] is not key[0] or cached[0][1] is not key[1]:
+            cached = self.__dict__["_inv_cache"] = (key, np.linalg.inv(self.view_proj))
+        return cached[1]

@@ -19,14 +19,15 @@ import numpy as np
 
 from rain_core import layout
 from rain_core.gfx import units
-from rain_core.gfx.effect import STAGES
+from rain_core.gfx.effect import STAGES, Effect
 from rain_core.gfx.frame import Frame, PassStat, RenderContext, SharedResources
+from rain_core.gfx.frame_block import FrameBlocks
 from rain_core.gfx.scene_draw import SceneDrawer
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
 from rain_core.gfx.targets import RenderTarget, float_target
 from rain_core.gfx.timing import PassTimer
-from rain_core.lighting import light_set_for_frame, pack_lights
+from rain_core.lighting import light_candidates, nearest_lights, pack_lights
 from rain_core.physics import CLEAR_AIR_EXTINCTION_PER_M
 
 
@@ -69,6 +70,10 @@ class Renderer:
         self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._timers: dict[str, PassTimer] = {}
+        self.frame_blocks = FrameBlocks(ctx)
+        self._lights_cache = None  # (key, light candidates) of the frame being rendered
+        self._proj_cache = None  # (lens and size, projection matrix)
+        self._clear_air = None  # (lighting, its clear-air and no-shadow uniforms)
 
     @property
     def scene_prog(self) -> moderngl.Program:
@@ -112,15 +117,53 @@ class Renderer:
         self._make_targets()
 
     # --- views ----------------------------------------------------------------------------------------------
-    def render_context(self, frame: Frame, fbo_target: RenderTarget | None = None) -> RenderContext:
+    def render_context(self, frame: Frame, fbo_target: RenderTarget | None = None, *, view: np.ndarray | None = None,
+                       projection: np.ndarray | None = None, **fields) -> RenderContext:
+        """The context of a view of ``frame``: its camera's matrices (or ``view``/``projection`` as given, in the
+        wrapped frame), its lights, the clear-air and no-shadow defaults; ``fields``: other RenderContext fields
+        (``shared``, ``uniforms``, ``active``) taken as given."""
         camera = frame.camera
         shift_z = math.floor(float(camera.position[2]) / layout.PERIOD_M) * layout.PERIOD_M
-        view = camera.view_matrix(shift=(0.0, 0.0, shift_z))
-        proj = camera.projection_matrix(self.size[0] / self.size[1])
-        lights = light_set_for_frame(getattr(self.world, "lamps", []), frame.vehicles, camera.position,
-                                     frame.lighting, shift_z, layout.PERIOD_M, frame.headlights_on)
-        return RenderContext(self.ctx, self.shaders, frame, fbo_target or self.hdr, self.size, shift_z, view, proj,
-                             pack_lights(lights), self, uniforms={**clear_air_uniforms(frame.lighting), **NO_SHADOW})
+        if view is None:
+            view = camera.view_matrix(shift=(0.0, 0.0, shift_z))
+        if projection is None:
+            projection = self._projection(camera)
+        cam = np.asarray(camera.position, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
+        lights = nearest_lights(self._light_candidates(frame, shift_z, float(cam[2])), cam)
+        if "uniforms" not in fields:
+            fields["uniforms"] = self._default_uniforms(frame.lighting)
+        return RenderContext(self.ctx, self.shaders, frame, fbo_target or self.hdr, self.size, shift_z, view,
+                             projection, pack_lights(lights), self, frame_blocks=self.frame_blocks, **fields)
+
+    def _projection(self, camera) -> np.ndarray:
+        """camera.projection_matrix at this frame's aspect, kept while the lens and the size stay (read-only)."""
+        key = (camera.fov_y_deg, camera.near_m, camera.far_m, self.size)
+        if self._proj_cache is None or self._proj_cache[0] != key:
+            projection = camera.projection_matrix(self.size[0] / self.size[1])
+            projection.flags.writeable = False
+            self._proj_cache = (key, projection)
+        return self._proj_cache[1]
+
+    def _default_uniforms(self, lighting) -> dict:
+        """A new dict of the clear-air and no-shadow uniforms (built once per lighting object, copied per view:
+        the frame adds to it)."""
+        if self._clear_air is None or self._clear_air[0] is not lighting:
+            self._clear_air = (lighting, {**clear_air_uniforms(lighting), **NO_SHADOW})
+        return dict(self._clear_air[1])
+
+    def _light_candidates(self, frame: Frame, shift_z: float, camera_z: float):
+        """lighting.light_candidates, kept for the frame being rendered: the road's mirror view (same vehicles,
+        lighting and camera z) only sorts them again by distance to its camera."""
+        key = (frame.vehicles, frame.lighting, frame.headlights_on, shift_z, camera_z)
+        cached = self._lights_cache
+        if cached is not None and all(a is b or (type(a) is float and a == b)
+                                      for a, b in zip(cached[0], key, strict=True)):
+            return cached[1]
+        lights = light_candidates(getattr(self.world, "lamps", []), frame.vehicles, camera_z, frame.lighting,
+                                  shift_z, layout.PERIOD_M, frame.headlights_on)
+        if self.scene.in_frame:  # outside render() the vehicles may move between calls: nothing kept
+            self._lights_cache = (key, lights)
+        return lights
 
     def _draw_scene(self, rc: RenderContext, include_sky: bool = True, clip_plane=None) -> None:
         self.shadow.bind()  # re-bound per draw: a GPU simulation may have used the unit
@@ -132,9 +175,8 @@ class Renderer:
         through the main view's projection: a texel of ``target`` lies where the main camera sees the surface
         point that reflects it. ``camera``: the mirrored camera (its position lights the speculars);
         ``clip_plane`` (a, b, c, d) keeps what is on its positive side. Same effects, same shared value."""
-        mrc = dataclasses.replace(self.render_context(dataclasses.replace(rc.frame, camera=camera), target),
-                                  view=rc.view @ mirror, projection=rc.projection, shared=rc.shared,
-                                  uniforms=rc.uniforms, active=rc.active)
+        mrc = self.render_context(dataclasses.replace(rc.frame, camera=camera), target, view=rc.view @ mirror,
+                                  projection=rc.projection, shared=rc.shared, uniforms=rc.uniforms, active=rc.active)
         target.fbo.use()
         target.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
         self.ctx.disable(moderngl.CULL_FACE)
@@ -159,23 +201,44 @@ class Renderer:
 
     def render(self, frame: Frame) -> None:
         """Run every pass of one frame into the HDR target and tone-map it."""
+        self.scene.begin_frame()
+        try:
+            self._render(frame)
+        finally:
+            self.scene.end_frame()
+            self._lights_cache = None
+
+    def _render(self, frame: Frame) -> None:
         ctx = self.ctx
         self.stats = []
         self.scene.forget_vehicles(frame.vehicles)
+        observed = {}
         for effect in self.effects:
-            effect.observe(frame)
+            if type(effect).observe is Effect.observe:  # the base class's: nothing to do, nothing to time
+                continue
+            self._timed(f"{effect.name}.observe", lambda e=effect: e.observe(frame))
+            observed[effect] = self.stats.pop()
         active = tuple(e for e in self.effects if e.active(frame))
+        # An effect's observe is its own work (the spray evaluates its water model there): listed with its passes
+        # while it runs; an idle effect keeps its one "not run" row.
+        self.stats.extend(observed[e] for e in active if e in observed)
         self.stats.extend(PassStat(e.name, False) for e in self.effects if e not in active)
         rc = self.render_context(frame)
         rc.active = active
         rc.shared = SharedResources()
         for effect in active:  # e.g. the rain medium, which every program of the frame sees
             rc.uniforms.update(effect.frame_uniforms(frame))
+        note = [""]
+
+        def update(effect):  # describe() is the effect's cost too: timed with its update
+            effect.update(frame, rc)
+            note[0] = effect.describe()
+
         for effect in active:
-            self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
-            self.stats[-1].note = effect.describe()
+            self._timed(f"{effect.name}.update", lambda e=effect: update(e))
+            self.stats[-1].note = note[0]
         if sun_is_up(frame.lighting):
-            self._timed("shadow", lambda: rc.uniforms.update(self.shadow.render(rc, self.scene.draw_list(rc, False))))
+            self._timed("shadow", lambda: rc.uniforms.update(self.shadow.render(rc, self.scene.draw_items(rc, False))))
         else:  # the sun is down: nothing casts a sun shadow
             self.stats.append(PassStat("shadow", False))
         for effect in active:
@@ -245,6 +308,7 @@ class Renderer:
         self.scene.release()
         for obj in (self._tonemap_vao, self._blit_vao):
             obj.release()
+        self.frame_blocks.release()
         self._timers.clear()  # moderngl queries have no release(); they go with their context
         if self._owns_shaders:
             self.shaders.release()

@@ -14,7 +14,7 @@ import numpy as np
 from rain_core import layout
 from rain_core.gfx.frame import RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import mat4_bytes
+from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms
 from rain_core.mesh import VERTEX_ATTRIBUTES, VERTEX_FORMAT
 
 # Share of direct sun/lamp light that reaches the cabin interior (the roof and pillars shade most of it).
@@ -31,6 +31,7 @@ def _tile_model(k: int) -> np.ndarray:
 
 
 _TILE_MODELS = tuple(_tile_model(k) for k in (-1, 0, 1))  # the world tile one period behind, here, ahead
+_TILE_BYTES = {k: mat4_bytes(m) for k, m in zip((-1, 0, 1), _TILE_MODELS, strict=True)}
 
 
 @dataclass
@@ -60,6 +61,8 @@ class SceneDrawer:
         # id(vehicle) → (vehicle, mesh): holding the vehicle keeps its id from being reused by a new one.
         self._vehicles: dict[int, tuple[object, GpuMesh]] = {}
         self._cabin: list[tuple[GpuMesh, float]] | None = None
+        self._items: dict | None = None  # the frame's draw items while the renderer draws a frame
+        self._models: dict | None = None  # and its vehicles' model bytes
 
     # --- geometry -------------------------------------------------------------------------------------------
     def _mesh(self, vertices: np.ndarray) -> GpuMesh:
@@ -117,6 +120,62 @@ class SceneDrawer:
             for mesh, share in self._cabin_meshes(frame.ego):
                 yield mesh, model, share
 
+    def begin_frame(self) -> None:
+        """From now until ``end_frame`` the frame's draw items are kept: the shadow pass, the scene and the road's
+        mirror view draw the same vehicles, so each model matrix is built and packed once per frame."""
+        self._items = {}
+        self._models = {}
+
+    def end_frame(self) -> None:
+        self._items = None
+        self._models = None
+
+    @property
+    def in_frame(self) -> bool:
+        """Between ``begin_frame`` and ``end_frame``."""
+        return self._items is not None
+
+    def _model_bytes(self, vehicle, shift_z: float) -> bytes:
+        """The vehicle's model matrix in the wrapped frame as ``u_model`` bytes (kept for the frame)."""
+        models = self._models
+        if models is not None:
+            hit = models.get(id(vehicle))
+            if hit is not None and hit[0] is vehicle and hit[1] == shift_z:
+                return hit[2]
+        model = vehicle.model_matrix().copy()
+        model[2, 3] -= shift_z
+        data = mat4_bytes(model)
+        if models is not None:
+            models[id(vehicle)] = (vehicle, shift_z, data)
+        return data
+
+    def draw_items(self, rc: RenderContext, include_cabin: bool) -> list:
+        """``draw_list`` with each model matrix as the bytes ``u_model`` takes; between ``begin_frame`` and
+        ``end_frame`` computed once per (vehicles, camera tile, cabin or not)."""
+        frame = rc.frame
+        cabin = bool(include_cabin and frame.camera.inside_car)
+        cam_z = float(rc.camera_position[2])
+        tiles = tuple(abs(cam_z - (k * layout.PERIOD_M + layout.PERIOD_M / 2)) <= layout.PERIOD_M * 1.5
+                      for k in (-1, 0, 1))
+        key = (cabin, rc.shift_z, tiles)
+        cache = self._items
+        if cache is not None:
+            hit = cache.get(key)
+            # the cached entry holds the vehicle list and ego it was built from: compared by identity
+            if hit is not None and hit[0] is frame.vehicles and hit[1] is frame.ego:
+                return hit[2]
+        items = [(self._world, _TILE_BYTES[k], 1.0) for k, on in zip((-1, 0, 1), tiles, strict=True) if on]
+        for vehicle in frame.vehicles:
+            if cabin and vehicle is frame.ego:
+                continue
+            items.append((self._vehicle_mesh(vehicle), self._model_bytes(vehicle, rc.shift_z), 1.0))
+        if cabin and frame.ego is not None:
+            model = self._model_bytes(frame.ego, rc.shift_z)
+            items += [(mesh, model, share) for mesh, share in self._cabin_meshes(frame.ego)]
+        if cache is not None:
+            cache[key] = (frame.vehicles, frame.ego, items)
+        return items
+
     # --- drawing --------------------------------------------------------------------------------------------
     def draw(self, rc: RenderContext, effects, include_sky: bool = True,
              clip_plane: tuple[float, float, float, float] | None = None) -> None:
@@ -127,13 +186,16 @@ class SceneDrawer:
         if include_sky:
             ctx.disable(moderngl.DEPTH_TEST)
             rc.set_frame_uniforms(self.sky_prog)
-            self.sky_prog["u_inv_view_proj"].write(mat4_bytes(np.linalg.inv(rc.view_proj)))
+            self.sky_prog["u_inv_view_proj"].write(mat4_bytes(rc.inv_view_proj))
             self._sky_vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable(moderngl.DEPTH_TEST)
         prog = self.scene_prog
         rc.set_frame_uniforms(prog)
         # Clip plane (reflection passes): keep dot((x, y, z, 1), plane) >= 0, wrapped-frame world positions.
-        prog["u_clip_plane"].value = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
+        # The scene drawer alone writes u_clip_plane and u_direct_scale in this program: owned_uniforms skips
+        # unchanged values (the main and the mirror view alternate the plane; only the cabin changes the scale).
+        owned = owned_uniforms(prog)
+        owned.set("u_clip_plane", (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane)))
         if clip_plane is not None:
             ctx.enable_direct(GL_CLIP_DISTANCE0)
         for effect in effects:
@@ -141,15 +203,11 @@ class SceneDrawer:
                 effect.bind_scene(prog, rc)
             else:
                 effect.unbind_scene(prog, rc)
-        model_u, scale_u = prog["u_model"], prog["u_direct_scale"]
-        scale_u.value = current = 1.0
-        for mesh, model, share in self.draw_list(rc, include_cabin=True):
-            model_u.write(mat4_bytes(model))
-            if share != current:  # only the cabin's interior differs: no write per mesh
-                scale_u.value = current = share
+        model_u, set_owned = prog["u_model"], owned.set
+        for mesh, model, share in self.draw_items(rc, include_cabin=True):
+            model_u.write(model)
+            set_owned("u_direct_scale", share)
             mesh.vao.render(moderngl.TRIANGLES, vertices=mesh.count)
-        if current != 1.0:
-            scale_u.value = 1.0
         if clip_plane is not None:
             ctx.disable_direct(GL_CLIP_DISTANCE0)
 

@@ -33,3 +33,45 @@ def set_uniforms(program, values: dict | None = None, /, **named) -> None:
 def mat4_bytes(m) -> bytes:
     """A row-major NumPy 4×4 (or 3×3) matrix → the column-major float32 bytes GLSL expects."""
     return np.ascontiguousarray(np.asarray(m, dtype=np.float32).T).tobytes()
+
+
+_MISSING = object()
+
+
+class OwnedUniforms:
+    """Writes uniforms of one program that a single owner alone sets (e.g. the road's ``u_road_*`` in the scene
+    program), skipping a write whose value equals the one this object wrote last: most of them do not change
+    from frame to frame. Anything else writing the same names in the same program would make it skip wrongly."""
+
+    __slots__ = ("program", "_last")
+
+    def __init__(self, program):
+        self.program = program
+        self._last: dict[str, object] = {}
+
+    def set(self, name: str, value) -> None:
+        if isinstance(value, np.ndarray):
+            value = np.ascontiguousarray(value, dtype=np.float32).tobytes()
+        last = self._last.get(name, _MISSING)
+        if type(last) is type(value) and last == value:
+            return
+        set_uniform(self.program, name, value)
+        self._last[name] = value
+
+    def update(self, values: dict) -> None:
+        for name, value in values.items():
+            self.set(name, value)
+
+
+_OWNED: dict[int, OwnedUniforms] = {}
+
+
+def owned_uniforms(program) -> OwnedUniforms:
+    """The one ``OwnedUniforms`` of ``program``, shared by every owner instance (two road effects drawing through
+    one shader library's scene program must see each other's writes)."""
+    owned = _OWNED.get(program.glo)
+    if owned is None or owned.program is not program:  # a released program's GL name may be reused
+        if len(_OWNED) > 256:
+            _OWNED.clear()  # forgetting only costs a write
+        owned = _OWNED[program.glo] = OwnedUniforms(program)
+    return owned

@@ -4,14 +4,8 @@
 // effect (its frame_uniforms) raises β with the rain rate and the haze, makes the airlight rain-grey, and adds
 // the sun's forward-peaked share. Its extra terms are 0 when it is off, and then every function below equals
 // plain apply_atmosphere.
-uniform float u_extinction_per_m;  // 1/m, total: clear air + rain + haze
-uniform vec3 u_airlight;           // cd/m², isotropic airlight (the surroundings' mean radiance)
-uniform float u_medium_extinction_per_m;  // 1/m, the rain + haze share of β (0 in clear air)
-uniform vec3 u_airlight_sun;       // lux: sun illuminance × (medium β / total β), weights the phase function
-uniform vec3 u_airlight_sun_dir;   // unit, towards the sun
-uniform float u_phase_g;           // Henyey–Greenstein asymmetry of the forward lobe (0 isotropic … 1 forward)
-uniform float u_phase_back_g;      // asymmetry of the backward lobe (< 0)
-uniform float u_phase_back_weight; // its weight (0: a single forward lobe)
+// β, the airlights and the phase lobes are members of the frame block:
+#include "common/frame.glsl"
 
 // Height of the scattering layer (m): the sky is seen through this much rain/haze straight up.
 const float ATMOSPHERE_LAYER_M = 1000.0;

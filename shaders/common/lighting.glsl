@@ -2,19 +2,16 @@
 #include "common/brdf.glsl"
 #include "common/sky.glsl"
 
-#define MAX_LIGHTS 32
-uniform vec4 u_light_pos[MAX_LIGHTS];    // xyz m, w range m (negative: a low-beam headlight, see below)
-uniform vec4 u_light_dir[MAX_LIGHTS];    // xyz unit, w cos(outer cone) (-1 = point light)
-uniform vec4 u_light_color[MAX_LIGHTS];  // rgb = colour × intensity (cd), w cos(inner cone)
-uniform int u_light_count;
+// The lights (u_light_pos/dir/color[MAX_LIGHTS], u_light_count) are frame-block members (frame.glsl).
+#include "common/frame.glsl"
 // Direct light (sun, lamps) reaching this draw: 1 outdoors; < 1 inside the cabin, whose roof and pillars shade
 // it from the lamps (which cast no shadow maps; the sun's shadow map adds the roof's shadow on top).
 uniform float u_direct_scale = 1.0;
 
 // Sun shadow map (renderer.py): depth seen from the sun around the camera, compared in hardware.
 uniform sampler2DShadow u_shadow_map;
-uniform mat4 u_shadow_matrix;   // wrapped world → shadow map [0, 1]³
-uniform vec3 u_shadow_params;   // on (1/0), texel size (1/px), depth bias
+// u_shadow_matrix (wrapped world → shadow map [0, 1]³) and u_shadow_params (on 1/0, texel size 1/px, depth
+// bias) are frame-block members; the sampler cannot be.
 
 // Share of the sun's disc visible from p (3×3 PCF); 1 outside the map or with shadows off.
 float sun_visibility(vec3 p, vec3 N) {

@@ -1,9 +1,6 @@
 // Analytic sky (cd/m²): a zenith–horizon gradient, a glow around the sun, the sun disk, a dark ground below.
-uniform vec3 u_sun_dir;        // towards the sun
-uniform vec3 u_sun_illum;      // lux, perpendicular to the rays
-uniform vec3 u_sky_zenith;     // cd/m²
-uniform vec3 u_sky_horizon;    // cd/m²
-uniform float u_ground_albedo;
+// The sun and sky (u_sun_dir, u_sun_illum, u_sky_zenith, u_sky_horizon, u_ground_albedo) are frame-block members.
+#include "common/frame.glsl"
 
 vec3 sky_radiance(vec3 dir, bool with_sun) {
     float up = dir.y;

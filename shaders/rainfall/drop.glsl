@@ -4,6 +4,7 @@
 // and headlights towards the eye; for a drop of radius r lit with illuminance E the scattered intensity is
 // E·πr²·p(θ)/4π, i.e. luminance E·p(θ)/4π over its disc. p: two-term Henyey–Greenstein, the same as the
 // atmosphere effect's (forward lobe g = 0.7, back lobe g = −0.5 weighted so p(180°)/4π = 1/18.8 sr).
+#define FRAME_OWN_LIGHTS  // the effect sets only the lights that reach its boxes (effect.py _lights)
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
 #include "common/atmosphere.glsl"

@@ -19,6 +19,8 @@ def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
         assert math.isfinite(frame[key]) and frame[key] >= 0.0, key
     assert frame["cpu_ms"] > 0.0 and frame["wall_ms"] >= frame["cpu_ms"]
     assert "scene" in result["rows"] and result["rows"]["scene"]["gl_calls"] > 0
+    # uniform writes are GL calls too (the scene pass writes at least each mesh's model matrix)
+    assert 0 < result["rows"]["scene"]["uniform_writes"] < result["rows"]["scene"]["gl_calls"]
     assert result["rows"]["sim: scene.step"]["cpu_ms"] > 0.0
     for row in result["rows"].values():
         assert all(math.isfinite(v) for v in row.values())

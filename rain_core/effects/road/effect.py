@@ -13,7 +13,7 @@ from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext, WaterNormals
 from rain_core.gfx.targets import float_target
-from rain_core.gfx.uniforms import mat4_bytes, set_uniform, set_uniforms
+from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform
 from rain_core.settings import RoadSection
 from rain_core.water_film import (
     crack_level,
@@ -23,6 +23,9 @@ from rain_core.water_film import (
     shelter_map_for,
     smooth_heightmap_for,
 )
+
+# The scene shader's dry path (the road effect inactive).
+_UNBOUND = {"u_road_wet": 0.0, "u_road_mirror": 0.0, "u_road_debug": 0.0, "u_road_reflect": 0.0}
 
 
 class RoadEffect(Effect):
@@ -68,6 +71,9 @@ class RoadEffect(Effect):
         self._levels = (0.0, 0.0, 0.0)
         self._road = None
         self._waves = (0.0, 0.0, 0.0)
+        self._film_values = None  # (levels key, film uniforms) last bound
+        self._scene_static = None  # (settings key, scene uniforms that only the settings change)
+        self._cabin_spec = None  # (car spec, cabin box)
 
     def set_world(self, world) -> None:
         """Take the road heightmap and roofs of ``world`` (done on the first update from ``frame.world`` when
@@ -138,9 +144,13 @@ class RoadEffect(Effect):
             raise RuntimeError("RoadEffect has no world yet: call set_world or render a frame first")
         self._height_tex.use(units.ROAD_HEIGHT)
         self._maps(int(seed)).use(units.ROAD_MAPS)
-        set_uniforms(program, u_road_height=units.ROAD_HEIGHT, u_road_maps=units.ROAD_MAPS,
-                     u_road_levels=(float(wetness), crack_level(cracks), puddle_level(puddles, puddle_amount), 0.0),
-                     u_road_height_extent=tuple(float(v) for v in self.world.heightmap_extent_m))
+        key = (float(wetness), float(cracks), float(puddles), float(puddle_amount))
+        if self._film_values is None or self._film_values[0] != key or self._film_values[2] is not self.world:
+            self._film_values = (key, {
+                "u_road_height": units.ROAD_HEIGHT, "u_road_maps": units.ROAD_MAPS,
+                "u_road_levels": (key[0], crack_level(cracks), puddle_level(puddles, puddle_amount), 0.0),
+                "u_road_height_extent": tuple(float(v) for v in self.world.heightmap_extent_m)}, self.world)
+        owned_uniforms(program).update(self._film_values[1])
 
     # --- per frame ---
     def update(self, frame: Frame, rc: RenderContext) -> None:
@@ -197,51 +207,68 @@ class RoadEffect(Effect):
 
     # --- the scene shader's inputs ---
     def bind_scene(self, program: moderngl.Program, rc: RenderContext) -> None:
+        # The road alone writes u_road_* in the scene program: owned_uniforms skips values it wrote last (most
+        # stay from frame to frame; the mirror view and the main view differ in a few).
         road = self._road if self._road is not None else self._road_settings(rc.frame)
         w, c, p = self._levels
         mirror = self._mirror_pass
         self.bind_film_uniforms(program, w, c, p, road.puddle_amount, road.puddle_seed)
-        set_uniforms(program, u_road_wet=1.0, u_road_mirror=1.0 if mirror else 0.0,
-                     u_road_debug=1.0 if road.debug_regions else 0.0, u_road_reflection=units.ROAD_REFLECTION,
-                     u_road_ripples=units.ROAD_RIPPLES, u_road_rain_rings=units.ROAD_RAIN_RINGS,
-                     u_road_waves=self._waves)
+        out = owned_uniforms(program)
+        out.update(self._scene_values(road))
+        out.set("u_road_mirror", 1.0 if mirror else 0.0)
         if self._reflection_valid and not mirror:
             self._reflection.color.use(units.ROAD_REFLECTION)
-            set_uniform(program, "u_road_reflect", 1.0)
+            out.set("u_road_reflect", 1.0)
         else:
             self._black.use(units.ROAD_REFLECTION)  # never the texture being drawn into
-            set_uniform(program, "u_road_reflect", 0.0)
+            out.set("u_road_reflect", 0.0)
         proj = rc.projection
-        set_uniform(program, "u_road_proj_scale", (0.5 * float(proj[0, 0]), 0.5 * float(proj[1, 1])))
+        out.set("u_road_proj_scale", (0.5 * float(proj[0, 0]), 0.5 * float(proj[1, 1])))
         ripple = None if mirror else (self._ripple if self._ripple_explicit else rc.shared.water_normals)
         if ripple is not None:
             ripple.texture.use(units.ROAD_RIPPLES)
             ox, oz = (float(v) for v in ripple.origin_xz_m)
-            set_uniform(program, "u_road_ripple_window", (ox, oz - rc.shift_z, float(ripple.extent_m), 1.0))
+            out.set("u_road_ripple_window", (ox, oz - rc.shift_z, float(ripple.extent_m), 1.0))
         else:
             self._black.use(units.ROAD_RIPPLES)
-            set_uniform(program, "u_road_ripple_window", (0.0, 0.0, 1.0, 0.0))
+            out.set("u_road_ripple_window", (0.0, 0.0, 1.0, 0.0))
         rings = None if mirror else rc.shared.rain_rings
         if rings is not None:
             rings.texture.use(units.ROAD_RAIN_RINGS)
-            set_uniform(program, "u_road_rain_rings_tile", (float(rings.tile_m), 1.0))
+            out.set("u_road_rain_rings_tile", (float(rings.tile_m), 1.0))
         else:
             self._black.use(units.ROAD_RAIN_RINGS)
-            set_uniform(program, "u_road_rain_rings_tile", (1.0, 0.0))
+            out.set("u_road_rain_rings_tile", (1.0, 0.0))
         ego = rc.frame.ego
         if rc.frame.camera.inside_car and ego is not None and not mirror:
-            from rain_core.car_mesh import windshield_frame
-
             model = ego.model_matrix().copy()
             model[2, 3] -= rc.shift_z
-            cowl = windshield_frame(ego.spec)["bottom_center"]
-            set_uniform(program, "u_road_cabin", mat4_bytes(np.linalg.inv(model)))
-            set_uniform(program, "u_road_cabin_box", (float(cowl[2]) + 0.02, 0.2, ego.spec.width_m / 2 + 0.05, 1.0))
+            out.set("u_road_cabin", mat4_bytes(np.linalg.inv(model)))
+            out.set("u_road_cabin_box", self._cabin_box(ego.spec))
         else:
-            set_uniform(program, "u_road_cabin_box", (0.0, 0.0, 0.0, 0.0))
+            out.set("u_road_cabin_box", (0.0, 0.0, 0.0, 0.0))
+
+    def _scene_values(self, road) -> dict:
+        """The scene shader's road inputs that only the settings change (units, debug view, waves)."""
+        key = (bool(road.debug_regions), self._waves)
+        if self._scene_static is None or self._scene_static[0] != key:
+            self._scene_static = (key, {
+                "u_road_wet": 1.0, "u_road_debug": 1.0 if key[0] else 0.0,
+                "u_road_reflection": units.ROAD_REFLECTION, "u_road_ripples": units.ROAD_RIPPLES,
+                "u_road_rain_rings": units.ROAD_RAIN_RINGS, "u_road_waves": self._waves})
+        return self._scene_static[1]
+
+    def _cabin_box(self, spec) -> tuple:
+        """(cowl z + 2 cm, 0.2, half width + 5 cm, 1): where the cabin hides the road (per car spec)."""
+        if self._cabin_spec is None or self._cabin_spec[0] is not spec:
+            from rain_core.car_mesh import windshield_frame
+
+            cowl = windshield_frame(spec)["bottom_center"]
+            self._cabin_spec = (spec, (float(cowl[2]) + 0.02, 0.2, spec.width_m / 2 + 0.05, 1.0))
+        return self._cabin_spec[1]
 
     def unbind_scene(self, program: moderngl.Program, rc: RenderContext) -> None:
-        set_uniforms(program, u_road_wet=0.0, u_road_mirror=0.0, u_road_debug=0.0, u_road_reflect=0.0)
+        owned_uniforms(program).update(_UNBOUND)
 
     # --- GPU twin of film_depth_mm ---
     def film_depth_gpu(self, x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, wetness=0.0) -> np.ndarray:

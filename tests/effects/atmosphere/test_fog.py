@@ -12,6 +12,7 @@ import pytest
 from rain_core import physics
 from rain_core.camera import look_at
 from rain_core.effects import atmosphere as atm
+from rain_core.gfx import frame_block
 from rain_core.gfx.renderer import clear_air_uniforms
 from rain_core.lighting import lighting_for_hour
 from rain_core.settings import AtmosphereSection, Settings
@@ -104,13 +105,11 @@ def test_no_rain_no_haze_skips_the_pass_and_a_rate_drop_returns_to_clear_air(gl_
     frame = kit.frame(camera, world, settings, 0.0, 22.0)
     r.render(frame)
     np.testing.assert_array_equal(r.hdr_image(), clear)
-    # The shared scene and sky programs are back at the clear air, and the idle effect holds no medium.
+    # The frame block every program reads is back at the clear air, and the idle effect holds no medium.
     assert r.effects[0].state is None
+    values = frame_block.unpack(r.frame_blocks.read_bound())
     for name, value in clear_air_uniforms(frame.lighting).items():
-        programs = [p for p in (r.scene.scene_prog, r.scene.sky_prog) if name in p]
-        assert programs, name
-        for prog in programs:
-            np.testing.assert_allclose(prog[name].value, value, rtol=1e-6)
+        np.testing.assert_allclose(values[name], value, rtol=1e-6)
     kit.release(r, plain)
 
 

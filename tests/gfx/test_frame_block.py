@@ -1,0 +1,226 @@
+"""The frame block (shaders/common/frame.glsl): the Python std140 layout is the one GL uses, every program of a
+frame reads it, programs with their own lights still get plain uniforms, and renderers sharing a context or a
+shader library do not see each other's values."""
+
+import dataclasses
+
+import moderngl
+import numpy as np
+import pytest
+
+from rain_core.effects.road import RoadEffect
+from rain_core.gfx import frame_block
+from rain_core.gfx.frame_block import BLOCK_BYTES, BLOCK_BYTES_OWN_LIGHTS, BLOCK_WORDS, FRAME_BLOCK_LAYOUT
+from rain_core.gfx.renderer import Renderer
+from rain_core.gfx.uniforms import OwnedUniforms, owned_uniforms
+from rain_core.scene import Scene
+from rain_core.settings import Settings, set_value
+
+SIZE = (96, 54)
+
+
+def _random_values(rng) -> dict:
+    values = {}
+    for name, (_offset, count, kind) in FRAME_BLOCK_LAYOUT.items():
+        if kind == "i":
+            values[name] = int(rng.integers(1, 32))
+        elif kind == "b":
+            values[name] = rng.uniform(-100.0, 100.0, count).astype(np.float32).tobytes()
+        else:
+            v = rng.uniform(-100.0, 100.0, count)
+            values[name] = float(v[0]) if count == 1 else tuple(float(x) for x in v)
+    return values
+
+
+def _readback_shader() -> str:
+    """A fragment shader writing word i of the block (read by member name) into pixel x = i."""
+    branches = []
+    for name, (offset, count, kind) in FRAME_BLOCK_LAYOUT.items():
+        if kind == "i":
+            branches.append(f"if (i == {offset}) v = float({name});")
+        elif name.startswith("u_light_"):  # vec4[MAX_LIGHTS]
+            branches.append(f"if (i >= {offset} && i < {offset + count}) "
+                            f"v = {name}[(i - {offset}) / 4][(i - {offset}) % 4];")
+        elif kind == "b":  # mat4: column-major words
+            branches.append(f"if (i >= {offset} && i < {offset + 16}) "
+                            f"v = {name}[(i - {offset}) / 4][(i - {offset}) % 4];")
+        elif count == 1:
+            branches.append(f"if (i == {offset}) v = {name};")
+        else:
+            branches.append(f"if (i >= {offset} && i < {offset + count}) v = {name}[i - {offset}];")
+    body = "\n    ".join(branches)
+    return ("#version 330 core\n#include \"common/frame.glsl\"\nout vec4 f_color;\nvoid main() {\n"
+            f"    int i = int(gl_FragCoord.x);\n    float v = -1.0e30;\n    {body}\n    f_color = vec4(v);\n}}\n")
+
+
+def test_python_layout_is_the_std140_layout_gl_reads(gl_ctx, shaders, tmp_path):
+    (tmp_path / "readback.frag").write_text(_readback_shader())
+    source = shaders.preprocess(str(tmp_path / "readback.frag")).text
+    prog = gl_ctx.program(vertex_shader=shaders.preprocess("common/fullscreen.vert").text, fragment_shader=source)
+    assert prog["FrameBlock"].size == BLOCK_BYTES
+    values = _random_values(np.random.default_rng(3))
+    data = frame_block.pack(values)
+    assert len(data) == BLOCK_BYTES
+    buffer = gl_ctx.buffer(data)
+    target = gl_ctx.texture((BLOCK_WORDS, 1), 4, dtype="f4")
+    fbo = gl_ctx.framebuffer(color_attachments=[target])
+    vao = gl_ctx.vertex_array(prog, [])
+    try:
+        buffer.bind_to_uniform_block(frame_block.BINDING)
+        prog["FrameBlock"].binding = frame_block.BINDING
+        fbo.use()
+        gl_ctx.disable(moderngl.BLEND)
+        vao.render(moderngl.TRIANGLES, vertices=3)
+        got = np.frombuffer(fbo.read(components=4, dtype="f4"), np.float32).reshape(-1, 4)[:, 0]
+    finally:
+        gl_ctx.detect_framebuffer(0).use()
+        for obj in (vao, fbo, target, buffer, prog):
+            obj.release()
+    expected = np.frombuffer(data, np.float32).copy()
+    count_at = FRAME_BLOCK_LAYOUT["u_light_count"][0]
+    expected[count_at] = float(values["u_light_count"])  # an int member: the shader wrote float(int)
+    members = np.zeros(BLOCK_WORDS, bool)  # std140 padding words are not members
+    for offset, count, _ in FRAME_BLOCK_LAYOUT.values():
+        members[offset:offset + count] = True
+    np.testing.assert_array_equal(got[members], expected[members])
+    unpacked = frame_block.unpack(data)
+    assert unpacked["u_light_count"] == values["u_light_count"]
+    assert unpacked["u_exposure"] == pytest.approx(values["u_exposure"], rel=1e-6)
+
+
+def test_scene_programs_read_the_block_and_rainfall_keeps_its_own_lights(gl_ctx):
+    settings = Settings()
+    set_value(settings, "rain.rate_mm_h", 8.0)
+    scene = Scene(gl_ctx, SIZE, settings=settings, seed=1)
+    try:
+        scene.step(1 / 30)
+        frame = scene.render()
+        renderer = scene.renderer
+        for prog in (renderer.scene.scene_prog, renderer.scene.sky_prog):
+            assert prog["FrameBlock"].size == BLOCK_BYTES
+            assert prog.get("u_view_proj", None) is None and prog.get("u_light_pos", None) is None
+        rainfall = next(e for e in scene.effects if e.name == "rainfall")
+        streak = rainfall.streak_prog
+        assert streak["FrameBlock"].size == BLOCK_BYTES_OWN_LIGHTS  # FRAME_OWN_LIGHTS: lights are plain
+        assert streak.get("u_light_pos", None) is not None
+        # set_frame_uniforms writes the frame's lights into a program that declares them plainly
+        rc = renderer.render_context(frame)
+        rc.set_frame_uniforms(streak)
+        assert streak["u_light_count"].value == rc.lights[3]
+        assert streak["u_light_pos"].read() == rc.lights[0]
+        # and binds a buffer holding this context's block
+        rc.set_frame_uniforms(renderer.scene.scene_prog)
+        values = frame_block.unpack(renderer.frame_blocks.read_bound())
+        assert values["u_light_count"] == rc.lights[3]
+        assert values["u_time"] == pytest.approx(frame.time_s, rel=1e-6)
+        np.testing.assert_allclose(values["u_camera_pos"], rc.camera_position, rtol=1e-6)
+        # the shadow's uniforms (frame uniforms added after the context was made) reach the block too
+        rc.uniforms["u_shadow_params"] = (1.0, 0.25, 0.5)
+        rc.set_frame_uniforms(renderer.scene.scene_prog)
+        assert frame_block.unpack(renderer.frame_blocks.read_bound())["u_shadow_params"] == (1.0, 0.25, 0.5)
+    finally:
+        scene.release()
+
+
+def _scene(gl_ctx, hour: float) -> Scene:
+    """No effects: their simulations step at every render, so only the built-in scene draws the same twice."""
+    settings = Settings()
+    set_value(settings, "time_of_day.hour", hour)
+    return Scene(gl_ctx, SIZE, settings=settings, seed=2, gpu_timing=False, effects=[])
+
+
+def test_two_renderers_on_one_context_alternate_without_mixing_their_frames(gl_ctx):
+    noon, night = _scene(gl_ctx, 12.0), _scene(gl_ctx, 22.0)
+    try:
+        for scene in (noon, night):
+            scene.step(1 / 30)
+        f_noon, f_night = noon.frame(), night.frame()
+        noon.renderer.render(f_noon)
+        first = noon.renderer.hdr_image()
+        night.renderer.render(f_night)
+        other = night.renderer.hdr_image()
+        noon.renderer.render(f_noon)
+        again = noon.renderer.hdr_image()
+        np.testing.assert_array_equal(again, first)
+        assert np.abs(other - first).max() > 0.01
+    finally:
+        noon.release()
+        night.release()
+
+
+def test_road_uniforms_skipped_only_when_unchanged_across_effects_sharing_a_program(gl_ctx):
+    """Two renderers share one shader library (so one scene program) with a road effect each, at different
+    puddle amounts: the road's skip-unchanged writes must not leave one road's values for the other."""
+    a = Scene(gl_ctx, SIZE, settings=_scene_settings(0.9), seed=2, gpu_timing=False,
+              effects=[RoadEffect(gl_ctx, _scene_settings(0.9))])
+    settings_b = _scene_settings(0.2)
+    rb = Renderer(gl_ctx, SIZE, a.world, effects=[RoadEffect(gl_ctx, settings_b)], shaders=a.renderer.shaders,
+                  gpu_timing=False)
+    try:
+        a.step(1 / 30)
+        fa = a.frame()
+        fb = dataclasses.replace(fa, settings=settings_b)
+        a.renderer.render(fa)
+        first = a.renderer.hdr_image()
+        rb.render(fb)
+        other = rb.hdr_image()
+        a.renderer.render(fa)
+        np.testing.assert_array_equal(a.renderer.hdr_image(), first)
+        assert np.abs(other - first).max() > 0.0
+    finally:
+        rb.release()
+        a.release()
+
+
+def _scene_settings(puddle_amount: float) -> Settings:
+    settings = Settings()
+    set_value(settings, "time_of_day.hour", 12.0)
+    for level in ("wetness", "cracks", "puddles"):
+        set_value(settings, f"rain.{level}", 1.0)
+    set_value(settings, "road.puddle_amount", puddle_amount)
+    return settings
+
+
+class _Counting:
+    def __init__(self):
+        self.writes = []
+
+    def get(self, name, default=None):
+        return _Uniform(self.writes, name)
+
+
+class _Uniform:
+    def __init__(self, writes, name):
+        self.writes, self.name = writes, name
+
+    def write(self, data):
+        self.writes.append((self.name, data))
+
+    @property
+    def value(self):
+        return None
+
+    @value.setter
+    def value(self, v):
+        self.writes.append((self.name, v))
+
+
+def test_owned_uniforms_skip_only_equal_values():
+    prog = _Counting()
+    owned = OwnedUniforms(prog)
+    owned.set("u_a", 1.0)
+    owned.set("u_a", 1.0)
+    owned.set("u_a", 2.0)
+    owned.set("u_b", (1.0, 2.0))
+    owned.set("u_b", (1.0, 2.0))
+    owned.set("u_c", np.array([1.0, 2.0]))
+    owned.set("u_c", np.array([1.0, 2.0]))
+    owned.set("u_c", np.array([1.0, 3.0]))
+    owned.set("u_d", 1)
+    owned.set("u_d", 1.0)  # another type: written (an int and a float uniform are different things)
+    assert [w[0] for w in prog.writes] == ["u_a", "u_a", "u_b", "u_c", "u_c", "u_d", "u_d"]
+
+
+def test_owned_uniforms_are_one_per_program_object(gl_ctx, shaders):
+    prog = shaders.program("core/scene.vert", "core/scene.frag")
+    assert owned_uniforms(prog) is owned_uniforms(prog)

@@ -1,0 +1,122 @@
+"""The render path's per-frame shortcuts give what the plain computations give: draw items (kept for a frame) equal
+the draw list, the lights chosen from cached candidates are the nearest, the lighting of an hour is one read-only
+object, and an effect's observe is timed with its passes only while it runs."""
+
+import numpy as np
+import pytest
+
+from rain_core import layout
+from rain_core.gfx.effect import Effect
+from rain_core.gfx.uniforms import mat4_bytes
+from rain_core.lighting import (
+    MAX_LIGHTS,
+    light_candidates,
+    light_set_for_frame,
+    lighting_for_hour,
+    lights_for_frame,
+    nearest_lights,
+    pack_lights,
+)
+from rain_core.scene import Scene
+from rain_core.settings import Settings, set_value
+
+SIZE = (64, 36)
+
+
+def _scene(gl_ctx, camera="driver", hour=12.0, effects=None, traffic=None):
+    settings = Settings()
+    set_value(settings, "camera.mode", camera)
+    set_value(settings, "time_of_day.hour", hour)
+    if traffic is not None:
+        set_value(settings, "traffic.count", traffic)
+    return Scene(gl_ctx, SIZE, settings=settings, seed=3, gpu_timing=False,
+                 effects=[] if effects is None else effects)
+
+
+@pytest.mark.parametrize("camera", ["driver", "chase"])
+def test_draw_items_are_the_draw_list_inside_and_outside_a_frame(gl_ctx, camera):
+    scene = _scene(gl_ctx, camera)
+    try:
+        scene.step(1 / 30)
+        frame = scene.frame()
+        drawer = scene.renderer.scene
+        rc = scene.renderer.render_context(frame)
+        for cabin in (True, False):
+            plain = [(m, mat4_bytes(model), share) for m, model, share in drawer.draw_list(rc, cabin)]
+            assert drawer.draw_items(rc, cabin) == plain  # outside a frame: computed
+            drawer.begin_frame()
+            try:
+                first = drawer.draw_items(rc, cabin)
+                assert first == plain and drawer.draw_items(rc, cabin) is first  # kept for the frame
+            finally:
+                drawer.end_frame()
+        assert len(drawer.draw_items(rc, True)) != len(drawer.draw_items(rc, False)) or camera == "chase"
+    finally:
+        scene.release()
+
+
+def test_nearest_of_the_candidates_are_the_lights_of_the_frame(gl_ctx):
+    scene = _scene(gl_ctx, hour=22.0, traffic=12)
+    try:
+        rng = np.random.default_rng(5)
+        for _ in range(5):
+            scene.step(0.5)
+            frame = scene.frame()
+            cam = np.asarray(frame.camera.position) + rng.uniform(-3.0, 3.0, 3)
+            shift = np.floor(cam[2] / layout.PERIOD_M) * layout.PERIOD_M
+            wrapped = cam - [0.0, 0.0, shift]
+            cand = light_candidates(scene.world.lamps, frame.vehicles, float(wrapped[2]), frame.lighting, shift,
+                                    layout.PERIOD_M, True)
+            assert len(cand) > MAX_LIGHTS  # a street at night with traffic: more lights than the shader takes
+            chosen = nearest_lights(cand, wrapped)
+            d_all = np.sort(np.sum((cand.position - wrapped) ** 2, axis=1))
+            d_chosen = np.sum((chosen.position - wrapped) ** 2, axis=1)
+            np.testing.assert_array_equal(d_chosen, d_all[:MAX_LIGHTS])  # the nearest, nearest first
+            packed = pack_lights(light_set_for_frame(scene.world.lamps, frame.vehicles, cam, frame.lighting,
+                                                     shift, layout.PERIOD_M, True))
+            assert packed == pack_lights(lights_for_frame(scene.world.lamps, frame.vehicles, cam, frame.lighting,
+                                                          shift, layout.PERIOD_M, True))
+    finally:
+        scene.release()
+
+
+def test_lighting_of_an_hour_is_one_read_only_object():
+    a, b = lighting_for_hour(12.0, 0.25), lighting_for_hour(12.0, 0.25)
+    assert a is b and lighting_for_hour(12.0, 0.5) is not a
+    with pytest.raises(ValueError):
+        a.sun_direction[0] = 0.0
+    with pytest.raises(ValueError, match="hour"):
+        lighting_for_hour(float("nan"))
+
+
+class _Watcher(Effect):
+    """Observes every frame; runs only while ``on``."""
+
+    name = "watcher"
+
+    def __init__(self):
+        self.on = False
+        self.seen = 0
+
+    def observe(self, frame):
+        self.seen += 1
+
+    def active(self, frame):
+        return self.on
+
+
+def test_observe_is_timed_with_its_effect_only_while_it_runs(gl_ctx):
+    watcher = _Watcher()
+    scene = _scene(gl_ctx, effects=[watcher])
+    try:
+        scene.step(1 / 30)
+        scene.render()
+        rows = {name: ran for name, ran, *_ in scene.renderer.pass_table()}
+        assert watcher.seen == 1 and rows["watcher"] is False and "watcher.observe" not in rows
+        watcher.on = True
+        scene.render()
+        rows = {name: ran for name, ran, *_ in scene.renderer.pass_table()}
+        assert watcher.seen == 2 and rows["watcher.observe"] is True and rows["watcher.update"] is True
+        assert "watcher" not in rows
+    finally:
+        scene.release()
