@@ -1,6 +1,8 @@
 """Sampling raindrop arrivals on the glass without a search (the fast path, ``sim.WindshieldSim``): the
 flux-weighted size law of one rain rate and glass motion as a bucket table over its cumulative distribution, so a
-sample is a gather instead of ``np.interp``'s binary search; only the far tail searches."""
+sample is a gather instead of ``np.interp``'s binary search; only the far tail searches. The bucket table is built
+only when a sample is large enough to repay it (the law changes nearly every frame while the car accelerates,
+and a frame's few hundred samples search the 512-point CDF faster than the table is built)."""
 
 from __future__ import annotations
 
@@ -9,12 +11,13 @@ import numpy as np
 from rain_core.effects.windshield.reference import _D_GRID_MM
 
 _CDF_BUCKETS = 4096
+_TABLE_FROM = 4096  # samples at least this large use the bucket table; smaller ones search (the same intervals)
 
 
 class ArrivalTable:
     """The flux-weighted size law of one rain rate and glass motion, ready to sample without a search: the
     reference's (closing speed, CDF) over the diameter grid, the slopes ``np.interp`` would use, and for each of
-    _CDF_BUCKETS equal slices of the CDF the first grid interval it meets."""
+    _CDF_BUCKETS equal slices of the CDF the first grid interval it meets (built on the first large sample)."""
 
     def __init__(self, closing: np.ndarray, cdf: np.ndarray):
         self.total = float(cdf[-1])
@@ -23,6 +26,10 @@ class ArrivalTable:
             self.d_slope = np.diff(_D_GRID_MM) / np.diff(cdf)  # inf on flat stretches: never selected
         self.c_slope = np.diff(closing) / np.diff(_D_GRID_MM)
         self.closing = closing
+        self.first = None
+
+    def _build_buckets(self) -> None:
+        cdf = self.cdf
         edges = np.arange(_CDF_BUCKETS + 1) * (self.total / _CDF_BUCKETS)
         j = np.searchsorted(cdf, edges, "right") - 1
         self.first = np.minimum(np.maximum(j[:-1] - 1, 0), len(cdf) - 2)  # one interval of slack for rounding
@@ -34,6 +41,11 @@ class ArrivalTable:
         """Diameters (mm) at the CDF quantiles ``u`` ∈ [0, 1) (as np.interp on the CDF gives them), and their
         closing speeds (m/s)."""
         x = u * self.total
+        if len(u) < _TABLE_FROM:
+            j = np.searchsorted(self.cdf, x, "right") - 1  # the interval the bucket walk below finds
+            return self._interpolate(j, x)
+        if self.first is None:
+            self._build_buckets()
         k = np.minimum((u * _CDF_BUCKETS).astype(np.int64), _CDF_BUCKETS - 1)
         j = self.first[k]
         for _ in range(self.steps):
@@ -41,6 +53,9 @@ class ArrivalTable:
         wide = self.span[k] > self.steps
         if wide.any():  # the far tail of the law, where one bucket spans many grid intervals
             j[wide] = np.searchsorted(self.cdf, x[wide], "right") - 1
+        return self._interpolate(j, x)
+
+    def _interpolate(self, j: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         j = np.minimum(j, len(self.cdf) - 2)
         d = self.d_slope[j] * (x - self.cdf[j]) + _D_GRID_MM[j]
         closing = self.c_slope[j] * (d - _D_GRID_MM[j]) + self.closing[j]

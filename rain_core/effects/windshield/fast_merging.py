@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from rain_core.effects.windshield.constants import drop_radius
-from rain_core.effects.windshield.drop_rows import CELL as _CELL
+from rain_core.effects.windshield.drop_rows import PLACED as _PLACED
 from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
 from rain_core.effects.windshield.drop_rows import VS as _VS
 from rain_core.effects.windshield.drop_rows import VT as _VT
@@ -23,28 +23,49 @@ class FastMerging:
 
     def _merge(self, start: np.ndarray, disp: np.ndarray) -> None:
         """Join drops that touched during the step (closest approach of their motions ≤ sum of radii); see
-        ``merging``. Candidate pairs come from ``grid.PairFinder``; the groups are formed on the drops that
-        touch only."""
+        ``merging``: ``start`` and ``disp`` (k, 2) m for the first k drops (the reference's form)."""
+        k = len(start)
+        self._merge_moves(k, np.arange(k), start[:, 0], start[:, 1], disp[:, 0], disp[:, 1])
+        self._remove_merged()
+
+    def _remove_merged(self) -> None:
+        """Remove the drops the last merge joined into others (``_merge_moves`` leaves their rows in place)."""
+        gone = self._merged_away
+        if gone is not None:
+            self._merged_away = None
+            keep = np.ones(self._n, bool)
+            keep[gone] = False
+            self._keep(keep)
+
+    def _merge_moves(self, n_moved: int, go, s_g, t_g, ds_g, dt_g) -> None:
+        """``_merge`` with the step's motion as columns (``_move``): of the first ``n_moved`` drops, those in
+        ``go`` started at (s_g, t_g) and moved by (ds_g, dt_g) m; the others stayed where they are. Candidate
+        pairs come from ``grid.PairFinder``; the groups are formed on the drops that touch only."""
         n = self._n
         fresh = self._fresh_buf[:n]
         if n < 2:
             fresh[:] = False
             return
-        n_moved = len(start)
-        if n_moved < n:  # trail droplets born during the step: tested from the next sub-step on
-            start = np.concatenate([start, self.pos[n_moved:]])
-            disp = np.concatenate([disp, np.zeros((n - n_moved, 2))])
-        s0, t0, ds, dt_ = start[:, 0], start[:, 1], disp[:, 0], disp[:, 1]
-        active = (ds != 0.0) | (dt_ != 0.0) | fresh
+        d = self._buf[:n]
+        a = d[:, _A]
+        # Dense columns of the motion (trail droplets born during the step, from n_moved on, rest this time
+        # and are tested from the next sub-step on). What did not move keeps its own position and reach.
+        s0, t0, reach = d[:, _S].copy(), d[:, _T].copy(), a.copy()
+        ds, dt_ = np.zeros(n), np.zeros(n)
+        active = fresh.copy()
         active[n_moved:] = False
         fresh[:n_moved] = False
         fresh[n_moved:] = True
+        mid_s, mid_t = s0.copy(), t0.copy()
+        if len(go):
+            s0[go], t0[go], ds[go], dt_[go] = s_g, t_g, ds_g, dt_g
+            active[go[(ds_g != 0.0) | (dt_g != 0.0)]] = True
+            reach[go] = a[go] + 0.5 * np.sqrt(ds_g * ds_g + dt_g * dt_g)
+            mid_s[go] = s_g + 0.5 * ds_g
+            mid_t[go] = t_g + 0.5 * dt_g
         if not active.any():
             return
-        d = self._buf[:n]
-        a = d[:, _A]
-        reach = a + 0.5 * np.sqrt(ds * ds + dt_ * dt_)
-        i, j, deferred = self._pairs.pairs(s0 + 0.5 * ds, t0 + 0.5 * dt_, reach, active, d[:, _S], d[:, _T], a)
+        i, j, deferred = self._pairs.pairs(mid_s, mid_t, reach, active, d[:, _S], d[:, _T], a)
         if deferred is not None:  # over the work budget: those drops are tested again next sub-step
             deferred[n_moved:] = False
             fresh |= deferred
@@ -84,10 +105,8 @@ class FastMerging:
             d[r, c] = np.bincount(slot, weights=wm * rows[:, c], minlength=len(nodes))[grown] / g_mass
         d[r, _M] = g_mass
         d[r, _A] = drop_radius(g_mass)
-        d[r, _CELL] = self._cells(d[r, _S], d[r, _T])
+        d[r, _PLACED] = self._placed(d[r, _S], d[r, _T])
         self._fresh_buf[r] = True
         gone = nodes[slot != np.arange(len(nodes))]
-        keep = np.ones(n, bool)
-        keep[gone] = False
-        self._keep(keep)
+        self._merged_away = gone  # removed with the shed drops (sim._shed_outside): one compaction a step
         self.merges += len(gone)

@@ -22,9 +22,18 @@ class FastWiping:
 
     def _sweep_drops(self, b: int, blade: Blade, ta: float, tb: float) -> None:
         """The reference's drop sweep, on the drops inside the blade's wedge only."""
+        gone = self._swept_drops(b, blade, ta, tb, None)
+        if gone is not None:
+            self._keep(~gone)
+
+    def _swept_drops(self, b: int, blade: Blade, ta: float, tb: float, gone: np.ndarray | None):
+        """Move the drops blade ``b`` sweeps between angles ta and tb (rad) into its bead, leaving out those
+        already ``gone`` (bool over the drops, or None), and mark them gone; returns the mask (None: none gone).
+        The caller removes the gone drops (one compaction for both blades: a drop the first swept is not there
+        for the second, as in the reference, which removes them in between)."""
         n = self._n
         if n == 0:
-            return
+            return gone
         lo, hi = min(ta, tb), max(ta, tb)
         d = self._buf[:n]
         px, py = blade.pivot
@@ -39,11 +48,13 @@ class FastWiping:
             in_wedge = (rt * math.cos(w_lo) - rs * math.sin(w_lo) >= 0.0) & (
                 rs * math.sin(w_hi) - rt * math.cos(w_hi) >= 0.0
             )
+            if gone is not None:
+                in_wedge &= ~gone
             cand = np.flatnonzero(in_wedge)
             if len(cand) == 0:
-                return
+                return gone
         else:
-            cand = np.arange(n)
+            cand = np.arange(n) if gone is None else np.flatnonzero(~gone)
         rel_s, rel_t = rs[cand], rt[cand]
         r = np.hypot(rel_s, rel_t)
         phi = np.arctan2(rel_t, rel_s)
@@ -56,34 +67,41 @@ class FastWiping:
             in_phi = (phi >= lo - margin_c) & (phi <= hi)
         swept = in_r & in_phi
         if swept.any():
-            gone = cand[swept]
-            np.add.at(self.beads[b], self._bin_of(blade, r[swept]), d[gone, _M])
-            keep = np.ones(n, bool)
-            keep[gone] = False
-            self._keep(keep)
+            idx = cand[swept]
+            np.add.at(self.beads[b], self._bin_of(blade, r[swept]), d[idx, _M])
+            if gone is None:
+                gone = np.zeros(n, bool)
+            gone[idx] = True
+        return gone
 
     def _sweep(self, seg, wear: float) -> None:
         """wiping.Wiping._sweep, with the blade angles in scalar math (Blade.angle, without NumPy)."""
         c0 = 1.0 - math.cos(math.pi * min(max(seg.p_start, 0.0), 1.0))
         c1 = 1.0 - math.cos(math.pi * min(max(seg.p_end, 0.0), 1.0))
+        gone = None
         for b, blade in enumerate(self.blades):
             span = blade.top_rad - blade.park_rad
             ta, tb = blade.park_rad + span * 0.5 * c0, blade.park_rad + span * 0.5 * c1
             if ta != tb:
-                self._sweep_blade(b, blade, ta, tb, wear)
+                # Wiping._sweep_blade, the swept drops removed once for both blades (below).
+                gone = self._swept_drops(b, blade, ta, tb, gone)
+                self._sweep_film(b, blade, min(ta, tb), max(ta, tb), wear)
                 rng = self._sweep_ranges[b]
                 rng[0] = min(rng[0], ta, tb)
                 rng[1] = max(rng[1], ta, tb)
             self._bead_off_glass(b, blade, tb)
+        if gone is not None:
+            self._keep(~gone)
         if seg.event is not None:
             for b, blade in enumerate(self.blades):
                 self._end_of_stroke(b, blade, float(blade.angle(seg.p_end)), seg.event)
 
     def _swept_cells(self, b: int, blade: Blade, lo: float, hi: float) -> np.ndarray:
-        order, phi_sorted, r_c = self._cells_by_angle[b]
-        cand = order[np.searchsorted(phi_sorted, lo, "left") : np.searchsorted(phi_sorted, hi, "right")]
-        r = r_c[cand]
-        return np.sort(cand[(r >= blade.r_inner_m) & (r <= blade.r_outer_m)])
+        order, phi_sorted = self._cells_by_angle[b]  # the cells within the blade's radii, by angle
+        return np.sort(order[np.searchsorted(phi_sorted, lo, "left") : np.searchsorted(phi_sorted, hi, "right")])
+
+    def _cell_bins(self, b: int, blade: Blade, cells: np.ndarray) -> np.ndarray:
+        return self._bins_of_cells[b][cells]
 
     def _bead_off_glass(self, b: int, blade: Blade, angle: float) -> None:
         """Water pushed past an edge of the glass leaves it: wiped (the reference's, on cached bin radii)."""

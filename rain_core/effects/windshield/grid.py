@@ -10,6 +10,8 @@ Two implementations of the same candidate search:
 * ``PairFinder`` (the fast path): occupied cells written into tables that live as long as the simulation, so a
   lookup is one gather instead of a binary search, and a work budget per call (``MERGE_CELLS_MAX`` cells of
   swept boxes, ``MERGE_PAIRS_MAX`` pairs) so that no input, however fast or dense, can ask for unbounded work.
+  Up to ``FAR_DIRECT_MAX`` far-reaching drops (ordinary rain has a few dozen at most) look up the near table
+  over their boxes and each other by distance, instead of every drop looking in a far grid.
 """
 
 from __future__ import annotations
@@ -123,6 +125,10 @@ def components(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
 _EMPTY_I = np.zeros(0, np.int64)
 NEAR_CELL_M = 1.6e-2  # PairFinder's grid: drops reaching ≤ half of this are found by their centres
 FAR_CELL_M = 6.4e-2  # PairFinder's grid for the few drops that reach further (fast or very large)
+# Up to this many far-reaching drops, whose boxes cover at most FAR_DIRECT_CELLS near cells in all, look up the
+# near table over their boxes instead (and each other directly): the far grid would have every drop look there.
+FAR_DIRECT_MAX = 64
+FAR_DIRECT_CELLS = 8192
 
 
 def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, members: np.ndarray):
@@ -154,7 +160,8 @@ class PairFinder:
     Drops that reach ≤ NEAR_CELL_M / 2 (nearly all) sit in a grid of NEAR_CELL_M cells by their centres, in a
     table of occupied cells (16-bit keys, so the sort is a radix sort, and a lookup is a gather); an active one
     looks in the 3 × 3 cells around its own. The rest sit in a FAR_CELL_M grid in every cell of their swept box
-    widened by NEAR_CELL_M / 2; every drop looks there by its centre's cell, a far-reaching one by its box.
+    widened by NEAR_CELL_M / 2; every drop looks there by its centre's cell, a far-reaching one by its box
+    (unless they are few: ``_far_in_near_table``).
 
     ``pairs(s, t, reach, active, end_s, end_t, radius)`` (1-D columns, m) returns (i, j, deferred): candidate
     pairs i ≠ j, at least one of them active, that include every such pair with |p_i − p_j| ≤ reach_i + reach_j,
@@ -173,6 +180,56 @@ class PairFinder:
         p1 = self._p1
         self._around = np.array([di * p1 + dj for di in (-1, 0, 1) for dj in (-1, 0, 1)], np.int16)
         self._f0, self._f1 = _grid_shape(FAR_CELL_M)
+        self._triu: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def _far_in_near_table(self, far_ids, s, t, reach, active, members, budget):
+        """Pairs of the few far-reaching drops ``far_ids`` (at most FAR_DIRECT_MAX, their boxes at most
+        FAR_DIRECT_CELLS cells of the near table) with the near drops, looked up in the near table over each one's
+        box widened by NEAR_CELL_M / 2, and among themselves by their distance; None when there are too many for that
+        (the far grid then does it). Returns (i, j, deferred far ids or None); pairs neither of which is active
+        are left out, the work budget as ``pairs``."""
+        f = len(far_ids)
+        if f > FAR_DIRECT_MAX:
+            return None
+        fs, ft = s[far_ids], t[far_ids]
+        half = reach[far_ids] + 0.5 * NEAR_CELL_M
+        inv = 1.0 / NEAR_CELL_M
+        o0, o1 = float(_GRID_ORIGIN[0]), float(_GRID_ORIGIN[1])
+        top0, top1 = self._n0 - 1, self._n1 - 1
+        lo0 = np.minimum(np.maximum(np.floor((fs - half - o0) * inv), 0), top0).astype(np.int64)
+        hi0 = np.minimum(np.maximum(np.floor((fs + half - o0) * inv), 0), top0).astype(np.int64)
+        lo1 = np.minimum(np.maximum(np.floor((ft - half - o1) * inv), 0), top1).astype(np.int64)
+        hi1 = np.minimum(np.maximum(np.floor((ft + half - o1) * inv), 0), top1).astype(np.int64)
+        if int(((hi0 - lo0 + 1) * (hi1 - lo1 + 1)).sum()) > FAR_DIRECT_CELLS:
+            return None
+        p1 = self._p1
+        keys, owner = _box_cells(lo0, lo1, hi0, hi1, far_ids, p1)
+        keys = keys + (p1 + 1)  # the near table's border offset (see pairs)
+        c = self._count[keys]
+        hit = np.flatnonzero(c)
+        out_i, out_j = [], []
+        deferred = None
+        if len(hit):
+            c, qid = c[hit], owner[hit]
+            if int(c.sum()) > budget:
+                over = np.cumsum(c) > budget
+                deferred = qid[over]
+                keep = ~over
+                hit, c, qid = hit[keep], c[keep], qid[keep]
+            i, j = _expand(qid, c, self._head[keys[hit]], members)
+            keep = active[i] | active[j]
+            out_i.append(i[keep])
+            out_j.append(j[keep])
+        if f > 1:
+            a, b = self._triu.get(f) or self._triu.setdefault(f, np.triu_indices(f, 1))  # (slow to make)
+            ds, dt, rr = fs[a] - fs[b], ft[a] - ft[b], reach[far_ids[a]] + reach[far_ids[b]]
+            i, j = far_ids[a], far_ids[b]
+            keep = (active[i] | active[j]) & (ds * ds + dt * dt <= rr * rr)
+            out_i.append(i[keep])
+            out_j.append(j[keep])
+        if not out_i:
+            return _EMPTY_I, _EMPTY_I, deferred
+        return np.concatenate(out_i), np.concatenate(out_j), deferred
 
     def pairs(self, s, t, reach, active, end_s, end_t, radius):
         n = len(s)
@@ -180,6 +237,7 @@ class PairFinder:
         budget = MERGE_PAIRS_MAX
         near = reach <= 0.5 * NEAR_CELL_M
         out_i, out_j = [], []
+        all_far_done = False
         near_ids = np.flatnonzero(near)
         all_near = len(near_ids) == n
         if len(near_ids):
@@ -202,6 +260,18 @@ class PairFinder:
             run_cells = sorted_keys[starts]
             self._head[run_cells] = starts
             self._count[run_cells] = ends - starts
+            if not all_near:
+                far_ids = np.flatnonzero(~near)
+                direct = self._far_in_near_table(far_ids, s, t, reach, active, members, budget)
+                if direct is not None:  # the few far-reaching drops were looked up here: no far grid needed
+                    fi, fj, f_deferred = direct
+                    out_i.append(fi)
+                    out_j.append(fj)
+                    budget -= len(fi)
+                    if f_deferred is not None:
+                        deferred = np.zeros(n, bool)
+                        deferred[f_deferred] = True
+                    all_far_done = True
             q = np.flatnonzero(active & near) if not all_near else np.flatnonzero(active)
             qk = keys[q] if all_near else keys[np.searchsorted(near_ids, q)]
             looked = (qk[:, None] + self._around).ravel()
@@ -213,7 +283,8 @@ class PairFinder:
                 qid = q[hit // 9]
                 if int(c.sum()) > budget:
                     over = np.cumsum(c) > budget
-                    deferred = np.zeros(n, bool)
+                    if deferred is None:
+                        deferred = np.zeros(n, bool)
                     deferred[qid[over]] = True
                     keep = ~over
                     hit, c, qid = hit[keep], c[keep], qid[keep]
@@ -222,7 +293,7 @@ class PairFinder:
                 out_i.append(i)
                 out_j.append(j)
 
-        if not all_near:
+        if not all_near and not all_far_done:
             far_ids = np.flatnonzero(~near)
             fs, ft, fr = s[far_ids], t[far_ids], reach[far_ids]
             c0, c1 = self._f0, self._f1
@@ -281,6 +352,8 @@ class PairFinder:
                 out_j.append(j[keep])
         if not out_i:
             return _EMPTY_I, _EMPTY_I, deferred
+        if deferred is not None and not deferred.any():
+            deferred = None
         i = np.concatenate(out_i) if len(out_i) > 1 else out_i[0]
         j = np.concatenate(out_j) if len(out_j) > 1 else out_j[0]
         keep = i != j

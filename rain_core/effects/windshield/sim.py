@@ -14,10 +14,15 @@ class extends; it computes the same state with far fewer NumPy calls (issue 13: 
   their run, and the slow evaporation of all drops one Newton step from the last radius (relative error
   ≲ 1e-8 for the smallest drops, not accumulating: each step restarts from the current mass).
 * **Only what moves is moved.** Forces are evaluated for every drop (they decide which start), the sliding update
-  only for the drops that are moving or starting.
+  only for the drops that are moving or starting. What depends on a drop's position alone (its film cell, the
+  air's factors there, gravity along the curved glass, its merge-grid key) is kept in its row, written where a
+  drop is placed (``_placed``: born, moved, merged), so the many drops at rest cost a few operations a step.
+  The merge test gets the motion as columns of the drops that slid (``_merge_moves``).
 * **Arrivals without binary searches**. The flux-weighted size law is sampled through a bucket table over its
-  cumulative distribution (a gather instead of ``np.interp``'s search; only the far tail searches), and the
-  impact speed comes from the same interval. What the effect draws of a step (impacts, trails) is kept as
+  cumulative distribution (a gather instead of ``np.interp``'s search; only the far tail searches), built only
+  for large samples (a frame's few hundred arrivals search the 512-point CDF), and the impact speed comes from
+  the same interval. The film's drying in the air is recomputed from per-cell factors when the car's speed
+  changes. What the effect draws of a step (impacts, trails) is kept as
   columns and assembled only when asked.
 * **Merging through tables**. ``grid.PairFinder`` keeps the occupied cells in tables so a neighbour lookup is a
   gather; the merge groups are formed on the few drops that touch, not on all of them.
@@ -41,7 +46,6 @@ import math
 import numpy as np
 
 from rain_core import checks
-from rain_core.effects.windshield.airflow import air_velocity
 from rain_core.effects.windshield.arrivals import ArrivalTable
 from rain_core.effects.windshield.constants import (
     BEAD_BINS,
@@ -75,16 +79,22 @@ from rain_core.effects.windshield.constants import (
     VISCOUS_C,
     VOLUME_PER_RADIUS3,
     drop_radius,
-    norm2,
 )
+from rain_core.effects.windshield.drop_rows import BL as _BL
 from rain_core.effects.windshield.drop_rows import CELL as _CELL
 from rain_core.effects.windshield.drop_rows import COLS as _COLS
+from rain_core.effects.windshield.drop_rows import GS as _GS
+from rain_core.effects.windshield.drop_rows import GT as _GT
+from rain_core.effects.windshield.drop_rows import KEY as _KEY
+from rain_core.effects.windshield.drop_rows import PLACED as _PLACED
 from rain_core.effects.windshield.drop_rows import ROW as _ROW
 from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
+from rain_core.effects.windshield.drop_rows import UP as _UP
 from rain_core.effects.windshield.drop_rows import VS as _VS
 from rain_core.effects.windshield.drop_rows import VT as _VT
 from rain_core.effects.windshield.drop_rows import A as _A
 from rain_core.effects.windshield.drop_rows import M as _M
+from rain_core.effects.windshield.drop_rows import Q as _Q
 from rain_core.effects.windshield.drop_rows import S as _S
 from rain_core.effects.windshield.drop_rows import T as _T
 from rain_core.effects.windshield.fast_merging import FastMerging
@@ -96,7 +106,8 @@ from rain_core.physics import G_M_S2, RHO_AIR, RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
 _MASS_PER_A3 = RHO_WATER * VOLUME_PER_RADIUS3  # kg / m³: a drop's mass over its contact radius cubed
-_EMPTY2 = np.zeros((0, 2))
+_EMPTY1 = np.zeros(0)
+_EMPTY_I = np.zeros(0, np.int64)
 _GRID_O = (-1.0, -0.2)  # grid._GRID_ORIGIN, as floats for the sort key
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 
@@ -109,24 +120,37 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         super().__init__(spec, seed)
         g = self.glass
         self._pairs = PairFinder()
+        self._merged_away: np.ndarray | None = None  # rows the last merge emptied, until _shed_outside
         self._sensor: float | None = 0.0
         self._inputs_seen: GlassInputs | None = None
         self._table: ArrivalTable | None = None
         self._air_key: bytes | None = None
         self._w0, self._dw, self._height = g.width_bottom, g._dw, g.height
+        self._sensor_box = (self.sensor_lo.tolist(), self.sensor_hi.tolist())
+        self._sensor_area = float(np.prod(self.sensor_hi - self.sensor_lo))
         # Gravity along the curved glass (GlassGeometry.gravity), its constants folded.
         self._g_up = -G_M_S2 * float(g.up[1])
         self._g_sag = -G_M_S2 * g.sag * float(g.normal[1])
         # Per blade: bin radii of its bead, and its film cells sorted by angle (a sweep is a range of them).
         self._bin_r = []
         self._cells_by_angle = []
+        self._bins_of_cells = []
         for b, blade in enumerate(self.blades):
             self._bin_r.append(
                 blade.r_inner_m + (np.arange(BEAD_BINS) + 0.5) / BEAD_BINS * (blade.r_outer_m - blade.r_inner_m)
             )
             r_c, phi_c = self._cell_polar[b]
             order = np.argsort(phi_c, kind="stable")
-            self._cells_by_angle.append((order, phi_c[order], r_c))
+            reach = (r_c[order] >= blade.r_inner_m) & (r_c[order] <= blade.r_outer_m)  # the cells it can sweep
+            self._cells_by_angle.append((order[reach], phi_c[order][reach]))
+            self._bins_of_cells.append(self._bin_of(blade, r_c))
+        # The air over each film cell (airflow.air_velocity) is head·_cell_up (or head·FLOW_AT_BOTTOM in a
+        # tailwind) along the glass and |up|·FLOW_SPREAD·_cell_q + CROSSWIND_GAIN·cross across it: the
+        # position-only factors, kept so the film's drying costs a few operations when the car's speed changes.
+        ct = self.cell_centres.reshape(-1, 2)
+        frac = np.clip(ct[:, 1] / g.height, 0.0, 1.0)
+        self._cell_up = FLOW_AT_BOTTOM + (FLOW_AT_TOP - FLOW_AT_BOTTOM) * frac
+        self._cell_q = 2.0 * ct[:, 0] / g.width(ct[:, 1])
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
@@ -166,7 +190,7 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
     def pos(self, value) -> None:
         d = self._buf[: self._n]
         d[:, _S : _T + 1] = value
-        d[:, _CELL] = self._cells(d[:, _S], d[:, _T])
+        d[:, _PLACED] = self._placed(d[:, _S], d[:, _T])
 
     @property
     def vel(self) -> np.ndarray:
@@ -218,6 +242,16 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
     def sensor_kg_m2(self, value: float) -> None:
         self._sensor = value
 
+    def sensor_reading(self) -> float:
+        """The reference's ``sensor_reading`` on the drop array's columns (the same drops, the same sums)."""
+        d = self._buf[: self._n]
+        s, t = d[:, _S], d[:, _T]
+        lo, hi = self._sensor_box
+        inside = (s >= lo[0]) & (s <= hi[0]) & (t >= lo[1]) & (t <= hi[1])
+        drops = float(d[inside, _M].sum()) / self._sensor_area
+        film = float(self.film.ravel()[self._sensor_cells].sum()) / max(self._sensor_cell_area, 1e-12)
+        return drops + film
+
     def _reserve(self, n: int) -> None:
         if n > len(self._buf):
             cap = max(n, 2 * len(self._buf))
@@ -240,7 +274,7 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         rows[:, _M] = mass
         rows[:, _TRAIL] = 0.0
         rows[:, _A] = drop_radius(mass) if radius is None else radius
-        rows[:, _CELL] = self._cells(rows[:, _S], rows[:, _T])
+        rows[:, _PLACED] = self._placed(rows[:, _S], rows[:, _T])
         self._fresh_buf[n : n + k] = True
         self._n = n + k
 
@@ -258,10 +292,7 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         n = self._n
         if n < 2:
             return
-        d = self._buf[:n]
-        k0 = np.minimum(np.maximum(((d[:, _S] - _GRID_O[0]) / GRID_CELL_M).astype(np.int64), 0), _G0 - 1)
-        k1 = np.minimum(np.maximum(((d[:, _T] - _GRID_O[1]) / GRID_CELL_M).astype(np.int64), 0), _G1 - 1)
-        keys = k0 * _G1 + k1
+        keys = self._buf[:n, _KEY]
         if not (keys[1:] < keys[:-1]).any():
             return
         order = np.argsort(keys, kind="stable")
@@ -277,6 +308,31 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         u = np.minimum(s / (self._w0 + self._dw * t) * FILM_CELLS + 0.5 * FILM_CELLS, FILM_CELLS - 0.5)
         v = np.minimum(t * (FILM_CELLS / self._height), FILM_CELLS - 0.5)
         return (v.astype(np.int64) * FILM_CELLS) + u.astype(np.int64)
+
+    def _placed(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """The position's columns (drop_rows CELL … KEY) of drops at (s, t) m, (k, 7): the film cell, the air's
+        factors, the boundary layer's run, gravity per unit mass and the merge-grid key, with the operations
+        (so the bits) of the formulas they replace in ``_move`` and ``_sort_drops``."""
+        out = np.empty((len(s), 7))
+        out[:, 0] = self._cells(s, t)
+        height = self._height
+        w = self._w0 + self._dw * t
+        frac = np.minimum(np.maximum(t / height, 0.0), 1.0)
+        out[:, 1] = FLOW_AT_BOTTOM + (FLOW_AT_TOP - FLOW_AT_BOTTOM) * frac
+        out[:, 2] = 2.0 * s / w
+        out[:, 3] = NU_AIR * (BL_RUN_UP_M + np.maximum(t, 0.0))
+        # Gravity along the curved glass (GlassGeometry.gravity), per unit mass.
+        x = 2.0 * (s / w + 0.5) - 1.0
+        y = 2.0 * (t / height) - 1.0
+        bv = 1.0 - y * y
+        dbu = -4.0 * x
+        out[:, 4] = self._g_sag * (dbu / w * bv)
+        out[:, 5] = self._g_up + self._g_sag * (dbu * (-s * self._dw / (w * w)) * bv + (1.0 - x * x) * (-4.0 * y)
+                                                / height)
+        k0 = np.minimum(np.maximum(((s - _GRID_O[0]) / GRID_CELL_M).astype(np.int64), 0), _G0 - 1)
+        k1 = np.minimum(np.maximum(((t - _GRID_O[1]) / GRID_CELL_M).astype(np.int64), 0), _G1 - 1)
+        out[:, 6] = k0 * _G1 + k1
+        return out
 
     # --- inputs -------------------------------------------------------------------------------------------
     def _prepare(self, inputs: GlassInputs) -> None:
@@ -301,7 +357,10 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         if air_key != self._air_key:
             self._air_key = air_key
             self._air_local = air_local
-            air = norm2(air_velocity(self.glass, self.cell_centres.reshape(-1, 2), air_local))
+            head, cross = float(air_local[2]), float(air_local[0])
+            up = head * self._cell_up if head >= 0.0 else np.full(len(self._cell_up), head * FLOW_AT_BOTTOM)
+            side = np.abs(up) * FLOW_SPREAD * self._cell_q + CROSSWIND_GAIN * cross
+            air = np.sqrt(side * side + up * up)  # norm2(air_velocity(...)) of the cell centres
             self._evap = FILM_EVAP_KG_M2_S * (1.0 + air / EVAP_AIR_M_S) * self._areas_flat
 
     # --- the step -------------------------------------------------------------------------------------------
@@ -324,8 +383,7 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         for _ in range(n_sub):
             if rate > 0.0:
                 self._arrive_fast(h, rate, inputs)
-            start, disp = self._move(h, air_local, inputs)
-            self._merge(start, disp)
+            self._merge_moves(*self._move(h, air_local, inputs))
             self._shed_outside()
             self._sensor = self.sensor_reading() if auto else None
             segments = wipers._advance(
@@ -408,51 +466,42 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         return placed
 
     # --- motion (dynamics.DropDynamics._move) ---------------------------------------------------------------
-    def _move(self, h: float, air_local: np.ndarray, inputs) -> tuple[np.ndarray, np.ndarray]:
-        """Forces, pinning, viscous sliding; returns (start positions, displacements) for the merge test."""
+    def _move(self, h: float, air_local: np.ndarray, inputs) -> tuple:
+        """Forces, pinning, viscous sliding; returns for the merge test (``_merge_moves``) the drop count before
+        the step's trail droplets, the drops that slid (``go``), their start (s, t) and displacement (m), as
+        columns: the others did not move."""
         n = self._n
         if n == 0:
-            return _EMPTY2, _EMPTY2
+            return 0, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
         d = self._buf[:n]
         s, t, m = d[:, _S], d[:, _T], d[:, _M]
         a = d[:, _A]  # the radius at the start of the step (the Newton update below comes after its last use)
-        # The air over the glass (airflow.air_velocity).
+        # The air over the glass (airflow.air_velocity), from the position's factors (drop_rows).
         head, cross = float(air_local[2]), float(air_local[0])
-        height = self._height
-        w = self._w0 + self._dw * t
         if head >= 0.0:
-            frac = np.minimum(np.maximum(t / height, 0.0), 1.0)
-            up = head * (FLOW_AT_BOTTOM + (FLOW_AT_TOP - FLOW_AT_BOTTOM) * frac)
-            side = up * FLOW_SPREAD * (2.0 * s / w) + CROSSWIND_GAIN * cross
+            up = head * d[:, _UP]
+            side = up * FLOW_SPREAD * d[:, _Q] + CROSSWIND_GAIN * cross
         else:  # a tailwind: a weak, separated flow down the glass
             up = np.full(n, head * FLOW_AT_BOTTOM)
-            side = abs(head * FLOW_AT_BOTTOM) * FLOW_SPREAD * (2.0 * s / w) + CROSSWIND_GAIN * cross
+            side = abs(head * FLOW_AT_BOTTOM) * FLOW_SPREAD * d[:, _Q] + CROSSWIND_GAIN * cross
         air_speed = np.sqrt(side * side + up * up)
         # Drag in the boundary layer (airflow.drag).
-        delta = 5.0 * np.sqrt(NU_AIR * (BL_RUN_UP_M + np.maximum(t, 0.0)) / np.maximum(air_speed, 1e-3))
+        delta = 5.0 * np.sqrt(d[:, _BL] / np.maximum(air_speed, 1e-3))
         eta = np.minimum(np.maximum(HEIGHT_PER_RADIUS * a / delta, 0.0), 1.0)
         profile = 1.5 * eta - 0.5 * (eta * eta * eta)
         vs, vt = d[:, _VS], d[:, _VT]
         rel_s = side * profile - vs
         rel_t = up * profile - vt
         coef = (0.5 * RHO_AIR * DRAG_CD * FRONTAL_PER_RADIUS2) * a**2 * np.sqrt(rel_s * rel_s + rel_t * rel_t)
-        # Gravity along the curved glass (GlassGeometry.gravity).
-        x = 2.0 * (s / w + 0.5) - 1.0
-        y = 2.0 * (t / height) - 1.0
-        bv = 1.0 - y * y
-        dbu = -4.0 * x
-        f_s = m * (self._g_sag * (dbu / w * bv)) + coef * rel_s
-        f_t = m * (self._g_up + self._g_sag * (dbu * (-s * self._dw / (w * w)) * bv + (1.0 - x * x) * (-4.0 * y)
-                                               / height)) + coef * rel_t
+        # Gravity along the curved glass (GlassGeometry.gravity), per unit mass from drop_rows.
+        f_s = m * d[:, _GS] + coef * rel_s
+        f_t = m * d[:, _GT] + coef * rel_t
         fmag = np.sqrt(f_s * f_s + f_t * f_t)
         pin = GAMMA_W * 2.0 * a * HYSTERESIS
         speed = np.sqrt(vs * vs + vt * vt)
         moving = speed > 0.0
         go = np.flatnonzero(moving | (fmag > pin))  # moving, or starting to
-        start = np.empty((n, 2))
-        start[:, 0] = s
-        start[:, 1] = t
-        disp = np.zeros((n, 2))
+        s_g = t_g = ds = dt_ = _EMPTY1
         if len(go):
             # The sliding update, for the drops that slide (the others stay at rest).
             mv = moving[go]
@@ -474,15 +523,13 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
             d[go, _VS] = nv_s
             d[go, _VT] = nv_t
             ds, dt_ = h * nv_s, h * nv_t
-            disp[go, 0] = ds
-            disp[go, 1] = dt_
-            s_g, t_g = start[go, 0], start[go, 1]
+            s_g, t_g = s[go], t[go]
             es, et = s_g + ds, t_g + dt_
             d[go, _S] = es
             d[go, _T] = et
             moved = (ds != 0.0) | (dt_ != 0.0)
-            if moved.any():  # (one that left the glass is shed before its cell is read)
-                d[go[moved], _CELL] = self._cells(es[moved], et[moved])
+            if moved.any():  # (one that left the glass is shed before its columns are read)
+                d[go[moved], _PLACED] = self._placed(es[moved], et[moved])
         # Slow evaporation of the drops themselves (hours for a millimetre drop; kept for the balance).
         loss = np.minimum(DROP_EVAP_KG_M_S * a * np.sqrt(1.0 + air_speed / EVAP_AIR_M_S) * h, m)
         m -= loss
@@ -496,7 +543,7 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
             run = np.flatnonzero(step_len > 0.0)
             if len(run):
                 self._run(go[run], s_g[run], t_g[run], ds[run], dt_[run], step_len[run], a_g[run])
-        return start, disp
+        return n, go, s_g, t_g, ds, dt_
 
     def _run(self, idx, s0, t0, ds, dt, step_len, a) -> None:
         """Running drops take up the film in their path, lay a thin wet line and drop trail droplets
@@ -580,17 +627,28 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
         return np.concatenate(rows) if rows else np.zeros((0, 5))
 
     def _shed_outside(self) -> None:
-        """Drops that left the glass are shed; drops worn below half the object size become film."""
+        """Drops that left the glass are shed; drops worn below half the object size become film. The drops
+        the step's merge joined into others go too: one compaction for all three (the reference compacts after
+        each; the sums run over the same drops in the same order)."""
         n = self._n
+        gone = self._merged_away
+        self._merged_away = None
         if n == 0:
             return
         d = self._buf[:n]
         outside = ~self._inside(d[:, _S], d[:, _T])
+        if gone is not None:
+            outside[gone] = False  # no longer drops
         if outside.any():
             self.shed += float(d[outside, _M].sum())
-            self._keep(~outside)
-            d = self._buf[: self._n]
         tiny = d[:, _M] < 0.5 * M_OBJECT_MIN
+        tiny &= ~outside
+        if gone is not None:
+            tiny[gone] = False
         if tiny.any():
             np.add.at(self.film.ravel(), self._cells(d[tiny, _S], d[tiny, _T]), d[tiny, _M])
-            self._keep(~tiny)
+        drop = outside | tiny
+        if gone is not None:
+            drop[gone] = True
+        if drop.any():
+            self._keep(~drop)

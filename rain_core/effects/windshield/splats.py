@@ -17,16 +17,28 @@ from rain_core.physics import RHO_WATER
 
 
 def drop_splats(sim, texel_m: float) -> np.ndarray:
-    """Instances (n, 8) for the drop-height texture: drops as caps with tails, beads as lines (mm)."""
+    """Instances (n, 8) float32 for the drop-height texture: drops as caps with tails, beads as lines (mm)."""
     rows = []
-    if sim.count:
+    n = sim.count
+    if n:
+        # Written column by column into the float32 rows the GPU reads (one upload, no float64 (n, 8) copy);
+        # only the few moving drops have a tail, the others' segment ends where it starts.
+        out = np.zeros((n, 8), np.float32)
+        pos, vel = sim.pos, sim.vel
         a = sim.radius()
+        out[:, 0:2] = pos
+        out[:, 2:4] = pos
         a_vis = np.maximum(a, 0.75 * texel_m)
-        h_mm = 1e3 * HEIGHT_PER_RADIUS * a * (a / a_vis)  # a sub-texel drop: wider, lower lens
-        speed = norm2(sim.vel)
-        tail = a * np.minimum(speed / 0.25, 1.5)
-        back = -sim.vel / np.maximum(speed, 1e-9)[:, None] * tail[:, None]
-        rows.append(np.column_stack([sim.pos, sim.pos + back, a_vis, h_mm, np.zeros(len(a)), np.zeros(len(a))]))
+        out[:, 4] = a_vis
+        out[:, 5] = (1e3 * HEIGHT_PER_RADIUS) * a * (a / a_vis)  # a sub-texel drop: wider, lower lens
+        vs, vt = vel[:, 0], vel[:, 1]
+        moving = np.flatnonzero((vs != 0.0) | (vt != 0.0))
+        if len(moving):
+            v = vel[moving]
+            speed = norm2(v)
+            tail = a[moving] * np.minimum(speed / 0.25, 1.5)
+            out[moving, 2:4] = pos[moving] - v / np.maximum(speed, 1e-9)[:, None] * tail[:, None]
+        rows.append(out)
     direction = 1.0 if (sim.wipers.phase or 0.0) < 0.5 else -1.0
     for b, blade in enumerate(sim.blades):
         bead = sim.beads[b]
@@ -44,39 +56,29 @@ def drop_splats(sim, texel_m: float) -> np.ndarray:
                 [centres - d, centres + d, w_vis, 1e3 * w * (w / w_vis), np.ones(len(w)), np.zeros(len(w))]
             )[keep]
         )
-    return np.concatenate(rows) if rows else np.zeros((0, 8))
+    if len(rows) == 1:
+        return rows[0]
+    return np.concatenate(rows, dtype=np.float32) if rows else np.zeros((0, 8), np.float32)
 
 
 def film_splats(sim, texel_m: float) -> np.ndarray:
-    """Instances (n, 8) added to the film texture (µm): wet trail lines and splash speckle."""
-    rows = []
+    """Instances (n, 8) float32 added to the film texture (µm): wet trail lines and splash speckle."""
     trails = sim.frame_trails()
-    if len(trails):
-        rows.append(
-            np.column_stack(
-                [
-                    trails[:, :4],
-                    trails[:, 4],
-                    np.full(len(trails), TRAIL_FILM_M * 1e6 * 4 / math.pi),
-                    np.ones(len(trails)),
-                    np.zeros(len(trails)),
-                ]
-            )
-        )
     impacts = sim.frame_impacts()
     if len(impacts):
         impacts = impacts[impacts[:, 2] >= 0.5 * texel_m][:4096]
-        seeds = np.arange(len(impacts)) + 7 * sim.arrival_count
-        rows.append(
-            np.column_stack(
-                [
-                    impacts[:, :2],
-                    impacts[:, :2],
-                    impacts[:, 2],
-                    impacts[:, 3] * 1e6,
-                    np.full(len(impacts), 2.0),
-                    seeds % 65536,
-                ]
-            )
-        )
-    return np.concatenate(rows) if rows else np.zeros((0, 8))
+    k = len(trails)
+    out = np.zeros((k + len(impacts), 8), np.float32)  # written in place: the rows the GPU reads
+    if k:
+        out[:k, 0:5] = trails
+        out[:k, 5] = TRAIL_FILM_M * 1e6 * 4 / math.pi
+        out[:k, 6] = 1.0
+    if len(impacts):
+        rows = out[k:]
+        rows[:, 0:2] = impacts[:, :2]
+        rows[:, 2:4] = impacts[:, :2]
+        rows[:, 4] = impacts[:, 2]
+        rows[:, 5] = impacts[:, 3] * 1e6
+        rows[:, 6] = 2.0
+        rows[:, 7] = (np.arange(len(impacts)) + 7 * sim.arrival_count) % 65536
+    return out

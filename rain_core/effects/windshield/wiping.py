@@ -82,6 +82,10 @@ class Wiping:
         r_c, phi_c = self._cell_polar[b]
         return np.flatnonzero((r_c >= blade.r_inner_m) & (r_c <= blade.r_outer_m) & (phi_c >= lo) & (phi_c <= hi))
 
+    def _cell_bins(self, b: int, blade: Blade, cells: np.ndarray) -> np.ndarray:
+        """The bead bin of blade ``b`` over each film cell (flat indices), by the cell centre's radius."""
+        return self._bin_of(blade, self._cell_polar[b][0][cells])
+
     def _sweep_film(self, b: int, blade: Blade, lo: float, hi: float, wear: float) -> None:
         """Film: the cells whose centres the blade passed over go into the bead, which leaves a residue and
         leaks what it cannot hold."""
@@ -89,9 +93,8 @@ class Wiping:
         if len(cells) == 0:
             return
         bead = self.beads[b]
-        r_c = self._cell_polar[b][0]
         flat = self.film.ravel()
-        bins = self._bin_of(blade, r_c[cells])
+        bins = self._cell_bins(b, blade, cells)
         np.add.at(bead, bins, flat[cells])
         flat[cells] = 0.0
         # The rubber leaves a thin residue where it pushed water, paid from the bead.

@@ -137,3 +137,80 @@ def test_a_copy_runs_on_like_the_original():
         fast.step(1 / 30, inputs)
         ref.step(1 / 30, inputs)
     _assert_same(fast, ref)
+
+
+def test_pair_finder_looks_up_a_few_far_reaching_drops_in_the_near_table():
+    # Fast drops are few in ordinary rain: up to grid.FAR_DIRECT_MAX of them look up the near table over their
+    # boxes (and each other by distance). Every touching pair must still be found, also at the grid's borders.
+    from rain_core.effects.windshield.grid import FAR_DIRECT_MAX, NEAR_CELL_M
+
+    rng = np.random.default_rng(5)
+    finder = PairFinder()
+    direct = 0
+    original = finder._far_in_near_table
+
+    def counted(*args):
+        nonlocal direct
+        result = original(*args)
+        direct += result is not None
+        return result
+
+    finder._far_in_near_table = counted
+    for trial in range(10):
+        n = int(rng.integers(300, 1500))
+        p = rng.uniform([-1.05, -0.25], [1.05, 1.45], (n, 2))  # a little beyond the grid on every side
+        reach = rng.uniform(0.0005, 0.5 * NEAR_CELL_M, n)
+        far = rng.choice(n, int(rng.integers(1, FAR_DIRECT_MAX + 1)), replace=False)
+        reach[far] = rng.uniform(0.5 * NEAR_CELL_M, 0.06, len(far))
+        active = rng.random(n) < 0.3
+        i, j, deferred = finder.pairs(p[:, 0], p[:, 1], reach, active, p[:, 0], p[:, 1], reach)
+        assert deferred is None
+        found = set(zip(np.minimum(i, j).tolist(), np.maximum(i, j).tolist(), strict=True))
+        dist = np.linalg.norm(p[:, None] - p[None], axis=2)
+        ii, jj = np.nonzero((dist <= reach[:, None] + reach[None]) & np.triu(np.ones((n, n), bool), 1))
+        want = {(a, b) for a, b in zip(ii.tolist(), jj.tolist(), strict=True) if active[a] or active[b]}
+        assert want <= found, trial
+        assert all(active[a] or active[b] for a, b in found)
+    assert direct == 10  # the direct path did the far drops each time
+
+
+def test_arrival_sampling_by_search_and_by_buckets_agree_with_interp():
+    from rain_core.effects.windshield import arrivals
+    from rain_core.effects.windshield.reference import _D_GRID_MM
+
+    sim = WindshieldSim()
+    u = np.random.default_rng(6).random(3 * arrivals._TABLE_FROM)
+    u[:4] = [0.0, 1e-17, 0.5, 1.0 - 1e-16]
+    for speed in (0.0, 60.0, 200.0, -30.0):
+        _, closing, cdf = sim.arrival_rate_per_s(GlassInputs.for_speed(speed, 8.0))
+        table = arrivals.ArrivalTable(closing, cdf)
+        d_big, c_big = table.sample(u)  # the bucket table
+        small = [table.sample(part) for part in np.array_split(u, 16)]  # binary searches
+        assert np.array_equal(d_big, np.concatenate([d for d, _ in small]))
+        assert np.array_equal(c_big, np.concatenate([c for _, c in small]))
+        assert np.allclose(d_big, np.interp(u * cdf[-1], cdf, _D_GRID_MM), rtol=1e-12, atol=1e-12)
+
+
+def test_position_columns_follow_the_drops():
+    # The drop array keeps functions of each drop's position (film cell, air factors, gravity, sort key) written
+    # where drops are placed; after arrivals, runs, merges, trails, wipes and beading they must equal a fresh
+    # computation, bit for bit.
+    from rain_core.effects.windshield.drop_rows import PLACED, S, T
+
+    sim = WindshieldSim(seed=8)
+    for speed, mode in ((150.0, "high"), (40.0, "off"), (-15.0, "low")):
+        inputs = GlassInputs.for_speed(speed, 25.0, drop_budget=1500, wiper_mode=mode)
+        for _ in range(45):
+            sim.step(1 / 30, inputs)
+            d = sim._buf[: sim.count]
+            assert np.array_equal(d[:, PLACED], sim._placed(d[:, S], d[:, T]))
+    assert sim.count > 500 and sim.merges > 0
+
+
+def test_sensor_reading_is_the_references():
+    sim = WindshieldSim(seed=9)
+    inputs = GlassInputs.for_speed(30.0, 20.0, wiper_mode="off")
+    for _ in range(60):
+        sim.step(1 / 30, inputs)
+    assert sim.sensor_reading() > 0.0
+    assert sim.sensor_reading() == WindshieldSimReference.sensor_reading(sim)
