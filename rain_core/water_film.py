@@ -94,9 +94,10 @@ def shelter_map(world) -> np.ndarray:
     return roof.astype(np.float32)
 
 
-def sample_road_map(grid: np.ndarray, x, z) -> np.ndarray:
+def sample_road_map(grid, x, z):
     """Bilinear sample of a puddle-map grid (rows z over PERIOD_M, columns x over the road) at x, z (m),
-    exactly as a GL LINEAR texture clamped across x and repeated along z (u = (x + 7)/14, v = z/PERIOD_M)."""
+    exactly as a GL LINEAR texture clamped across x and repeated along z (u = (x + 7)/14, v = z/PERIOD_M).
+    A tuple of grids gives a tuple of samples (one set of indices, as ``sample_heightmap``)."""
     return sample_heightmap(grid, (2 * ROAD_HALF_WIDTH_M, layout.PERIOD_M), x, z)
 
 
@@ -163,19 +164,23 @@ def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=
     world = world if world is not None else default_world()
     x = np.asarray(x_m, dtype=np.float64)
     z = np.asarray(z_m, dtype=np.float64)
-    x, z = np.broadcast_arrays(x, z)
+    if x.shape != z.shape:
+        x, z = np.broadcast_arrays(x, z)
     standing = np.zeros(x.shape)
     film = np.zeros(x.shape)
     # Only the asphalt holds water: sample the maps there alone (callers such as the ripples ask for whole strips
     # of cells, about half of them over the pavements).
     on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
-    if not on_road.any():
+    everywhere = bool(on_road.all())  # e.g. the wheels' points: no gather and scatter
+    if not everywhere and not on_road.any():
         return standing, film
+    if everywhere:
+        on_road = ...
     xr, zr = x[on_road], z[on_road]
-    h = sample_heightmap(world.road_heightmap, world.heightmap_extent_m, xr, zr)
-    h_smooth = sample_heightmap(smooth_heightmap_for(world), world.heightmap_extent_m, xr, zr)
-    n = sample_road_map(puddle_noise(int(seed)), xr, zr)
-    shelter = sample_road_map(shelter_map_for(world), xr, zr)
+    # Maps on one grid are sampled together (one set of indices and weights; each value as if sampled alone).
+    h, h_smooth = sample_heightmap((world.road_heightmap, smooth_heightmap_for(world)), world.heightmap_extent_m,
+                                   xr, zr)
+    n, shelter = sample_road_map((puddle_noise(int(seed)), shelter_map_for(world)), xr, zr)
     standing[on_road] = _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount)
     film[on_road] = WET_FILM_MM * wetness * (1.0 - shelter)
     return standing, film

@@ -13,26 +13,40 @@ HEIGHTMAP_TEXEL_M = 0.05  # m per road heightmap texel (square texels)
 HEIGHTMAP_EXTENT_M = (2.0 * layout.ROAD_HALF_WIDTH_M, 48.0)  # m (x, z); PERIOD_M is 25 × 48 m
 
 
-def sample_heightmap(hmap: np.ndarray, extent_m: tuple[float, float], x, z) -> np.ndarray:
-    """Bilinear, GL-texture-compatible sample of a road heightmap (see :meth:`World.road_height01`); x, z in m."""
-    nz, nx = hmap.shape
+def sample_heightmap(hmap, extent_m: tuple[float, float], x, z):
+    """Bilinear, GL-texture-compatible sample of a road heightmap (see :meth:`World.road_height01`); x, z in m.
+
+    ``hmap`` is one (nz, nx) map, or a tuple of maps on one grid (as a texture's channels): they are sampled
+    with one set of indices and weights and a tuple of results comes back, each exactly what sampling that map
+    alone gives."""
+    maps = hmap if isinstance(hmap, tuple) else (hmap,)
+    nz, nx = maps[0].shape
     fx = (np.asarray(x, dtype=np.float64) + extent_m[0] / 2) / extent_m[0] * nx - 0.5
     fz = np.asarray(z, dtype=np.float64) / extent_m[1] * nz - 0.5
-    fx, fz = np.broadcast_arrays(fx, fz)
+    if fx.shape != fz.shape:  # (broadcast_arrays costs more than the rest on a few wheels' points)
+        fx, fz = np.broadcast_arrays(fx, fz)
     i0 = np.floor(fx)
     j0 = np.floor(fz)
     tx = fx - i0
     tz = fz - j0
     i0 = i0.astype(np.int64)
     j0 = j0.astype(np.int64)
-    ia = np.clip(i0, 0, nx - 1)
-    ib = np.clip(i0 + 1, 0, nx - 1)
-    ja = np.mod(j0, nz)
-    jb = np.mod(j0 + 1, nz)
-    # Convert only the four picked texels, not the whole map (a per-frame lookup must not cost the map's size).
-    top = hmap[ja, ia].astype(np.float64) * (1 - tx) + hmap[ja, ib].astype(np.float64) * tx
-    bot = hmap[jb, ia].astype(np.float64) * (1 - tx) + hmap[jb, ib].astype(np.float64) * tx
-    return top * (1 - tz) + bot * tz
+    # Clamp across x, wrap along z; flat indices and take(): 2-D fancy indexing costs several times more.
+    ia = np.minimum(np.maximum(i0, 0), nx - 1)
+    ib = np.minimum(np.maximum(i0 + 1, 0), nx - 1)
+    ja = np.mod(j0, nz) * nx
+    jb = np.mod(j0 + 1, nz) * nx
+    taps = (ja + ia, ja + ib, jb + ia, jb + ib)
+    ux, uz = 1 - tx, 1 - tz
+    out = []
+    for m in maps:
+        flat = m.ravel() if m.flags.c_contiguous else np.ascontiguousarray(m).ravel()
+        # Only the four picked texels are read; float32 texels widen exactly in the float64 products.
+        aa, ab, ba, bb = (flat.take(t) for t in taps)
+        top = aa * ux + ab * tx
+        bot = ba * ux + bb * tx
+        out.append(top * uz + bot * tz)
+    return tuple(out) if isinstance(hmap, tuple) else out[0]
 
 
 # ----------------------------------------------------------------------------------------------------------------

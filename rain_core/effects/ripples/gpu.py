@@ -5,7 +5,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from rain_core.effects.ripples.solver import WaveSolver, shifted
+from rain_core.effects.ripples.solver import WaveSolver, shift_in_place
 from rain_core.gfx import units
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import PingPong, float_target, fullscreen_triangle
@@ -16,6 +16,7 @@ REDUCE_BLOCK = 8  # cells per side summed by one fragment of the reduction pass
 # Program (by GL name) → the constant uniforms last written into it. The shader library caches programs, so two
 # solvers may share one; a solver re-writes its constants only when another wrote its own since.
 _CONSTANTS_IN: dict[int, dict] = {}
+_UNSET = object()
 
 
 class WaveSolverGPU(WaveSolver):
@@ -61,6 +62,7 @@ class WaveSolverGPU(WaveSolver):
         }
         self._vaos = {name: fullscreen_triangle(ctx, p) for name, p in self._progs.items() if name != "impulse"}
         state_unit, mask_unit, _ = units.SCRATCH
+        self._written: dict[int, dict] = {}  # program (GL name) → per-pass uniforms this solver wrote there last
         self._constants = {"u_state": state_unit, "u_mask": mask_unit, "u_n": n,
                            "u_s2": self.speed_m_s ** 2, "u_inv_h2": 1.0 / self.cell_m ** 2}
         self._queued: list[np.ndarray] = []  # (K, 4) float32 bumps (x, z, radius in cells; peak m) not drawn yet
@@ -89,11 +91,21 @@ class WaveSolverGPU(WaveSolver):
         if _CONSTANTS_IN.get(prog.glo) is not self._constants:
             set_uniforms(prog, self._constants)
             _CONSTANTS_IN[prog.glo] = self._constants
+            self._written.pop(prog.glo, None)  # another solver may have written its own values since
+
+    def _set(self, prog, uniforms: dict) -> None:
+        """Write the per-pass uniforms that differ from what this solver last wrote into ``prog`` (call after
+        ``_own``): the sub-step's coefficients and a zero shift repeat frame after frame."""
+        written = self._written.setdefault(prog.glo, {})
+        changed = {k: v for k, v in uniforms.items() if written.get(k, _UNSET) != v}
+        if changed:
+            set_uniforms(prog, changed)
+            written.update(changed)
 
     def _draw(self, name: str, target, **uniforms):
         prog = self._progs[name]
         self._own(prog)
-        set_uniforms(prog, uniforms)
+        self._set(prog, uniforms)
         state_unit, mask_unit, _ = units.SCRATCH
         self.state.src.color.use(state_unit)
         self.mask_texture.use(mask_unit)
@@ -112,7 +124,12 @@ class WaveSolverGPU(WaveSolver):
         if xs.size == 0:
             return
         inv_h = 1.0 / self.cell_m
-        self._queued.append(np.stack([xs * inv_h, zs * inv_h, r_eff * inv_h, amounts], axis=1).astype(np.float32))
+        rows = np.empty((xs.size, 4), np.float32)  # straight into the instance layout: no float64 (K, 4) first
+        np.multiply(xs, inv_h, out=rows[:, 0], casting="same_kind")
+        np.multiply(zs, inv_h, out=rows[:, 1], casting="same_kind")
+        np.multiply(r_eff, inv_h, out=rows[:, 2], casting="same_kind")
+        rows[:, 3] = amounts
+        self._queued.append(rows)
         self._sourced = True
         self._asleep = False
 
@@ -160,7 +177,7 @@ class WaveSolverGPU(WaveSolver):
     def _advance(self, k: int, alpha: float, kc2: float):
         self._flush()
         self._own(self._progs["step"])
-        set_uniforms(self._progs["step"], u_alpha=alpha, u_k=kc2)
+        self._set(self._progs["step"], {"u_alpha": alpha, "u_k": kc2})
         for _ in range(k):
             self._pass("step")
 
@@ -218,7 +235,7 @@ class WaveSolverGPU(WaveSolver):
             return
         self._flush()
         if self._mask is not None:
-            self._mask = shifted(self._mask, dx, dz, 1.0)
+            shift_in_place(self._mask, dx, dz, 1.0)
             self._draw("mask_shift", self.mask.dst, u_shift=(dx, dz))
             self.mask.swap()
         if not self._asleep:

@@ -80,6 +80,34 @@ def shifted(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
     return out
 
 
+def shift_in_place(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
+    """``shifted`` into ``a`` itself (returned): the window scrolls every frame at speed, and a fresh n² array
+    filled and copied each time costs more than moving the part that stays and filling the strips that enter."""
+    n_z, n_x = a.shape
+    if abs(dx) >= n_x or abs(dz) >= n_z:
+        a[...] = fill
+        return a
+    # NumPy copies overlapping views as if through a temporary, so the move is exact in either direction.
+    if dx == 0 and a.flags.c_contiguous:  # whole rows: one contiguous move (the car drives along z)
+        flat, k = a.reshape(-1), abs(dz) * n_x
+        if dz > 0:
+            flat[:flat.size - k] = flat[k:]
+        elif dz < 0:
+            flat[k:] = flat[:flat.size - k]
+    else:
+        a[max(0, -dz):n_z - max(0, dz), max(0, -dx):n_x - max(0, dx)] = \
+            a[max(0, dz):n_z - max(0, -dz), max(0, dx):n_x - max(0, -dx)]
+    if dz > 0:
+        a[n_z - dz:, :] = fill
+    elif dz < 0:
+        a[:-dz, :] = fill
+    if dx > 0:
+        a[:, n_x - dx:] = fill
+    elif dx < 0:
+        a[:, :-dx] = fill
+    return a
+
+
 class WaveSolver:
     """Float64 NumPy reference of the damped leapfrog wave solver (see the module docstring for the scheme).
 
@@ -557,12 +585,15 @@ class WaveSolver:
         if dx == 0 and dz == 0:
             return
         if self._mask is not None:
-            self._mask = shifted(self._mask, dx, dz, 1.0)
+            shift_in_place(self._mask, dx, dz, 1.0)
         if self._asleep:
             return
-        z, zp = shifted(self._z, dx, dz, 0.0), shifted(self._zp, dx, dz, 0.0)
-        for a in (z, zp):
+        if self.dtype == np.float64:  # the reference: new arrays, so a height taken before stays as it was
+            self._z, self._zp = shifted(self._z, dx, dz, 0.0), shifted(self._zp, dx, dz, 0.0)
+        else:  # the fast path steps in place anyway: no n² allocations per scroll
+            shift_in_place(self._z, dx, dz, 0.0)
+            shift_in_place(self._zp, dx, dz, 0.0)
+        for a in (self._z, self._zp):
             a[0, :] = a[-1, :] = a[:, 0] = a[:, -1] = 0.0
-        self._z, self._zp = z, zp
 
 
