@@ -127,6 +127,21 @@ def wheel_contacts_local(spec: VehicleSpec) -> np.ndarray:
     return np.array([[-hx, 0.0, -hz], [hx, 0.0, -hz], [-hx, 0.0, hz], [hx, 0.0, hz]])
 
 
+_CONTACTS_LOCAL: dict[int, tuple[VehicleSpec, np.ndarray]] = {}
+
+
+def _contacts_local(spec: VehicleSpec) -> np.ndarray:
+    """wheel_contacts_local(spec) as a shared read-only array (every vehicle asks every step)."""
+    hit = _CONTACTS_LOCAL.get(id(spec))
+    if hit is None or hit[0] is not spec:
+        if len(_CONTACTS_LOCAL) > 64:
+            _CONTACTS_LOCAL.clear()
+        local = wheel_contacts_local(spec)
+        local.flags.writeable = False
+        hit = _CONTACTS_LOCAL[id(spec)] = (spec, local)
+    return hit[1]
+
+
 def light_positions_local(spec: VehicleSpec) -> tuple[np.ndarray, np.ndarray]:
     """Lens centres (m, local frame) of the (2, 3) headlights and the (2, 3) tail lights, left first.
 
@@ -221,7 +236,7 @@ class Vehicle:
 
     def wheel_contacts(self) -> np.ndarray:
         """(4, 3) world contact points (m), order FL, FR, RL, RR, on the road plane y = 0."""
-        return self.to_world(wheel_contacts_local(self.spec))
+        return self.to_world(_contacts_local(self.spec))
 
     def wheel_speeds(self) -> np.ndarray:
         """(4,) ground speed of each contact point (m/s), order FL, FR, RL, RR; negative while reversing.
@@ -312,10 +327,15 @@ class EgoCar(Vehicle):
         dpsi = omega * h
         ds = v_mean * h
         chord = ds * (math.sin(dpsi / 2.0) / (dpsi / 2.0) if abs(dpsi) > 1e-9 else 1.0)
-        rear = self.rear_axle() + _forward(self.yaw + dpsi / 2.0) * chord
-        self.yaw = math.remainder(self.yaw + dpsi, math.tau)
-        self.position = rear + self.forward() * (spec.wheelbase_m / 2.0)
-        self.position[1] = 0.0
+        # rear_axle() + _forward(yaw + dpsi/2)·chord, then the new centre rear + forward()·wheelbase/2: the same
+        # operations on x and z in scalars (the same bits), without five 3-vectors per sub-step (y is 0).
+        half = spec.wheelbase_m / 2.0
+        yaw = self.yaw
+        px, pz = float(self.position[0]), float(self.position[2])
+        rx = px - -math.sin(yaw) * half + -math.sin(yaw + dpsi / 2.0) * chord
+        rz = pz - -math.cos(yaw) * half + -math.cos(yaw + dpsi / 2.0) * chord
+        self.yaw = yaw = math.remainder(yaw + dpsi, math.tau)
+        self.position = np.array([rx + -math.sin(yaw) * half, 0.0, rz + -math.cos(yaw) * half])
         self.speed_m_s = v1
         self.steer_rad = delta
         self.yaw_rate_rad_s = v1 * math.tan(delta) / spec.wheelbase_m
@@ -524,7 +544,8 @@ class Traffic:
         around = float(self.ego.position[2]) if self.ego is not None else 0.0
         for v in self.vehicles:
             z = float(v.position[2])
-            dz = float(wrap_z(z, around)) - z
+            # wrap_z for one float: Python's round, like np.round, rounds halves to even.
+            dz = (z - PERIOD_M * round((z - around) / PERIOD_M)) - z
             if dz != 0.0:
                 v._shift_z(dz)
 
@@ -561,7 +582,8 @@ class Traffic:
         for v, a in zip(self.vehicles, accels, strict=True):
             v1 = max(0.0, v.speed_m_s + a * h)
             ds = 0.5 * (v.speed_m_s + v1) * h
-            v.position = v.position + v.forward() * ds
+            p = v.position  # position + forward()·ds, in scalars (the same bits, no temporaries)
+            v.position = np.array([p[0] + -math.sin(v.yaw) * ds, p[1] + 0.0 * ds, p[2] + -math.cos(v.yaw) * ds])
             v.speed_m_s = v1
             v.odometer_m += ds
         self._enforce_gaps()

@@ -149,6 +149,7 @@ class Weather:
         self._pinned: set[str] = set()
         self._time_s = 0.0
         self._rate = 0.0
+        self._of_rate: tuple | None = None  # (rate, fill rates, category, extinction): they depend on it alone
         self._since_rain = math.inf
         self.set_wind(wind_speed_m_s, wind_direction_rad, gustiness)
 
@@ -241,7 +242,7 @@ class Weather:
         dw = dt * self._time_scale  # weather time
         free = [name for name in LEVELS if name not in self._pinned]
         if rate >= R_WET_MIN_MM_H:
-            fill = fill_rates_per_s(rate)
+            fill = self._rate_terms(rate)[1]
             for i, name in enumerate(LEVELS):
                 if name in free:
                     self._levels[name] = min(1.0, self._levels[name] + float(fill[i]) * dw)
@@ -257,6 +258,15 @@ class Weather:
                 self._levels[name] = max(0.0, self._levels[name] - DRY_PER_S[name] * drying)
             self._since_rain = t1
         return self.state
+
+    def _rate_terms(self, rate: float) -> tuple:
+        """(rate, fill_rates_per_s, rain category, extinction per km) at ``rate`` (mm/h, already checked): the
+        rate changes only when the user moves it, so the last one's are kept (each costs NumPy calls)."""
+        terms = self._of_rate
+        if terms is None or terms[0] != rate:
+            terms = self._of_rate = (rate, fill_rates_per_s(rate), physics.rain_category(rate),
+                                     physics.rain_extinction_per_km(rate))
+        return terms
 
     def wind_at(self, time_s: float) -> WindState:
         """The wind at absolute time time_s (s, any finite value): mean settings plus the seeded gusts."""
@@ -281,12 +291,12 @@ class Weather:
         return WeatherState(
             time_s=self._time_s,
             rate_mm_h=self._rate,
-            category=physics.rain_category(self._rate),
+            category=self._rate_terms(self._rate)[2],
             wetness=self._levels["wetness"],
             cracks=self._levels["cracks"],
             puddles=self._levels["puddles"],
             time_since_rain_s=self._since_rain,
-            extinction_per_km=physics.rain_extinction_per_km(self._rate),
+            extinction_per_km=self._rate_terms(self._rate)[3],
             wind=self.wind_at(self._time_s),
             pinned=tuple(name for name in LEVELS if name in self._pinned),
         )

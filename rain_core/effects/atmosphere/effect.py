@@ -32,7 +32,7 @@ from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import ColorView, RenderTarget, float_target
-from rain_core.gfx.uniforms import mat4_bytes, set_uniform, set_uniforms
+from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform
 from rain_core.settings import AtmosphereSection
 
 
@@ -56,6 +56,8 @@ class AtmosphereEffect(Effect):
         self.glow_sigma_px = 0.0  # of the last frame, full-resolution pixels
         self._post_draws = False
         self._scatter_count = 0
+        self._state_of: tuple | None = None  # (frame, lighting, key, state): frame_uniforms and update share it
+        self._inv_of: tuple | None = None  # (rc, view, projection, inverse view-projection bytes)
         self._glow_factor = 1
         self._programs: dict[str, moderngl.Program] = {}
         self._vaos: dict[str, moderngl.VertexArray] = {}
@@ -70,8 +72,18 @@ class AtmosphereEffect(Effect):
         return settings.atmosphere if settings is not None else AtmosphereSection()
 
     def _state(self, frame) -> AtmosphereState:
-        return atmosphere_state(self._section(frame), frame.rain_rate_mm_h, frame.lighting,
-                                lamp_lit=bool(getattr(frame.world, "lamps", None)))
+        # The renderer asks twice per frame (frame_uniforms, then update) with the same Frame: model it once
+        # (the key also holds what the model reads, so a frame whose settings were edited is modelled afresh).
+        sec = self._section(frame)
+        key = (frame.rain_rate_mm_h, sec.enabled, sec.fog_scale, sec.haze_per_km, sec.sky_darkening, sec.glow,
+               sec.light_scattering)
+        cached = self._state_of
+        if cached is not None and cached[0] is frame and cached[1] is frame.lighting and cached[2] == key:
+            return cached[3]
+        state = atmosphere_state(sec, frame.rain_rate_mm_h, frame.lighting,
+                                 lamp_lit=bool(getattr(frame.world, "lamps", None)))
+        self._state_of = (frame, frame.lighting, key, state)
+        return state
 
     def observe(self, frame: Frame) -> None:
         self.state = None  # until ``update`` models this frame: an idle effect holds no stale medium
@@ -118,7 +130,14 @@ class AtmosphereEffect(Effect):
     def _frame_uniforms(self, prog: moderngl.Program, rc: RenderContext) -> None:
         """The frame's uniforms (the medium included) and the inverse camera the depth reconstruction needs."""
         rc.set_frame_uniforms(prog)
-        set_uniform(prog, "u_inv_view_proj", mat4_bytes(np.linalg.inv(rc.view_proj)))
+        owned_uniforms(prog).set("u_inv_view_proj", self._inv_view_proj(rc))
+
+    def _inv_view_proj(self, rc: RenderContext) -> bytes:
+        """mat4 bytes of inverse(projection·view), once per render context (both post programs need it)."""
+        cached = self._inv_of
+        if cached is None or cached[0] is not rc or cached[1] is not rc.view or cached[2] is not rc.projection:
+            cached = self._inv_of = (rc, rc.view, rc.projection, mat4_bytes(np.linalg.inv(rc.view_proj)))
+        return cached[3]
 
     def render(self, stage: str, rc: RenderContext) -> None:
         if stage == "post" and self.state is not None and self._post_draws:
@@ -136,10 +155,12 @@ class AtmosphereEffect(Effect):
         prog, vao = self._program(rc, "atmosphere/composite.frag")
         self._frame_uniforms(prog, rc)
         a.color.use(units.ATMOSPHERE_GLOW)
-        set_uniforms(prog, u_glow=units.ATMOSPHERE_GLOW, u_depth=units.ATMOSPHERE_DEPTH,
-                     u_glow_factor=self._glow_factor, u_glow_strength=self.state.glow_strength,
-                     u_scatter_count=self._scatter_count, u_scatter_samples=SCATTER_SAMPLES,
-                     u_scatter_per_m=self.state.scatter_per_m, u_scatter_max_m=SCATTER_MAX_M)
+        # Only this effect writes these names in its programs: unchanged values are skipped (most frames, all).
+        owned_uniforms(prog).update({
+            "u_glow": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH, "u_glow_factor": self._glow_factor,
+            "u_glow_strength": self.state.glow_strength, "u_scatter_count": self._scatter_count,
+            "u_scatter_samples": SCATTER_SAMPLES, "u_scatter_per_m": self.state.scatter_per_m,
+            "u_scatter_max_m": SCATTER_MAX_M})
         # The composite reads the scene's depth, so it writes through a framebuffer without that depth attached.
         self._hdr_fbo.fbo(rc.hdr.color).use()
         ctx.enable(moderngl.BLEND)
@@ -156,14 +177,16 @@ class AtmosphereEffect(Effect):
         down, down_vao = self._program(rc, "atmosphere/glow_down.frag")
         self._frame_uniforms(down, rc)
         rc.hdr.color.use(units.ATMOSPHERE_GLOW)
-        set_uniforms(down, u_color=units.ATMOSPHERE_GLOW, u_depth=units.ATMOSPHERE_DEPTH, u_factor=self._glow_factor)
+        owned_uniforms(down).update({"u_color": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH,
+                                     "u_factor": self._glow_factor})
         a.fbo.use()
         down_vao.render(moderngl.TRIANGLES, vertices=3)
         sigma = min(self.glow_sigma_px / self._glow_factor, MAX_BLUR_RADIUS / 3.0)
         blur, blur_vao = self._program(rc, "atmosphere/blur.frag")
-        set_uniforms(blur, u_src=units.ATMOSPHERE_GLOW, u_sigma_px=sigma, u_radius=blur_radius(sigma))
+        owned = owned_uniforms(blur)
+        owned.update({"u_src": units.ATMOSPHERE_GLOW, "u_sigma_px": sigma, "u_radius": blur_radius(sigma)})
         for step, src, dst in (((1, 0), a, b), ((0, 1), b, a)):
-            set_uniform(blur, "u_step", step)
+            set_uniform(blur, "u_step", step)  # changes between the two draws: always written
             src.color.use(units.ATMOSPHERE_GLOW)
             dst.fbo.use()
             blur_vao.render(moderngl.TRIANGLES, vertices=3)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from rain_core.effects.rainfall.boxes import wrap_near
+from rain_core.effects.rainfall.boxes import PERIOD_M, wrap_near
 from rain_core.effects.rainfall.constants import MAX_VEHICLES
 
 
@@ -92,10 +92,13 @@ def cull_vehicles(vehicles, centre, reach_m: float) -> list:
     """The vehicles (at most MAX_VEHICLES, nearest first) within reach_m (m) of centre (x, z) horizontally, z
     periodic."""
     out = []
+    cx, cz = float(centre[0]), float(centre[1])
     for veh in vehicles:
-        c = np.asarray(veh.position, dtype=np.float64)
-        dz = float(wrap_near(c[2] - centre[1], 0.0))
-        dist = float(np.hypot(c[0] - centre[0], dz))
+        # wrap_near for one vehicle in scalars (Python's round, like np.round, rounds halves to even).
+        x, z = float(veh.position[0]), float(veh.position[2])
+        dz = z - cz
+        dz = dz - PERIOD_M * round(dz / PERIOD_M)
+        dist = float(np.hypot(x - cx, dz))
         if dist <= reach_m + 0.5 * veh.spec.length_m:
             out.append((dist, veh))
     out.sort(key=lambda item: item[0])
@@ -105,21 +108,42 @@ def cull_vehicles(vehicles, centre, reach_m: float) -> list:
 def vehicle_uniforms(vehicles, shift_z: float, around_z: float) -> dict[str, np.ndarray | int]:
     """The shader's vehicle arrays: u_veh_pose (x, y, z in the frame shifted by shift_z and wrapped near
     around_z, yaw), u_veh_lo / u_veh_hi (local boxes), u_veh_plane, u_veh_count."""
+    vehicles = vehicles[:MAX_VEHICLES]
     pose = np.zeros((MAX_VEHICLES, 4))
-    lo = np.zeros((MAX_VEHICLES * PIECES_PER_VEHICLE, 4))
-    hi = np.zeros((MAX_VEHICLES * PIECES_PER_VEHICLE, 4))
-    planes = np.zeros((MAX_VEHICLES * PIECES_PER_VEHICLE * PLANES_PER_PIECE, 4))
-    for i, veh in enumerate(vehicles[:MAX_VEHICLES]):
+    for i, veh in enumerate(vehicles):
         c = np.asarray(veh.position, dtype=np.float64)
         z = float(wrap_near(c[2] - shift_z, around_z))
         pose[i] = (c[0], c[1], z, veh.yaw)
-        plo, phi, pp = piece_volumes(veh.spec)
-        n = PIECES_PER_VEHICLE
+    lo, hi, planes = _piece_arrays(tuple(veh.spec for veh in vehicles))
+    return {"u_veh_pose": pose, "u_veh_lo": lo, "u_veh_hi": hi, "u_veh_plane": planes,
+            "u_veh_count": len(vehicles)}
+
+
+_PIECE_ARRAYS: dict[tuple, tuple[tuple, tuple]] = {}
+
+
+def _piece_arrays(specs: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """u_veh_lo, u_veh_hi, u_veh_plane for vehicles of ``specs`` in this order: they change only when the
+    vehicles near the camera do, so they are kept per spec sequence (shared read-only arrays)."""
+    key = tuple(id(sp) for sp in specs)
+    hit = _PIECE_ARRAYS.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], specs, strict=True)):
+        return hit[1]
+    n = PIECES_PER_VEHICLE
+    lo = np.zeros((MAX_VEHICLES * n, 4))
+    hi = np.zeros((MAX_VEHICLES * n, 4))
+    planes = np.zeros((MAX_VEHICLES * n * PLANES_PER_PIECE, 4))
+    for i, spec in enumerate(specs):
+        plo, phi, pp = piece_volumes(spec)
         lo[i * n: (i + 1) * n, :3] = plo
         hi[i * n: (i + 1) * n, :3] = phi
         planes[i * n * PLANES_PER_PIECE: (i + 1) * n * PLANES_PER_PIECE] = pp.reshape(-1, 4)
-    return {"u_veh_pose": pose, "u_veh_lo": lo, "u_veh_hi": hi, "u_veh_plane": planes,
-            "u_veh_count": min(len(vehicles), MAX_VEHICLES)}
+    for a in (lo, hi, planes):
+        a.flags.writeable = False
+    if len(_PIECE_ARRAYS) > 256:
+        _PIECE_ARRAYS.clear()  # forgetting only costs a rebuild
+    _PIECE_ARRAYS[key] = (specs, (lo, hi, planes))
+    return lo, hi, planes
 
 
 def inside_vehicles(p: np.ndarray, vehicles) -> np.ndarray:

@@ -119,12 +119,23 @@ def time_to_height_newton(y0, w0, uy, tau, level, tol_s: float = 1e-5, max_steps
     drop = np.maximum(y0 - level, 0.0)  # rows already at or below the level: f(0) = 0, and they answer 0
     t = np.where(a > 0.0, (drop + a * tau) / -uy, 0.0)
     a_tau, rate = a * tau, -1.0 / tau
+    # The loop runs on preallocated buffers (the arrays are small: NumPy's per-call cost dominates, and a new
+    # array per operation is most of it); the same operations in the same order, so the same bits.
+    em1, num, den = np.empty_like(t), np.empty_like(t), np.empty_like(t)
     for i in range(max_steps):
-        em1 = np.expm1(t * rate)  # e^(−t/τ) − 1
+        np.multiply(t, rate, out=em1)
+        np.expm1(em1, out=em1)  # e^(−t/τ) − 1
         # f = height − level; its slope u_y + a·e^(−t/τ) = w0 + a·em1 is < 0 at every iterate (see above).
-        step = (drop + uy * t - a_tau * em1) / (w0 + a * em1)
-        t -= step
-        if i >= 2 and not np.abs(step).max(initial=0.0) > tol_s:
+        np.multiply(uy, t, out=num)
+        np.add(drop, num, out=num)
+        np.multiply(a_tau, em1, out=den)
+        np.subtract(num, den, out=num)
+        np.multiply(a, em1, out=den)
+        np.add(w0, den, out=den)
+        np.divide(num, den, out=num)  # the Newton step
+        t -= num
+        # Spray launches need 6–12 steps: testing for convergence before the sixth only costs time.
+        if i >= 5 and not np.abs(num, out=num).max(initial=0.0) > tol_s:
             break
     return np.where(below, 0.0, t)
 

@@ -1,0 +1,38 @@
+"""The atmosphere's per-frame CPU paths (issue 13): the frame's medium is modelled once, and afresh when what it
+depends on changes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rain_core.camera import look_at
+from rain_core.effects import atmosphere as atm
+from rain_core.effects.atmosphere.model import atmosphere_state, atmosphere_uniforms
+from rain_core.settings import Settings
+
+
+def test_the_medium_is_modelled_once_per_frame_and_again_when_its_inputs_change(gl_ctx, kit, monkeypatch):
+    effect = atm.AtmosphereEffect(gl_ctx)
+    calls = []
+    model = atm.effect.atmosphere_state
+
+    def counting(*args, **kwargs):
+        calls.append(args)
+        return model(*args, **kwargs)
+
+    monkeypatch.setattr(atm.effect, "atmosphere_state", counting)
+    settings = Settings()
+    world = kit.world([kit.box((0.0, 5.0, 500.0), (20.0, 10.0, 20.0), (0.3, 0.3, 0.3))])
+    camera = look_at((3.0, 1.5, 600.0), (0.0, 4.0, 500.0), fov_y_deg=60.0)
+    frame = kit.frame(camera, world, settings, 8.0, 12.0)
+    first = effect.frame_uniforms(frame)
+    assert effect._state(frame) is effect._state(frame) and len(calls) == 1  # frame_uniforms, update: one model
+    assert first == atmosphere_uniforms(atmosphere_state(settings.atmosphere, 8.0, frame.lighting))
+    settings.atmosphere.fog_scale = 3.0  # the same frame with its settings edited: modelled afresh
+    thicker = effect.frame_uniforms(frame)
+    assert len(calls) == 2 and thicker["u_extinction_per_m"] > first["u_extinction_per_m"]
+    np.testing.assert_equal(thicker, atmosphere_uniforms(atmosphere_state(settings.atmosphere, 8.0, frame.lighting)))
+    other = kit.frame(camera, world, settings, 8.0, 12.0)  # a new frame: modelled again
+    effect.frame_uniforms(other)
+    assert len(calls) == 3
+    effect.release()
