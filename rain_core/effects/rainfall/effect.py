@@ -235,13 +235,15 @@ class RainfallEffect(Effect):
         hi = boxes.hi[-1] - [0.0, 0.0, rc.shift_z]
         gap = np.maximum(np.maximum(lo - pos[:count, :3], pos[:count, :3] - hi), 0.0)
         keep = np.flatnonzero(np.linalg.norm(gap, axis=1) < np.abs(pos[:count, 3]))  # w < 0: a low beam
-        out = []
-        for buf in (pos_b, dir_b, col_b):
-            arr = np.frombuffer(buf, np.float32).reshape(-1, 4)
-            packed = np.zeros_like(arr)
-            packed[: keep.size] = arr[keep]
-            out.append(packed.tobytes())
-        return (*out, int(keep.size))
+        # The three arrays packed in one pass (one gather, one tobytes), then cut into their three byte strings.
+        size = len(pos_b)
+        if len(dir_b) != size or len(col_b) != size:
+            raise ValueError("rc.lights: the position, direction and colour buffers must have the same size")
+        arr = np.frombuffer(pos_b + dir_b + col_b, np.float32).reshape(3, -1, 4)
+        packed = np.zeros_like(arr)
+        packed[:, : keep.size] = arr[:, keep]
+        data = packed.tobytes()
+        return data[:size], data[size:2 * size], data[2 * size:], int(keep.size)
 
     def _draw_environment(self, rc) -> None:
         rc.set_frame_uniforms(self.env_prog)
@@ -307,6 +309,11 @@ class RainfallEffect(Effect):
             if not name.startswith(_OWN_UNIFORMS):
                 set_uniform(prog, name, value)
                 continue
+            # The same read-only array as last time (the vehicles' pieces) is the same value: no conversion.
+            frozen = isinstance(value, np.ndarray) and not value.flags.writeable
+            if frozen and cache.get(name + "#array") is value:
+                continue
+            cache[name + "#array"] = value if frozen else None
             if isinstance(value, np.ndarray):
                 value = np.ascontiguousarray(value, dtype=np.float32).tobytes()
             if cache.get(name) == value:
@@ -403,3 +410,37 @@ class RainfallEffect(Effect):
             obj.release()
         if self._owns_shaders:
             self.shaders.release()
+
+    # --- label images (rain_core.labels) ---
+    def render_label(self, name: str, rc, target) -> None:
+        """Label image ``name`` of the frame last updated: for "rain", the streaks' opacity (the alpha the
+        ``transparent`` pass blends with) as the fragment alpha into ``target.fbo``, depth-tested against its
+        depth (not written). The caller (rain_core.labels) sets blending and colour mask; other names: nothing."""
+        upd = self.last_update
+        if name != "rain" or self.sim is None or upd is None or upd.rate_mm_h <= 0.0:
+            return
+        if not self.sim.capacity or upd.drawn_expected <= 0.0:
+            return
+        s = self._settings(rc.frame)
+        prog = self.streak_prog
+        rc.set_frame_uniforms(prog)
+        self._set(prog, self.drop_uniforms(upd, rc.shift_z, float(rc.camera_position[2])))
+        self._set(prog, {
+            "u_viewport": tuple(float(v) for v in rc.size),
+            "u_focal_px": float(rc.projection[1, 1]) * rc.size[1] / 2.0,
+            "u_brightness": float(s.rainfall.streak_brightness), "u_rain_env": units.RAINFALL_ENV,
+            "u_cam_vel": tuple(self.camera_velocity_m_s), "u_exposure_s": float(s.camera.exposure_s),
+            "u_near": float(rc.frame.camera.near_m), "u_shape_area": self._shape_area,
+            "u_shape_width": self._shape_width, "u_width_floor_px": WIDTH_FLOOR_PX, "u_width_max_px": WIDTH_MAX_PX,
+            "u_alpha_max": ALPHA_MAX,
+        })
+        self._env_tex.use(units.RAINFALL_ENV)  # colour only, but never another pass's texture on that unit
+        self._bind_static()
+        target.fbo.use()
+        rc.ctx.enable(moderngl.DEPTH_TEST)
+        rc.ctx.disable(moderngl.CULL_FACE)
+        target.fbo.depth_mask = False
+        try:
+            self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
+        finally:
+            target.fbo.depth_mask = True

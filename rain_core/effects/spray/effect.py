@@ -187,3 +187,41 @@ class SprayEffect(Effect):
         self._capacity = [-1, -1]
         self._color_fbo.release()
         self._depth_sampler.release()
+
+    # --- label images (rain_core.labels) ---
+    def render_label(self, name: str, rc, target) -> None:
+        """Label image ``name`` of the frame last rendered: for "spray", the parcels' opacity (the alpha the
+        ``transparent`` pass blends with) as the fragment alpha into ``target.color_fbo``, hidden and softened by
+        ``target.depth`` as the pass is by the scene's. The caller (rain_core.labels) sets blending and colour
+        mask; other names, or nothing in flight: nothing drawn."""
+        if name != "spray" or self._program is None:
+            return
+        frame = rc.frame
+        now = self.emitter.clock(frame.time_s)
+        if self.emitter.alive_until() <= now:
+            return
+        prog = self._program
+        rc.set_frame_uniforms(prog)
+        camera = frame.camera
+        cam_vel = np.asarray(frame.ego.velocity(), dtype=np.float64) if frame.ego is not None else np.zeros(3)
+        set_uniforms(prog, {
+            "u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
+            "u_camera_vel": tuple(float(x) for x in cam_vel),
+            "u_exposure_s": float(getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)),
+            "u_cam_forward": tuple(float(x) for x in camera.basis()[2]), "u_depth": units.SPRAY_DEPTH,
+            "u_viewport": (float(rc.size[0]), float(rc.size[1])),
+            "u_near": float(camera.near_m), "u_far": float(camera.far_m),
+            "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
+        })
+        self._depth_sampler.use(units.SPRAY_DEPTH)
+        target.depth.use(units.SPRAY_DEPTH)
+        target.color_fbo.use()
+        rc.ctx.disable(moderngl.DEPTH_TEST)
+        try:
+            for ring in (1, 0):
+                vao = self._vao(ring, prog)
+                if vao is not None and self.emitter.rings[ring].last_death() > now:
+                    vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.emitter.rings[ring].capacity)
+        finally:
+            rc.ctx.enable(moderngl.DEPTH_TEST)
+            self._depth_sampler.clear(units.SPRAY_DEPTH)

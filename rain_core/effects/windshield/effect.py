@@ -66,6 +66,8 @@ class WindshieldEffect(Effect):
         self.seed = int(seed)
         self.sim = WindshieldSim(spec, seed)
         self.glass = self.sim.glass
+        self._centre_local = self.glass.local_points(np.array([[0.0, 0.5 * self.glass.height]]))[0].tolist()
+        self._shelter_memo = None  # ((world, x, z), roof height m) of the last _sheltered lookup
         self.film_prog = self.shaders.program("common/fullscreen.vert", "windshield/film.frag")
         self.normals_prog = self.shaders.program("common/fullscreen.vert", "windshield/normals.frag")
         self.splat_prog = self.shaders.program("windshield/splat.vert", "windshield/splat.frag")
@@ -153,9 +155,18 @@ class WindshieldEffect(Effect):
         return frame.settings if frame.settings is not None else self.settings
 
     def _sheltered(self, frame) -> bool:
-        centre = frame.ego.to_world(self.glass.local_points(np.array([[0.0, 0.5 * self.glass.height]])))[0]
-        roof = float(np.asarray(frame.world.occluder_height(centre[0], centre[2])))
-        return roof > centre[1]
+        """Whether a roof is over the glass's centre. ``active`` and ``inputs_for`` both ask each frame: the
+        answer for the last world and position is kept (the occluders do not move), so the lookup runs once."""
+        ego = frame.ego
+        lx, ly, lz = self._centre_local  # ego.to_world of the glass centre, in scalars
+        c, s = math.cos(ego.yaw), math.sin(ego.yaw)
+        px, py, pz = ego.position.tolist()
+        x, y, z = lx * c + lz * s + px, ly + py, -lx * s + lz * c + pz
+        key = (frame.world, x, z)
+        memo = self._shelter_memo
+        if memo is None or memo[0][0] is not key[0] or memo[0][1:] != key[1:]:
+            memo = self._shelter_memo = (key, float(np.asarray(frame.world.occluder_height(x, z))))
+        return memo[1] > y
 
     def active(self, frame) -> bool:
         settings = self._settings(frame)
@@ -398,3 +409,31 @@ class WindshieldEffect(Effect):
             self._frame_copy = None
         if self._owns_shaders:  # a shared library's owner releases it: its programs serve every effect using it
             self.shaders.release()
+
+    # --- label images (rain_core.labels) ---
+    def render_label(self, name: str, rc, target) -> None:
+        """Label image ``name`` of the frame last rendered: for "glass_water", the water on the glass as seen
+        (the coverage of drops and film glass.frag blends, 0..1) as the fragment alpha into ``target.fbo``,
+        depth-tested against its depth (the cabin hides the glass; not written). The caller (rain_core.labels)
+        sets blending and colour mask; other names, outside the car or before the first water pass: nothing."""
+        frame = rc.frame
+        if name != "glass_water" or not self.resolution or not frame.camera.inside_car or frame.ego is None:
+            return
+        prog = self.shaders.program("windshield/glass.vert", "labels/glass_water.frag")
+        rc.set_frame_uniforms(prog)
+        model = frame.ego.model_matrix().copy()
+        model[2, 3] -= rc.shift_z
+        set_uniforms(prog, u_glass=(self.glass.width_bottom, self.glass.width_top, self.glass.height),
+                     u_model=mat4_bytes(model), u_aperture_m=PUPIL_RADIUS_M, u_water=_UNIT_A)
+        self._water.color.use(_UNIT_A)
+        # Made per call and released: labels are asked for now and then, and release() need not know of it.
+        vao = self.ctx.vertex_array(prog, [(self._mesh_vbo, "3f 12x 2f", "in_position", "in_uv")],  # normal unused
+                                    index_buffer=self._mesh_ibo, index_element_size=4)
+        target.fbo.use()
+        rc.ctx.enable(moderngl.DEPTH_TEST)
+        target.fbo.depth_mask = False
+        try:
+            vao.render(moderngl.TRIANGLES)
+        finally:
+            target.fbo.depth_mask = True
+            vao.release()

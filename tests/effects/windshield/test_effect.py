@@ -168,3 +168,24 @@ def test_splats_are_one_instanced_draw_per_water_target_with_only_what_the_frame
     assert effect.upload_bytes == 32 * rows + 4 * FILM_CELLS * FILM_CELLS  # 8 float32 a splat, the coarse film
     assert effect.status()["upload_kb"] == effect.upload_bytes / 1024
     scene.release()
+
+
+def test_shelter_lookup_is_kept_per_position_and_matches_the_roof(gl_ctx, shaders):
+    # active() and inputs_for() both ask whether a roof is over the glass; the answer is kept for the last
+    # world and position. Along the road (under the bridge and out) it must equal the direct lookup.
+    s = Settings()
+    effect = WindshieldEffect(gl_ctx, s, seed=1, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+    ego, world = scene.ego, scene.world
+    x0 = float(ego.position[0])
+    seen = set()
+    for z in np.linspace(-400.0, 400.0, 321):
+        ego.position[2] = z
+        frame = scene.frame()
+        centre = ego.to_world(effect.glass.local_points(np.array([[0.0, 0.5 * effect.glass.height]])))[0]
+        want = bool(float(np.asarray(world.occluder_height(centre[0], centre[2]))) > centre[1])
+        assert effect._sheltered(frame) == want, z
+        assert effect._sheltered(frame) == want, z  # the kept answer
+        seen.add(want)
+    assert seen == {True, False}, f"no roof over the road at x = {x0} in ±400 m"
+    scene.release()
