@@ -93,11 +93,17 @@ def _path(text: str) -> Path:
     return Path(text)
 
 
+def _keys_epilog() -> str:
+    from app.controls import keys_help_text
+
+    return "\nkeys in the window (F1 shows them there too):\n" + keys_help_text() + "\n"
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m app",
         description="Rainroad: drive through rain. Without --headless a window opens; --headless renders offscreen.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG + _keys_epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--headless", action="store_true", help="render without a window (EGL), autopilot driving")
     p.add_argument("--size", type=_size, default=(1280, 720),
                    help=f"frame size WIDTHxHEIGHT in pixels, each in [16, {MAX_SIZE}] (x or X)")
@@ -125,7 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--panel", action="store_true", help="headless: draw the Rain Manager panel into the frames")
     p.add_argument("--frames", type=_int_in(1, 10**9), help="window: close after this many frames (smoke tests)")
     p.add_argument("--window", default="pyglet", choices=WINDOW_BACKENDS,
-                   help="moderngl-window backend for the window")
+                   help="moderngl-window backend for the window (default: pyglet; the others need their own "
+                        "package, e.g. pip install glfw)")
     return p
 
 

@@ -5,6 +5,42 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
+from rain_core import layout
+
+# Every key of the window, in the order the help overlay (F1), ``--help`` and the README list them.
+KEY_HELP = (
+    ("W / Up", "throttle (the autopilot drives until you touch a driving key)"),
+    ("S / Down", "brake, then reverse once stopped"),
+    ("A / Left, D / Right", "steer"),
+    ("R", "reset: the car back on its lane at cruise speed"),
+    ("C", "camera: driver's seat -> chase -> free-fly (free: WASD/arrows fly, drag the mouse to look)"),
+    ("Tab", "hide / show the Rain Manager"),
+    ("F1", "this list of keys"),
+    ("F12", "screenshot to screenshots/"),
+    ("Esc", "quit"),
+)
+
+
+def keys_help_text(indent: str = "  ") -> str:
+    """KEY_HELP as aligned plain-text lines (for ``--help``)."""
+    width = max(len(k) for k, _ in KEY_HELP)
+    return "\n".join(f"{indent}{k:<{width}}  {action}" for k, action in KEY_HELP)
+
+
+def reset_to_lane(scene) -> None:
+    """Put the ego car back on the autopilot's lane, wheels straight, facing along the lane at the autopilot's
+    cruise speed (m/s), where it was along the street (z kept): the R key and the Rain Manager's button."""
+    ego, lane = scene.ego, scene.autopilot.lane_index
+    ego.position = np.array([layout.LANE_CENTRES_X[lane], 0.0, float(ego.position[2])])
+    ego.yaw = float(layout.LANE_YAW[lane])
+    ego.speed_m_s = float(scene.autopilot.target_speed_m_s)
+    ego.steer_rad = 0.0
+    ego.yaw_rate_rad_s = 0.0
+    ego.previous_wheel_contacts = ego.wheel_contacts()  # no swept wheel path across the jump
+    scene.chase.reset()
+
 
 @dataclass
 class DriveInput:
@@ -35,6 +71,10 @@ class KeyboardDriver:
 
     def release(self, name: str, key: object = None):
         self._keys.pop(name if key is None else key, None)
+
+    def center(self):
+        """Wheels straight and no drive input held over (after a reset)."""
+        self.state = DriveInput()
 
     def update(self, dt_s: float, speed_m_s: float) -> DriveInput:
         dt_s = min(max(dt_s, 0.0), 0.1) if math.isfinite(dt_s) else 0.0

@@ -167,6 +167,8 @@ class ImGuiLayer:
         self.io = imgui.get_io()
         # No imgui.ini in the working directory: the app owns its settings (TOML), not ImGui.
         self.io.set_ini_filename(None)
+        # A thin slider grab: the default 12 px block hides the value printed under it in narrow sliders.
+        imgui.get_style().grab_min_size = 5.0
         self.io.backend_flags |= (
             imgui.BackendFlags_.renderer_has_textures | imgui.BackendFlags_.renderer_has_vtx_offset
         )

@@ -3,6 +3,10 @@
 Widgets are generated from the settings declarations (type, range, unit, choices), and every edit goes through
 ``rain_core.settings.set_value``, the same validation as the CLI and scenario files. A refused value is shown in
 red next to its widget instead of reaching the simulation.
+
+It starts compact: docked to the window's left side at most ``MAX_WIDTH_FRACTION`` of its width, FPS and frame
+ms in the title, the Rain section open and the groups Effects, View and quality, Performance collapsed. Tab
+hides it, F1 shows the keys (``app.controls.KEY_HELP``).
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ from collections import deque
 import numpy as np
 from imgui_bundle import imgui
 
+from app.controls import KEY_HELP, reset_to_lane
 from app.imgui_layer import ImGuiLayer
 from rain_core import physics
 from rain_core.settings import SettingsError, all_fields, apply_rain_preset, field_info, get_value, set_value
@@ -23,6 +28,15 @@ SECTIONS = (
     ("time_of_day", "Time of day"), ("traffic", "Traffic"), ("quality", "Quality"), ("ripples", "Ripples"),
     ("rainfall", "Rainfall"), ("spray", "Spray"), ("windshield", "Windshield"), ("atmosphere", "Atmosphere"),
 )
+# The panel's groups, in the README's order (Rain first and open, then Effects, View and quality; Performance last).
+GROUPS = (
+    ("Effects", ("road", "wind", "wipers", "ripples", "rainfall", "spray", "windshield", "atmosphere")),
+    ("View and quality", ("camera", "time_of_day", "traffic", "quality")),
+)
+SECTION_TITLES = dict(SECTIONS)
+MAX_WIDTH_FRACTION = 0.25  # of the window's width
+MAX_WIDTH_PX = 380.0  # wide windows need no wider panel
+MIN_WIDGET_PX = 110.0  # a slider narrower than this hides its value under the grab
 # Fields the generic widgets should not show (edited by dedicated widgets).
 CUSTOM_FIELDS = {"rain.rate_mm_h", "rain.preset", "rain.wetness", "rain.cracks", "rain.puddles"}
 LOG_FIELDS = {"rain.time_scale"}
@@ -43,7 +57,29 @@ def field_label(info) -> str:
         if name.endswith(suffix):
             name = name[: -len(suffix)]
             break
-    return name.replace("_", " ") + (f" ({info.unit})" if info.unit else "")
+    return ascii_text(name.replace("_", " ") + (f" ({info.unit})" if info.unit else ""))
+
+
+# The default ImGui font has ASCII only: anything else would show as '?'.
+_ASCII = {"→": "->", "←": "<-", "≈": "~", "…": "...", "×": "x", "β": "beta", "°": " deg", "≤": "<=", "≥": ">=",
+          "−": "-", "–": "-", "—": "-", "²": "^2", "³": "^3", "µ": "u", "μ": "u", "·": "*", "±": "+/-", "½": "1/2",
+          "‰": " per mille", "’": "'", "“": '"', "”": '"', "α": "alpha", "θ": "theta", "λ": "lambda"}
+
+
+def ascii_text(text: str) -> str:
+    """``text`` with the usual symbols spelled in ASCII (→ "->", ≈ "~", × "x", …); anything else → '?'."""
+    out = "".join(_ASCII.get(ch, ch) for ch in str(text))
+    return out.encode("ascii", "replace").decode("ascii")
+
+
+def preset_in_use(settings) -> str:
+    """The rain preset shown: the one named in the settings, else the preset whose rate the current rate equals
+    (the default 2 mm/h is "moderate"), else "custom"."""
+    if settings.rain.preset in physics.RAIN_PRESETS:
+        return settings.rain.preset
+    rate = float(settings.rain.rate_mm_h)
+    return next((name for name, r in physics.RAIN_PRESETS.items() if abs(r - rate) <= 1e-9 * max(r, 1.0)),
+                "custom")
 
 
 def effect_totals(pass_table) -> list[tuple[str, float, float | None]]:
@@ -66,6 +102,12 @@ class RainManagerPanel:
     def __init__(self, ctx, window_size, scene, framebuffer_size=None, expand_all: bool = False):
         self.layer = ImGuiLayer(ctx, tuple(window_size), framebuffer_size)
         self.expand_all = expand_all  # open every section (screenshots, tests)
+        self.visible = True  # Tab
+        self.show_help = False  # F1
+        self.on_reset = None  # the app's reset (car, driving input, cameras); default: controls.reset_to_lane
+        self.last_rect = None  # ((x, y), (w, h)) of the panel in the last frame, window pixels
+        self.open_sections: list[str] = []  # titles of the headers open in the last frame
+        self._label_w = 0.0  # px, the label column of the section being drawn
         self.scene = scene
         self.cameras = None  # the app's CameraModes, when there is a window
         self.errors: dict[str, str] = {}
@@ -84,6 +126,21 @@ class RainManagerPanel:
         except SettingsError as exc:
             self.errors[path] = str(exc)
 
+    def _fit(self, label: str) -> str:
+        """Size the next widget so its label fits beside it (labels are never cut): the section's label column
+        when that leaves the widget MIN_WIDGET_PX, else this label's own width; a label too long for either goes
+        on its own line above a full-width widget. Returns the label to give the widget."""
+        text = label.split("##")[0]
+        spacing = imgui.get_style().item_inner_spacing.x + 2.0
+        avail = imgui.get_content_region_avail().x
+        for label_w in (self._label_w, imgui.calc_text_size(text).x):
+            if avail - label_w - spacing >= MIN_WIDGET_PX:
+                imgui.set_next_item_width(avail - label_w - spacing)
+                return label
+        imgui.text(text)
+        imgui.set_next_item_width(-1.0)
+        return "##" + label
+
     def _field_widget(self, info, id_suffix: str = "") -> None:
         settings = self.scene.settings
         value = get_value(settings, info.path)
@@ -98,7 +155,8 @@ class RainManagerPanel:
                 imgui.text_disabled(label)
                 return
             value = get_value(settings, info.path)
-            imgui.set_next_item_width(140)  # leave room for the label after the progress bar and checkbox
+        if info.kind != "bool":
+            label = self._fit(label)
         if info.kind == "bool":
             changed, new = imgui.checkbox(label, bool(value))
         elif info.kind == "str" and info.choices:
@@ -116,7 +174,7 @@ class RainManagerPanel:
             imgui.text(f"{label}: {value}")
             return
         if imgui.is_item_hovered() and info.doc:
-            imgui.set_tooltip(info.doc)
+            imgui.set_tooltip(ascii_text(info.doc))
         if changed:
             self._set(info.path, new)
         if info.path in self.errors:
@@ -126,16 +184,16 @@ class RainManagerPanel:
     def _rain_section(self) -> None:
         settings = self.scene.settings
         presets = list(physics.RAIN_PRESETS)
-        current = settings.rain.preset
+        current = preset_in_use(settings)
         index = presets.index(current) + 1 if current in presets else 0
-        changed, index = imgui.combo("preset", index, ["custom", *presets])
+        changed, index = imgui.combo(self._fit("preset"), index, ["custom", *presets])
         if changed and index > 0:
             try:
                 apply_rain_preset(settings, presets[index - 1])
             except SettingsError as exc:
                 self.errors["rain.preset"] = str(exc)
         rate = settings.rain.rate_mm_h
-        changed, rate = imgui.slider_float("rate (mm/h)", rate, 0.0, 200.0, "%.2f",
+        changed, rate = imgui.slider_float(self._fit("rate (mm/h)"), rate, 0.0, 200.0, "%.2f",
                                            imgui.SliderFlags_.logarithmic.value)
         if changed:
             self._set("rain.rate_mm_h", rate)
@@ -145,7 +203,7 @@ class RainManagerPanel:
         state = self.scene.weather_state
         imgui.separator_text("road water (auto = weather drives it)")
         for level in ("wetness", "cracks", "puddles"):
-            imgui.progress_bar(float(getattr(state, level)), imgui.ImVec2(120, 0), f"{getattr(state, level):.2f}")
+            imgui.progress_bar(float(getattr(state, level)), imgui.ImVec2(48, 0), f"{getattr(state, level):.2f}")
             imgui.same_line()
             self._field_widget(next(f for f in self.fields["rain"] if f.path == f"rain.{level}"))
 
@@ -188,25 +246,26 @@ class RainManagerPanel:
 
     def _performance_section(self) -> None:
         renderer = self.scene.renderer
-        if self.frame_ms:
-            mean = sum(self.frame_ms) / len(self.frame_ms)
-            width, height = renderer.size
-            imgui.text(f"{1000.0 / max(mean, 1e-6):.1f} FPS  ({mean:.2f} ms/frame)  {width}x{height}")
-        imgui.text(f"speed {self.scene.ego.speed_m_s * 3.6:.0f} km/h   GPU timing: {renderer.timing_source}")
+        width, height = renderer.size
+        imgui.text(f"render {width}x{height}   GPU timing: {renderer.timing_source}")
         imgui.text_disabled("GPU ms are timed only while this section is open (one frame late)")
-        flags = imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
+        # Columns as wide as their text (no cut pass names); a table wider than the panel scrolls sideways.
+        flags = (imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
+                 | imgui.TableFlags_.sizing_fixed_fit.value | imgui.TableFlags_.scroll_x.value)
         table = renderer.pass_table()
-        if imgui.begin_table("effects", 3, flags):
+        line = imgui.get_text_line_height_with_spacing() + 2.0
+        totals = effect_totals(table)
+        if imgui.begin_table("effects", 3, flags, imgui.ImVec2(0.0, line * (len(totals) + 2) + 14.0)):
             for title in ("effect", "CPU ms", "GPU ms"):
                 imgui.table_setup_column(title)
             imgui.table_headers_row()
-            for name, cpu_ms, gpu_ms in effect_totals(table):
+            for name, cpu_ms, gpu_ms in totals:
                 imgui.table_next_row()
                 for text in (name, f"{cpu_ms:.2f}", "-" if gpu_ms is None else f"{gpu_ms:.2f}"):
                     imgui.table_next_column()
                     imgui.text(text)
             imgui.end_table()
-        if imgui.begin_table("passes", 5, flags):
+        if imgui.begin_table("passes", 5, flags, imgui.ImVec2(0.0, line * (len(table) + 2) + 14.0)):
             for title in ("pass", "ran", "CPU ms", "GPU ms", "note"):
                 imgui.table_setup_column(title)
             imgui.table_headers_row()
@@ -218,40 +277,118 @@ class RainManagerPanel:
                     imgui.text(text)
             imgui.end_table()
 
-    def draw(self, dt_s: float, fbo) -> None:
-        """Build and draw one frame of the panel into ``fbo``."""
-        self.frame_ms.append(dt_s * 1e3)
-        layer = self.layer
-        layer.new_frame(dt_s)
-        imgui.set_next_window_pos(imgui.ImVec2(10, 10), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(440, 520), imgui.Cond_.first_use_ever.value)
-        imgui.begin("Rain Manager")
-        for section, title in SECTIONS:
-            open_by_default = imgui.TreeNodeFlags_.default_open.value if section in ("rain", "camera") else 0
-            if self.expand_all:
-                imgui.set_next_item_open(True)
-            if not imgui.collapsing_header(title, open_by_default):
+    def fps_line(self) -> str:
+        """"60.0 FPS  16.7 ms": the mean over the last frames drawn (empty before the first)."""
+        if not self.frame_ms:
+            return "- FPS"
+        mean = sum(self.frame_ms) / len(self.frame_ms)
+        return f"{1000.0 / max(mean, 1e-6):.1f} FPS  {mean:.1f} ms"
+
+    @staticmethod
+    def panel_width(window_width: float) -> float:
+        """The docked panel's width (px) for a window that wide: a quarter of it, at most MAX_WIDTH_PX."""
+        return float(min(MAX_WIDTH_FRACTION * window_width, MAX_WIDTH_PX))
+
+    def reset_car(self) -> None:
+        if self.on_reset is not None:
+            self.on_reset()
+        else:
+            reset_to_lane(self.scene)
+
+    def _header(self, title: str, default_open: bool, tree: bool = False) -> bool:
+        """A collapsing header (or a tree node inside a group); remembers which are open."""
+        if self.expand_all:
+            imgui.set_next_item_open(True)
+        flags = imgui.TreeNodeFlags_.default_open.value if default_open else 0
+        opened = imgui.tree_node_ex(title, flags) if tree else imgui.collapsing_header(title, flags)
+        if opened:
+            self.open_sections.append(title)
+        return opened
+
+    def _section(self, section: str) -> None:
+        """The widgets of one settings section, their labels in a column as wide as the longest."""
+        effect = next((e for e in self.scene.effects if e.name == section), None)
+        if effect is not None and effect.describe():
+            imgui.push_text_wrap_pos(0.0)
+            imgui.text_disabled(ascii_text(effect.describe()))
+            imgui.pop_text_wrap_pos()
+        infos = [i for i in self.fields.get(section, []) if i.path not in CUSTOM_FIELDS]
+        extras = [field_info(path) for path in EXTRA_FIELDS.get(section, ())]
+        labels = [field_label(i) for i in infos + extras] or [""]
+        self._label_w = max(imgui.calc_text_size(t).x for t in labels)
+        if section == "rain":
+            self._rain_section()
+        for info in infos:
+            self._field_widget(info)
+        for info in extras:
+            self._field_widget(info, id_suffix=f"##{section}")
+        if section == "spray":
+            self._spray_section()
+        elif section == "ripples":
+            self._ripple_heights()
+        if section == "camera" and self.cameras is not None:
+            self.cameras.set_mode(self.scene.settings.camera.mode, self.scene.ego)
+
+    def _help_window(self) -> None:
+        io = imgui.get_io()
+        imgui.set_next_window_pos(imgui.ImVec2(io.display_size.x * 0.5, io.display_size.y * 0.5),
+                                  imgui.Cond_.always.value, imgui.ImVec2(0.5, 0.5))
+        flags = imgui.WindowFlags_.always_auto_resize.value | imgui.WindowFlags_.no_collapse.value
+        _, still_open = imgui.begin("Keys (F1 closes)", True, flags)
+        if imgui.begin_table("keys", 2, imgui.TableFlags_.sizing_fixed_fit.value):
+            for key, action in KEY_HELP:
+                imgui.table_next_row()
+                imgui.table_next_column()
+                imgui.text(key)
+                imgui.table_next_column()
+                imgui.text(ascii_text(action))
+            imgui.end_table()
+        imgui.end()
+        self.show_help = bool(still_open)
+
+    def _main_window(self) -> bool:
+        """The docked panel; returns whether the Performance section is open."""
+        io = imgui.get_io()
+        width = self.panel_width(io.display_size.x)
+        imgui.set_next_window_pos(imgui.ImVec2(0, 0), imgui.Cond_.always.value)
+        imgui.set_next_window_size(imgui.ImVec2(width, io.display_size.y), imgui.Cond_.always.value)
+        flags = (imgui.WindowFlags_.no_move.value | imgui.WindowFlags_.no_resize.value
+                 | imgui.WindowFlags_.no_collapse.value)
+        # "###" keeps the window's id fixed while its title (the FPS) changes.
+        imgui.begin(f"Rain Manager  {self.fps_line()}###Rain Manager", None, flags)
+        pos, size = imgui.get_window_pos(), imgui.get_window_size()
+        self.last_rect = ((pos.x, pos.y), (size.x, size.y))
+        imgui.text(f"{self.fps_line()}  {self.scene.ego.speed_m_s * 3.6:.0f} km/h")
+        if imgui.button("Reset car (R)"):
+            self.reset_car()
+        imgui.same_line()
+        if imgui.button("Keys (F1)"):
+            self.show_help = not self.show_help
+        imgui.text_disabled("Tab hides this panel")
+        if self._header("Rain", default_open=True):
+            self._section("rain")
+        for group, sections in GROUPS:
+            if not self._header(group, default_open=False):
                 continue
-            effect = next((e for e in self.scene.effects if e.name == section), None)
-            if effect is not None and effect.describe():
-                imgui.text_disabled(effect.describe())
-            if section == "rain":
-                self._rain_section()
-            for info in self.fields.get(section, []):
-                if info.path not in CUSTOM_FIELDS:
-                    self._field_widget(info)
-            for path in EXTRA_FIELDS.get(section, ()):
-                self._field_widget(field_info(path), id_suffix=f"##{section}")
-            if section == "spray":
-                self._spray_section()
-            elif section == "ripples":
-                self._ripple_heights()
-            if section == "camera" and self.cameras is not None:
-                self.cameras.set_mode(self.scene.settings.camera.mode, self.scene.ego)
-        performance = imgui.collapsing_header("Performance", imgui.TreeNodeFlags_.default_open.value)
-        # GPU timer queries only while the table is on screen: they add work to every pass.
-        self.scene.renderer.gpu_timing = performance
+            for section in sections:
+                if self._header(SECTION_TITLES[section], default_open=False, tree=True):
+                    self._section(section)
+                    imgui.tree_pop()
+        performance = self._header("Performance", default_open=False)
         if performance:
             self._performance_section()
         imgui.end()
+        return performance
+
+    def draw(self, dt_s: float, fbo) -> None:
+        """Build and draw one frame of the panel into ``fbo`` (nothing but the help, if open, while hidden)."""
+        self.frame_ms.append(dt_s * 1e3)
+        self.open_sections = []
+        layer = self.layer
+        layer.new_frame(dt_s)
+        performance = self._main_window() if self.visible else False
+        if self.show_help:
+            self._help_window()
+        # GPU timer queries only while the table is on screen: they add work to every pass.
+        self.scene.renderer.gpu_timing = performance
         layer.render(fbo)

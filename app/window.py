@@ -1,4 +1,5 @@
-"""The interactive window: drive with WASD/arrows, C switches camera, F12 saves a screenshot, Esc quits."""
+"""The interactive window: drive with WASD/arrows, R resets the car, C switches camera, Tab hides the Rain Manager,
+F1 lists the keys, F12 saves a screenshot, Esc quits (``app.controls.KEY_HELP``)."""
 
 from __future__ import annotations
 
@@ -8,13 +9,30 @@ from datetime import datetime
 from pathlib import Path
 
 from app.cameras import CameraModes
-from app.controls import KeyboardDriver
+from app.controls import KeyboardDriver, reset_to_lane
 from app.recording import save_png
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.scene import Scene
 
 KEY_NAMES = {"W": "up", "UP": "up", "S": "down", "DOWN": "down", "A": "left", "LEFT": "left", "D": "right",
              "RIGHT": "right"}
+
+
+# The package each moderngl-window backend imports, and what to pip-install for it.
+BACKEND_PACKAGES = {"pyglet": ("pyglet", "pyglet"), "glfw": ("glfw", "glfw"), "sdl2": ("sdl2", "pysdl2 pysdl2-dll"),
+                    "pygame2": ("pygame", "pygame"), "pyqt5": ("PyQt5", "PyQt5"), "pyside2": ("PySide2", "PySide2"),
+                    "tk": ("pyopengltk", "pyopengltk")}
+DEFAULT_BACKEND = "pyglet"
+
+
+def missing_backend_message(backend: str, exc: ImportError) -> str:
+    """What to tell the user when a window backend's package cannot be imported."""
+    module, pip_name = BACKEND_PACKAGES.get(backend, (getattr(exc, "name", None) or backend, backend))
+    missing = getattr(exc, "name", None) or module
+    return (f"rainroad: the window backend {backend!r} is not installed (cannot import {missing!r}).\n"
+            f"  Install it with: python -m pip install {pip_name}\n"
+            f"  or use the default backend: --window {DEFAULT_BACKEND}; without a display: "
+            "python -m app --headless --screenshot out.png")
 
 
 def create_window(backend: str, size: tuple[int, int], title: str = "Rainroad"):
@@ -49,7 +67,9 @@ class RainroadApp:
         self.cameras = CameraModes(settings.camera.mode)
         self.panel = RainManagerPanel(self.ctx, wnd.size, self.scene, framebuffer_size=wnd.buffer_size)
         self.panel.cameras = self.cameras
-        self._keys = {getattr(wnd.keys, name, None): name for name in (*KEY_NAMES, "C", "F12", "ESCAPE")}
+        self.panel.on_reset = self.reset_car
+        self._keys = {getattr(wnd.keys, name, None): name
+                      for name in (*KEY_NAMES, "C", "R", "TAB", "F1", "F12", "ESCAPE")}
         self._keys.pop(None, None)
         self._last = time.perf_counter()
         wnd.render_func = self.render
@@ -85,10 +105,22 @@ class RainroadApp:
         elif pressed and name == "C":
             self.cameras.cycle(self.scene.ego)
             self.scene.settings.camera.mode = self.cameras.mode
+        elif pressed and name == "R":
+            self.reset_car()
+        elif pressed and name == "TAB":
+            self.panel.visible = not self.panel.visible
+        elif pressed and name == "F1":
+            self.panel.show_help = not self.panel.show_help
         elif pressed and name == "F12":
             self.screenshot()
         elif pressed and name == "ESCAPE":
             self.wnd.close()
+
+    def reset_car(self):
+        """R / the Rain Manager's button: the car back on its lane (``controls.reset_to_lane``)."""
+        reset_to_lane(self.scene)
+        self.driver.center()
+        self.cameras.chase.reset()
 
     def mouse_drag_event(self, x, y, dx, dy):
         self.panel.layer.mouse_drag_event(x, y, dx, dy)
@@ -135,6 +167,9 @@ class RainroadApp:
 def run_window(args, settings, max_frames: int | None = None) -> int:
     try:
         wnd = create_window(args.window, args.size)
+    except ImportError as exc:  # the backend's package is not installed: name it and how to get it
+        print(missing_backend_message(args.window, exc), file=sys.stderr)
+        return 1
     except Exception as exc:  # no display, no GL, unknown backend: say so instead of a traceback
         print(f"rainroad: could not open a window ({args.window}): {exc}\n"
               "  Without a display use the headless variant: python -m app --headless --screenshot out.png",

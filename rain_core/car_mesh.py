@@ -48,6 +48,9 @@ _RUBBER = ((0.025, 0.025, 0.025), 0.85, 0.0, MAT_RUBBER)
 _HUB = ((0.55, 0.55, 0.56), 0.35, 1.0, MAT_METAL)
 _CHASSIS = ((0.03, 0.03, 0.03), 0.7, 0.5, MAT_METAL)
 _PAINT_ROUGHNESS, _PAINT_METALLIC = 0.25, 0.6
+_WHEEL_RIM = (0.09, 0.085, 0.08)
+_MIRROR = ((0.05, 0.055, 0.06), 0.08, 0.0, MAT_GENERIC)  # the door mirror's face (it does not show the scene)
+_WHEEL_SPOKE = (0.16, 0.16, 0.17)  # brushed-metal-look spokes
 
 
 @dataclass(frozen=True)
@@ -103,7 +106,7 @@ def _profile(spec: VehicleSpec) -> _Profile:
         s = spec.length_m / 4.6  # the numbers below are for a 4.6 m saloon
         cowl = (-0.62 * s, 0.85 * h / 1.45)
         rear_base = (1.80 * s, 0.95 * h / 1.45)
-        top = ((-hl, 0.70 * h / 1.45, 0.90), (-2.14 * s, 0.79 * h / 1.45, 0.95), (*cowl, 1.0), (*rear_base, 1.0),
+        top = ((-hl, 0.70 * h / 1.45, 0.90), (-2.14 * s, 0.75 * h / 1.45, 0.95), (*cowl, 1.0), (*rear_base, 1.0),
                (2.20 * s, 0.95 * h / 1.45, 0.97), (hl, 0.90 * h / 1.45, 0.93))
         gh = _greenhouse(cowl, h - 0.05, rake, h, 1.20 * s, rear_base)
         return _Profile(top, 0.20, (-hl, hl), hw - 0.13, 0.3, gh, ("glass", "paint", "paint", "glass", "paint"),
@@ -279,14 +282,21 @@ def _bumpers(spec: VehicleSpec, prof: _Profile) -> list[np.ndarray]:
 
 
 def _mirrors(spec: VehicleSpec, prof: _Profile, paint) -> list[np.ndarray]:
+    """Door mirrors: a painted housing on a stalk that starts at the door's top edge beside the A-pillar base (so
+    it never floats when seen through the side glass), with a dark mirror face at its rear."""
     zc, yc = prof.cowl
+    top = np.asarray(prof.top)
     parts = []
     for sgn in (-1.0, 1.0):
-        x0 = sgn * (spec.width_m / 2.0 - 0.02)
-        x1 = sgn * (spec.width_m / 2.0 + 0.16)
-        lo = np.array([min(x0, x1), yc + 0.08, zc + 0.22])
-        hi = np.array([max(x0, x1), yc + 0.20, zc + 0.30])
-        parts.append(_triangles(_box(lo, hi), paint))
+        z0, z1 = zc + 0.20, zc + 0.30
+        y_door = float(np.interp(z0, top[:, 0], top[:, 1]))
+        x_in = sgn * (spec.width_m / 2.0 - 0.04)
+        x_root, x_tip = sgn * (spec.width_m / 2.0 + 0.03), sgn * (spec.width_m / 2.0 + 0.19)
+        stalk = _box((min(x_in, x_root), y_door - 0.04, z0 + 0.02), (max(x_in, x_root), y_door + 0.06, z1 - 0.02))
+        housing = _box((min(x_root, x_tip), y_door + 0.02, z0), (max(x_root, x_tip), y_door + 0.15, z1))
+        glass = _box((min(x_root, x_tip) + 0.01, y_door + 0.03, z1), (max(x_root, x_tip) - 0.01, y_door + 0.14,
+                                                                       z1 + 0.005))
+        parts += [_triangles(stalk, paint), _triangles(housing, paint), _triangles(glass, _MIRROR)]
     return parts
 
 
@@ -419,7 +429,7 @@ def windshield_surface(spec: VehicleSpec = CAR_SPEC, n_u: int = 24, n_v: int = 1
 def driver_eye_local(spec: VehicleSpec = CAR_SPEC) -> np.ndarray:
     """Driver's eye (m, local frame) for a vehicle type: left-hand drive, so x < 0."""
     zc, yc = _profile(spec).cowl
-    return np.array([-0.2 * spec.width_m, yc + 0.35, zc + 1.21])
+    return np.array([-0.2 * spec.width_m, yc + 0.38, zc + 1.05])
 
 
 DRIVER_EYE_LOCAL = driver_eye_local(CAR_SPEC)  # m, the ego car's driver
@@ -495,14 +505,15 @@ def _steering_wheel(eye: np.ndarray, z_dash: float, y_dash: float) -> list[np.nd
     rot = trimesh.transformations.rotation_matrix(-tilt, [1.0, 0.0, 0.0])
     xf = trimesh.transformations.translation_matrix(centre) @ rot
     rim = trimesh.creation.torus(0.19, 0.017, major_sections=32, minor_sections=8, transform=xf)
-    parts = [from_trimesh(rim, (0.02, 0.02, 0.02), roughness=0.6, material=MAT_GENERIC, smooth=True)]
+    # Leather-grey rather than black, so the rim and spokes read against the dark dashboard.
+    parts = [from_trimesh(rim, _WHEEL_RIM, roughness=0.55, material=MAT_GENERIC, smooth=True)]
     hub = trimesh.creation.cylinder(radius=0.06, height=0.06, sections=12, transform=xf)
     parts.append(from_trimesh(hub, (0.025, 0.025, 0.025), roughness=0.6, material=MAT_GENERIC))
     for offset, extents in (((0.095, 0.0, 0.0), (0.19, 0.03, 0.02)), ((-0.095, 0.0, 0.0), (0.19, 0.03, 0.02)),
                             ((0.0, -0.095, 0.0), (0.03, 0.19, 0.02))):  # spokes: right, left, down
         spoke = trimesh.creation.box(extents=extents)
         spoke.apply_transform(xf @ trimesh.transformations.translation_matrix(offset))
-        parts.append(from_trimesh(spoke, (0.025, 0.025, 0.025), roughness=0.6, material=MAT_GENERIC))
+        parts.append(from_trimesh(spoke, _WHEEL_SPOKE, roughness=0.5, material=MAT_GENERIC))
     column = trimesh.creation.cylinder(radius=0.035, segment=[centre, centre + rot[:3, :3] @ [0, 0, -0.35]],
                                        sections=10)
     parts.append(from_trimesh(column, (0.02, 0.02, 0.02), roughness=0.6, material=MAT_GENERIC))

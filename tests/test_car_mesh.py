@@ -230,15 +230,16 @@ def test_driver_view_layout(cabin, fov_deg, pitch_deg):
     interior = np.isfinite(t_cabin) & ~hood
     through = np.isinf(t_cabin)
     assert np.all(np.isfinite(t_glass[hood | through]))  # the hood and the road are seen through the glass
-    # Bottom: dashboard and wheel, then a band of hood, then the road; the roof edge frames the top.
+    # Bottom: dashboard and wheel, then a band of hood, then the road; the roof header (above the eye, just
+    # ahead of it) at most a thin band at the top.
     from_bottom = np.flatnonzero(~(hood | interior)[::-1])[0] / rows
-    assert 0.25 < from_bottom < 0.5
-    assert 0.08 < hood.mean() < 0.2
+    assert 0.2 < from_bottom < 0.45
+    assert 0.06 < hood.mean() < 0.2
     hood_rows = np.flatnonzero(hood)
     assert np.all(np.diff(hood_rows) == 1)  # one band
     assert hood_rows.max() < rows - 0.2 * rows  # above the dashboard at the very bottom
     top = np.flatnonzero(~interior)[0] / rows
-    assert 0.01 < top < 0.2  # the roof header across the top
+    assert top < 0.1  # the roof header
     assert through[rows // 2 - 10: rows // 2 + 10].all()  # the middle of the view is open
 
 
@@ -253,8 +254,35 @@ def test_a_pillars_frame_the_sides(cabin):
     assert len(left) > 0  # the left A-pillar is in view
     assert 0.0 < (cols // 2 - left.max()) / cols < 0.35  # and it is left of centre, not at the very edge
     assert not blocked[cols // 2 - 20: cols // 2 + 30].any()  # straight ahead is clear
-    # Lower down, at the hood, the right A-pillar closes the right side.
+    # Lower down, at the hood, the right half shows only hood and road: the right A-pillar, ~48° to the right
+    # of a left-hand driver, is at or beyond the edge of the view.
     t_low, idx = _first_hit(DRIVER_EYE_LOCAL, _camera_rays(0.0, ndc_x, np.full(cols, -0.3)), tris)
     trim = np.isfinite(t_low) & (mats[idx] != MAT_CAR_PAINT)  # not the hood
-    right = np.flatnonzero(trim[cols // 2:])
-    assert len(right) > 0 and right.min() > cols // 4  # in the right quarter of the image
+    assert not trim[cols // 2:].any()
+    assert (np.isfinite(t_low) & (mats[idx] == MAT_CAR_PAINT))[cols // 2:].any()  # the hood is there
+
+
+def test_cabin_share_of_a_rendered_driver_frame(gl_ctx):
+    """The hood and the cabin (label classes ego_vehicle + ego_cabin) on a rendered driver frame at the default
+    field of view (60° vertical, pitch −4°), 16:9. Was 0.44 before the eye moved forward and up and the hood
+    front dropped; 0.40 now. The issue's ≤ 0.25 needs a narrower or less-pitched driver view as well (about
+    0.27 at 45°, pitch 0 with this cabin): the regression bound here is the geometry's share."""
+    from rain_core.labels import CLASS_IDS, render_label_images
+    from rain_core.scene import Scene
+    from rain_core.settings import Settings, set_value
+
+    settings = Settings()
+    set_value(settings, "camera.mode", "driver")
+    set_value(settings, "rain.rate_mm_h", 0.0)
+    scene = Scene(gl_ctx, (192, 108), settings, seed=1, gpu_timing=False)
+    try:
+        scene.step(1 / 30)
+        frame = scene.render()
+        classes = render_label_images(scene, frame, masks=["class"]).masks["class"]
+    finally:
+        scene.release()
+    cabin = np.isin(classes, [CLASS_IDS["ego_cabin"], CLASS_IDS["ego_vehicle"]])
+    assert 0.2 < cabin.mean() <= 0.42
+    # The middle of the frame (the road ahead and the sky) is clear of the car.
+    h, w = cabin.shape
+    assert not cabin[h // 4: h // 2, w // 3: 2 * w // 3].any()
