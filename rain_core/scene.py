@@ -11,7 +11,7 @@ from rain_core import checks, layout
 from rain_core.atmosphere import sky_overcast
 from rain_core.camera import Camera, ChaseRig, driver_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
-from rain_core.checks import MAX_FRAME_DT_S  # noqa: F401  (re-exported: app.headless sub-steps by it)
+from rain_core.checks import MAX_FRAME_DT_S  # noqa: F401  (re-exported: older imports of rain_core.scene keep working)
 from rain_core.effects import default_effects
 from rain_core.gfx.frame import Frame
 from rain_core.gfx.renderer import Renderer
