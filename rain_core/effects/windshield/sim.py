@@ -29,8 +29,8 @@ class extends; it computes the same state with far fewer NumPy calls (issue 13: 
 * **Wiping a sector, not the glass**. A blade's sweep first keeps the drops inside its wedge (two half-planes),
   then tests those exactly as the reference does; film cells come from a per-blade table sorted by angle.
 
-Modules: ``drop_rows`` (the array's columns), ``arrivals`` (the bucket table), ``fast_merging`` and
-``fast_wiping`` (mixins ahead of the reference's ``merging`` and ``wiping``).
+Modules: ``drop_rows`` (the array's columns), ``arrivals`` (the bucket table), ``fast_motion``,
+``fast_merging`` and ``fast_wiping`` (mixins ahead of the reference's ``dynamics``, ``merging`` and ``wiping``).
 
 Work bounds per sub-step (``constants``): MAX_ARRIVALS_PER_SUBSTEP arrivals, MERGE_CELLS_MAX / MERGE_PAIRS_MAX
 merge work, the drop budget of the inputs. ``tests/effects/windshield/test_fast_path.py`` compares this class
@@ -51,68 +51,47 @@ from rain_core.effects.windshield.constants import (
     BEAD_BINS,
     BL_RUN_UP_M,
     CROSSWIND_GAIN,
-    DRAG_CD,
-    DROP_EVAP_KG_M_S,
     EVAP_AIR_M_S,
     FILM_CELLS,
     FILM_EVAP_KG_M2_S,
     FLOW_AT_BOTTOM,
     FLOW_AT_TOP,
     FLOW_SPREAD,
-    FRONTAL_PER_RADIUS2,
-    GAMMA_W,
-    HEIGHT_PER_RADIUS,
-    HYSTERESIS,
-    KINETIC_PIN,
     M_OBJECT_MIN,
     MAX_ARRIVALS_PER_SUBSTEP,
     MAX_SUBSTEP_S,
-    MU_W,
     NU_AIR,
     SPLASH_MAX,
     SPLASH_SPEED_M_S,
-    TRAIL_FILM_M,
-    TRAIL_FRACTION,
-    TRAIL_PARENT_MIN,
-    TRAIL_SPACING_RADII,
-    V_STOP_M_S,
-    VISCOUS_C,
     VOLUME_PER_RADIUS3,
     drop_radius,
 )
-from rain_core.effects.windshield.drop_rows import BL as _BL
 from rain_core.effects.windshield.drop_rows import CELL as _CELL
 from rain_core.effects.windshield.drop_rows import COLS as _COLS
-from rain_core.effects.windshield.drop_rows import GS as _GS
-from rain_core.effects.windshield.drop_rows import GT as _GT
 from rain_core.effects.windshield.drop_rows import KEY as _KEY
 from rain_core.effects.windshield.drop_rows import PLACED as _PLACED
 from rain_core.effects.windshield.drop_rows import ROW as _ROW
 from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
-from rain_core.effects.windshield.drop_rows import UP as _UP
 from rain_core.effects.windshield.drop_rows import VS as _VS
 from rain_core.effects.windshield.drop_rows import VT as _VT
 from rain_core.effects.windshield.drop_rows import A as _A
 from rain_core.effects.windshield.drop_rows import M as _M
-from rain_core.effects.windshield.drop_rows import Q as _Q
 from rain_core.effects.windshield.drop_rows import S as _S
 from rain_core.effects.windshield.drop_rows import T as _T
 from rain_core.effects.windshield.fast_merging import FastMerging
+from rain_core.effects.windshield.fast_motion import FastMotion
 from rain_core.effects.windshield.fast_wiping import FastWiping
 from rain_core.effects.windshield.grid import GRID_CELL_M, PairFinder, _grid_shape
 from rain_core.effects.windshield.inputs import GlassInputs
 from rain_core.effects.windshield.reference import WindshieldSimReference, _check_inputs
-from rain_core.physics import G_M_S2, RHO_AIR, RHO_WATER
+from rain_core.physics import G_M_S2, RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
-_MASS_PER_A3 = RHO_WATER * VOLUME_PER_RADIUS3  # kg / m³: a drop's mass over its contact radius cubed
-_EMPTY1 = np.zeros(0)
-_EMPTY_I = np.zeros(0, np.int64)
 _GRID_O = (-1.0, -0.2)  # grid._GRID_ORIGIN, as floats for the sort key
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 
 
-class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
+class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference):
     """Water on the windshield: drops, film, wiper beads and the wipers (the fast path; see the module
     docstring). Same constructor, state and queries as ``WindshieldSimReference``."""
 
@@ -464,151 +443,6 @@ class WindshieldSim(FastMerging, FastWiping, WindshieldSimReference):
             d[pick, _A] = drop_radius(d[pick, _M])
             self._fresh_buf[pick] = True
         return placed
-
-    # --- motion (dynamics.DropDynamics._move) ---------------------------------------------------------------
-    def _move(self, h: float, air_local: np.ndarray, inputs) -> tuple:
-        """Forces, pinning, viscous sliding; returns for the merge test (``_merge_moves``) the drop count before
-        the step's trail droplets, the drops that slid (``go``), their start (s, t) and displacement (m), as
-        columns: the others did not move."""
-        n = self._n
-        if n == 0:
-            return 0, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
-        d = self._buf[:n]
-        s, t, m = d[:, _S], d[:, _T], d[:, _M]
-        a = d[:, _A]  # the radius at the start of the step (the Newton update below comes after its last use)
-        # The air over the glass (airflow.air_velocity), from the position's factors (drop_rows).
-        head, cross = float(air_local[2]), float(air_local[0])
-        if head >= 0.0:
-            up = head * d[:, _UP]
-            side = up * FLOW_SPREAD * d[:, _Q] + CROSSWIND_GAIN * cross
-        else:  # a tailwind: a weak, separated flow down the glass
-            up = np.full(n, head * FLOW_AT_BOTTOM)
-            side = abs(head * FLOW_AT_BOTTOM) * FLOW_SPREAD * d[:, _Q] + CROSSWIND_GAIN * cross
-        air_speed = np.sqrt(side * side + up * up)
-        # Drag in the boundary layer (airflow.drag).
-        delta = 5.0 * np.sqrt(d[:, _BL] / np.maximum(air_speed, 1e-3))
-        eta = np.minimum(np.maximum(HEIGHT_PER_RADIUS * a / delta, 0.0), 1.0)
-        profile = 1.5 * eta - 0.5 * (eta * eta * eta)
-        vs, vt = d[:, _VS], d[:, _VT]
-        rel_s = side * profile - vs
-        rel_t = up * profile - vt
-        coef = (0.5 * RHO_AIR * DRAG_CD * FRONTAL_PER_RADIUS2) * a**2 * np.sqrt(rel_s * rel_s + rel_t * rel_t)
-        # Gravity along the curved glass (GlassGeometry.gravity), per unit mass from drop_rows.
-        f_s = m * d[:, _GS] + coef * rel_s
-        f_t = m * d[:, _GT] + coef * rel_t
-        fmag = np.sqrt(f_s * f_s + f_t * f_t)
-        pin = GAMMA_W * 2.0 * a * HYSTERESIS
-        speed = np.sqrt(vs * vs + vt * vt)
-        moving = speed > 0.0
-        go = np.flatnonzero(moving | (fmag > pin))  # moving, or starting to
-        s_g = t_g = ds = dt_ = _EMPTY1
-        if len(go):
-            # The sliding update, for the drops that slide (the others stay at rest).
-            mv = moving[go]
-            fs_g, ft_g, fm_g, pin_g, m_g, a_g = f_s[go], f_t[go], fmag[go], pin[go], m[go], a[go]
-            vs_g, vt_g, sp_g = vs[go], vt[go], speed[go]
-            sp_g, fm_safe = np.maximum(sp_g, 1e-300), np.maximum(fm_g, 1e-300)
-            dir_s = np.where(mv, vs_g / sp_g, fs_g / fm_safe)
-            dir_t = np.where(mv, vt_g / sp_g, ft_g / fm_safe)
-            kp = KINETIC_PIN * pin_g
-            damp = 1.0 + h * (VISCOUS_C * MU_W * a_g / m_g)
-            nv_s = (vs_g + h * ((fs_g - kp * dir_s) / m_g)) / damp
-            nv_t = (vt_g + h * ((ft_g - kp * dir_t) / m_g)) / damp
-            stop = mv & (
-                (nv_s * vs_g + nv_t * vt_g <= 0.0)
-                | ((np.sqrt(nv_s * nv_s + nv_t * nv_t) < V_STOP_M_S) & (fm_g < pin_g))
-            )
-            nv_s[stop] = 0.0
-            nv_t[stop] = 0.0
-            d[go, _VS] = nv_s
-            d[go, _VT] = nv_t
-            ds, dt_ = h * nv_s, h * nv_t
-            s_g, t_g = s[go], t[go]
-            es, et = s_g + ds, t_g + dt_
-            d[go, _S] = es
-            d[go, _T] = et
-            moved = (ds != 0.0) | (dt_ != 0.0)
-            if moved.any():  # (one that left the glass is shed before its columns are read)
-                d[go[moved], _PLACED] = self._placed(es[moved], et[moved])
-        # Slow evaporation of the drops themselves (hours for a millimetre drop; kept for the balance).
-        loss = np.minimum(DROP_EVAP_KG_M_S * a * np.sqrt(1.0 + air_speed / EVAP_AIR_M_S) * h, m)
-        m -= loss
-        self.evaporated += float(loss.sum())
-        # The radius follows the mass: one Newton step from the last radius (see the module docstring).
-        ra = d[:, _A]
-        ra2 = ra * ra
-        ra -= (ra2 * ra - m * (1.0 / _MASS_PER_A3)) / (3.0 * ra2)
-        if len(go):
-            step_len = np.sqrt(ds * ds + dt_ * dt_)
-            run = np.flatnonzero(step_len > 0.0)
-            if len(run):
-                self._run(go[run], s_g[run], t_g[run], ds[run], dt_[run], step_len[run], a_g[run])
-        return n, go, s_g, t_g, ds, dt_
-
-    def _run(self, idx, s0, t0, ds, dt, step_len, a) -> None:
-        """Running drops take up the film in their path, lay a thin wet line and drop trail droplets
-        (dynamics.DropDynamics._sweep_film_and_trail on the running drops ``idx``, their start (s0, t0) m,
-        displacement (ds, dt) m, its length (m) and their radius (m), as 1-D columns)."""
-        ms, mt = s0 + 0.5 * ds, t0 + 0.5 * dt
-        inside = self._inside(ms, mt)
-        if not inside.all():
-            sel = np.flatnonzero(inside)
-            if len(sel) == 0:
-                return
-            idx, s0, t0, ds, dt, step_len, a, ms, mt = (v[sel] for v in (idx, s0, t0, ds, dt, step_len, a, ms, mt))
-        d = self._buf[: self._n]
-        cells = self._cells(ms, mt)
-        flat = self.film.ravel()
-        swept_area = 2.0 * a * step_len
-        frac = swept_area / self._areas_flat[cells]
-        total = np.bincount(cells, weights=frac, minlength=flat.size)[cells]
-        scale = np.where(total > 1.0, 1.0 / np.maximum(total, 1e-300), 1.0)
-        take = flat[cells] * frac * scale
-        np.subtract.at(flat, cells, take)
-        np.maximum(flat, 0.0, out=flat)
-        mass = d[idx, _M]
-        wet = np.minimum(RHO_WATER * TRAIL_FILM_M * swept_area, 0.1 * mass)
-        np.add.at(flat, cells, wet)
-        mass += take - wet
-        d[idx, _M] = mass
-        es, et = s0 + ds, t0 + dt
-        self._trails.append((s0, t0, es, et, a))
-        # Trail droplets: one every TRAIL_SPACING_RADII radii of run, behind the drop, from heavy drops only.
-        spacing = TRAIL_SPACING_RADII * a
-        run = d[idx, _TRAIL] + step_len
-        k = np.minimum(np.floor(run / spacing), 4).astype(np.int64)
-        k[mass < TRAIL_PARENT_MIN] = 0
-        run -= k * spacing
-        d[idx, _TRAIL] = np.minimum(run, spacing)
-        total_k = int(k.sum())
-        if total_k:
-            if total_k == np.count_nonzero(k):  # one droplet per drop at most: the common case
-                local = np.flatnonzero(k)
-                gap = 1.3 * a[local]
-            else:
-                local = np.repeat(np.arange(len(idx)), k)
-                within = np.arange(total_k) - np.repeat(np.cumsum(k) - k, k)
-                gap = (1.3 + TRAIL_SPACING_RADII * within) * a[local]
-            # Behind the drop on the path it ran, clear of it (so they do not join again at once).
-            gap /= step_len[local]
-            ws = es[local] - ds[local] * gap
-            wt = et[local] - dt[local] * gap
-            ok = self._inside(ws, wt)
-            if not ok.all():
-                local, ws, wt = local[ok], ws[ok], wt[ok]
-            parent = idx[local]
-            m_t = TRAIL_FRACTION * d[parent, _M]
-            np.subtract.at(d[:, _M], parent, m_t)
-        d[idx, _A] = drop_radius(d[idx, _M])
-        if total_k:
-            room = max(self._budget - self._n, 0)
-            as_drop = np.zeros(len(m_t), bool)
-            as_drop[:room] = m_t[:room] >= M_OBJECT_MIN
-            film_part = ~as_drop
-            if film_part.any():
-                np.add.at(flat, self._cells(ws[film_part], wt[film_part]), m_t[film_part])
-            if as_drop.any():
-                self._append(np.column_stack([ws[as_drop], wt[as_drop]]), 0.0, m_t[as_drop])
 
     # --- what the last step did (for drawing): kept as columns, assembled only when asked ------------------
     def frame_impacts(self) -> np.ndarray:
