@@ -368,6 +368,18 @@ class AtmosphereSection(_Section):
 
 
 @dataclass
+class RainbowSection(_Section):
+    SECTION: ClassVar[str] = "rainbow"
+    enabled: bool = field(True, doc="a bow where the sun is low behind you and rain falls in front")
+    strength: float = field(1.0, range=(0.0, 4.0), unit="×", doc="bow radiance relative to the physical")
+    shower_speed_m_s: float = field(10.0, range=(0.5, 40.0), unit="m/s",
+                                    doc="how fast the shower moves off after the rain stops (the bow stays on it)")
+    shower_width_m: float = field(3000.0, range=(100.0, 20_000.0), unit="m", doc="depth of the departing shower")
+    cloud_base_m: float = field(1500.0, range=(200.0, 5000.0), unit="m",
+                                doc="where rain starts above the street (rays into the sky leave the rain there)")
+
+
+@dataclass
 class Settings:
     """The whole settings tree. ``Settings()`` is valid; construction validates every field."""
 
@@ -384,6 +396,7 @@ class Settings:
     spray: SpraySection = _section(SpraySection)
     windshield: WindshieldSection = _section(WindshieldSection)
     atmosphere: AtmosphereSection = _section(AtmosphereSection)
+    rainbow: RainbowSection = _section(RainbowSection)
 
     def __post_init__(self):
         self.validate()

@@ -12,13 +12,14 @@ def effect_classes() -> tuple:
     standing water, the spray its droplets landing in water, and the ripples read both and publish the water
     normals the road's scene binding reads."""
     from rain_core.effects.atmosphere import AtmosphereEffect
+    from rain_core.effects.rainbow import RainbowEffect
     from rain_core.effects.rainfall import RainfallEffect
     from rain_core.effects.ripples import RipplesEffect
     from rain_core.effects.road import RoadEffect
     from rain_core.effects.spray import SprayEffect
     from rain_core.effects.windshield import WindshieldEffect
 
-    return (RoadEffect, SprayEffect, RipplesEffect, RainfallEffect, AtmosphereEffect, WindshieldEffect)
+    return (RoadEffect, SprayEffect, RipplesEffect, RainfallEffect, RainbowEffect, AtmosphereEffect, WindshieldEffect)
 
 
 def default_effects(ctx, settings, seed: int = 0, shaders=None) -> list:

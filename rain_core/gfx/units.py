@@ -35,5 +35,9 @@ WINDSHIELD = (12, 13, 14, 15)
 # Spray.
 SPRAY_DEPTH = 16
 
+# Rainbow (its post pass: the P(θ) table and the scene's depth).
+RAINBOW_LUT = 20
+RAINBOW_DEPTH = 21
+
 # What the scene shader samples in one draw: these must all differ (tests/gfx/test_units.py).
 SCENE_SHADER = (SHADOW_MAP, ROAD_RAIN_RINGS, ROAD_HEIGHT, ROAD_MAPS, ROAD_REFLECTION, ROAD_RIPPLES)

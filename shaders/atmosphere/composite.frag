@@ -6,7 +6,7 @@
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
 #include "common/atmosphere.glsl"
-#include "atmosphere/depth.glsl"
+#include "common/depth.glsl"
 uniform sampler2D u_glow;          // blurred c·w at the glow resolution
 uniform int u_glow_factor;         // full-resolution pixels per glow texel
 uniform float u_glow_strength;     // k: share of the scattered light that forms the visible halo

@@ -4,7 +4,7 @@
 // forward part reaches the eye from nearby directions: that is the halo (blurred next, added back last).
 #include "common/frame.glsl"
 #include "common/atmosphere.glsl"
-#include "atmosphere/depth.glsl"
+#include "common/depth.glsl"
 uniform sampler2D u_color;   // pre-exposed HDR scene
 uniform int u_factor;        // full-resolution pixels per glow texel (per axis)
 out vec4 f_color;

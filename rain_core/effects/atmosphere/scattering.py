@@ -1,5 +1,5 @@
 """Light scattered by the rain from lamps and headlights, in NumPy: the eye ray of every pixel from a depth buffer
-(twin of ``shaders/atmosphere/depth.glsl``) and a dense single-scattering quadrature, the reference of the
+(twin of ``shaders/common/depth.glsl``) and a dense single-scattering quadrature, the reference of the
 composite pass (``shaders/atmosphere/composite.frag``). No GL.
 
 The post pass traces the nearest lights per pixel up to the depth buffer (σ_s = β_m × the user's scale, the
@@ -57,7 +57,7 @@ def light_inscatter_reference(eye, view_dirs, t_max, light, extinction_per_m: fl
 def pixel_distances(depth, view_proj, eye, sky_m: float = math.inf) -> tuple[np.ndarray, np.ndarray]:
     """Distance (m) and unit eye ray (wrapped frame) of every pixel of a depth buffer (H, W) in [0, 1], bottom
     row first as GL stores it, for the camera ``view_proj`` (4×4) at ``eye`` (m); sky pixels (depth 1) get sky_m.
-    Twin of atmosphere_pixel_ray in shaders/atmosphere/depth.glsl."""
+    Twin of atmosphere_pixel_ray in shaders/common/depth.glsl."""
     depth = np.asarray(depth, dtype=np.float64)
     h, w = depth.shape
     x, y = np.meshgrid((np.arange(w) + 0.5) / w * 2 - 1, (np.arange(h) + 0.5) / h * 2 - 1)

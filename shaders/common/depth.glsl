@@ -1,4 +1,4 @@
-// Shared by the atmosphere's post passes: distance along the eye ray from the scene's depth buffer.
+// Distance along the eye ray from the scene's depth buffer: the post passes of the atmosphere and the rainbow.
 uniform sampler2D u_depth;       // the scene's depth (window depth in [0, 1]), sampled without compare
 uniform mat4 u_inv_view_proj;    // clip → wrapped world frame
 
