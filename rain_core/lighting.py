@@ -238,6 +238,14 @@ def light_candidates(lamps, vehicles, camera_z_m: float, lighting: Lighting, shi
         *(np.concatenate([getattr(part, name) for part in parts]) for name in LightSet.__slots__))
 
 
+def concat_lights(sets) -> LightSet:
+    """One LightSet of several, in order."""
+    sets = list(sets)
+    if len(sets) == 1:
+        return sets[0]
+    return LightSet(*(np.concatenate([getattr(s, name) for s in sets]) for name in LightSet.__slots__))
+
+
 def nearest_lights(lights: LightSet, camera_position_wrapped, max_lights: int = MAX_LIGHTS) -> LightSet:
     """The ``max_lights`` of ``lights`` nearest to the camera (wrapped frame), nearest first (stable order)."""
     cam = np.asarray(camera_position_wrapped, dtype=np.float64)

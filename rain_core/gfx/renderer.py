@@ -27,7 +27,7 @@ from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
 from rain_core.gfx.targets import RenderTarget, float_target
 from rain_core.gfx.timing import PassTimer
-from rain_core.lighting import light_candidates, nearest_lights, pack_lights
+from rain_core.lighting import concat_lights, light_candidates, nearest_lights, pack_lights
 from rain_core.physics import CLEAR_AIR_EXTINCTION_PER_M
 
 
@@ -72,6 +72,7 @@ class Renderer:
         self._timers: dict[str, PassTimer] = {}
         self.frame_blocks = FrameBlocks(ctx)
         self._lights_cache = None  # (key, light candidates) of the frame being rendered
+        self._effect_lights = None  # LightSet the active effects add this frame (Effect.frame_lights), or None
         self._proj_cache = None  # (lens and size, projection matrix)
         self._clear_air = None  # (lighting, its clear-air and no-shadow uniforms)
 
@@ -130,6 +131,8 @@ class Renderer:
             projection = self._projection(camera)
         cam = np.asarray(camera.position, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
         lights = nearest_lights(self._light_candidates(frame, shift_z, float(cam[2])), cam)
+        if self._effect_lights is not None:  # the active effects' own lights (a flash) lead the list
+            lights = concat_lights([self._effect_lights, lights])
         if "uniforms" not in fields:
             fields["uniforms"] = self._default_uniforms(frame.lighting)
         return RenderContext(self.ctx, self.shaders, frame, fbo_target or self.hdr, self.size, shift_z, view,
@@ -207,6 +210,7 @@ class Renderer:
         finally:
             self.scene.end_frame()
             self._lights_cache = None
+            self._effect_lights = None
 
     def _render(self, frame: Frame) -> None:
         ctx = self.ctx
@@ -223,6 +227,8 @@ class Renderer:
         # while it runs; an idle effect keeps its one "not run" row.
         self.stats.extend(observed[e] for e in active if e in observed)
         self.stats.extend(PassStat(e.name, False) for e in self.effects if e not in active)
+        added = [lights for e in active if (lights := e.frame_lights(frame)) is not None and len(lights)]
+        self._effect_lights = concat_lights(added) if added else None
         rc = self.render_context(frame)
         rc.active = active
         rc.shared = SharedResources()
