@@ -7,6 +7,7 @@ the tone mapper's range without per-scene tweaks. Geography: +X is east, +Z is s
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -106,6 +107,14 @@ def _lighting_for_hour(hour: float, overcast: float) -> Lighting:
     e_key = float(sun.mean() * sin_e + math.pi * 0.5 * (zenith.mean() + horizon.mean()) + 120.0 * night)
     ev100 = math.log2(max(e_key, 1e-3) / 2.5)
     return Lighting(hour, sun_dir, sun, zenith, horizon, 0.15, night, ev100)
+
+
+def with_sky_light(lighting: Lighting, sky_cd_m2) -> Lighting:
+    """``lighting`` with ``sky_cd_m2`` (cd/m², RGB) added to the sky's zenith and horizon (a lightning flash lighting
+    the cloud base): the sky, the airlight and the ambient light follow; the exposure does not (an eye or a
+    camera does not adapt within a flash)."""
+    add = np.asarray(sky_cd_m2, dtype=np.float64)
+    return dataclasses.replace(lighting, sky_zenith=lighting.sky_zenith + add, sky_horizon=lighting.sky_horizon + add)
 
 
 # Cone cosines of the light kinds (shaders/common/lighting.glsl reads cos_outer, cos_inner per light).
@@ -244,6 +253,15 @@ def concat_lights(sets) -> LightSet:
     if len(sets) == 1:
         return sets[0]
     return LightSet(*(np.concatenate([getattr(s, name) for s in sets]) for name in LightSet.__slots__))
+
+
+def wrap_lights(lights: LightSet, shift_z: float) -> LightSet:
+    """The same lights with world positions moved into the renderer's wrapped frame (z − shift_z, m)."""
+    if shift_z == 0.0:
+        return lights
+    position = np.array(lights.position, dtype=np.float64)
+    position[:, 2] -= shift_z
+    return LightSet(position, *(getattr(lights, name) for name in LightSet.__slots__[1:]))
 
 
 def nearest_lights(lights: LightSet, camera_position_wrapped, max_lights: int = MAX_LIGHTS) -> LightSet:

@@ -13,9 +13,10 @@ from rain_core.camera import Camera, ChaseRig, driver_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.checks import MAX_FRAME_DT_S  # noqa: F401  (re-exported: older imports of rain_core.scene keep working)
 from rain_core.effects import default_effects
+from rain_core.effects.lightning.storm import Storm
 from rain_core.gfx.frame import Frame
 from rain_core.gfx.renderer import Renderer
-from rain_core.lighting import lighting_for_hour
+from rain_core.lighting import lighting_for_hour, with_sky_light
 from rain_core.settings import Settings
 from rain_core.vehicles import Autopilot, EgoCar, Traffic
 from rain_core.weather import Weather
@@ -44,6 +45,7 @@ class Scene:
                                ego=self.ego)
         self.weather = Weather.from_settings(self.settings)
         self.weather_state = self.weather.state
+        self.storm = Storm(seed=self.seed)  # lightning: weather like the rain, drawn by the lightning effect
         self.time_s = 0.0
         self.last_dt_s = 0.0
         self.chase = ChaseRig()
@@ -86,9 +88,15 @@ class Scene:
         overcast = sky_overcast(self.settings.atmosphere, self.weather_state.rate_mm_h)
         lighting = lighting_for_hour(self.settings.time_of_day.hour, overcast)
         raining = self.weather_state.rate_mm_h > 0.0
-        return Frame(time_s=self.time_s, dt_s=self.last_dt_s, camera=camera or self.camera(), lighting=lighting,
+        camera = camera or self.camera()
+        flash = self.storm.frame_view(self.settings, self.time_s, self.last_dt_s, camera.position,
+                                      self.weather_state.rate_mm_h)
+        headlights = raining or lighting.night_factor > 0.05
+        if flash is not None:  # the lit cloud base brightens the sky, and with it the airlight and the ambient
+            lighting = with_sky_light(lighting, flash.sky_cd_m2)
+        return Frame(time_s=self.time_s, dt_s=self.last_dt_s, camera=camera, lighting=lighting,
                      world=self.world, ego=self.ego, vehicles=self.vehicles, weather=self.weather_state,
-                     settings=self.settings, headlights_on=raining or lighting.night_factor > 0.05)
+                     settings=self.settings, headlights_on=headlights, flash=flash, storm=self.storm)
 
     def render(self, camera: Camera | None = None) -> Frame:
         frame = self.frame(camera)

@@ -365,6 +365,8 @@ class AtmosphereSection(_Section):
                                     doc="light scattered in the rain around lamps and in headlight beams")
     scatter_lights: int = field(8, range=(0, 32), unit="lights", doc="nearest lights traced per pixel")
     glow_resolution: float = field(0.25, range=(0.0625, 1.0), unit="× frame", doc="resolution of the glow blur")
+    cloud_base_m: float = field(1500.0, range=(200.0, 5000.0), unit="m",
+                                doc="height of the cloud base: rain falls from it, lightning leaves it")
 
 
 @dataclass
@@ -375,8 +377,16 @@ class RainbowSection(_Section):
     shower_speed_m_s: float = field(10.0, range=(0.5, 40.0), unit="m/s",
                                     doc="how fast the shower moves off after the rain stops (the bow stays on it)")
     shower_width_m: float = field(3000.0, range=(100.0, 20_000.0), unit="m", doc="depth of the departing shower")
-    cloud_base_m: float = field(1500.0, range=(200.0, 5000.0), unit="m",
-                                doc="where rain starts above the street (rays into the sky leave the rain there)")
+
+
+@dataclass
+class LightningSection(_Section):
+    SECTION: ClassVar[str] = "lightning"
+    enabled: bool = field(True, doc="lightning in convective rain (thunderstorms)")
+    flashes_per_min: float | None = field(None, range=(0.0, 60.0), unit="1/min",
+                                          doc="storm flash rate; unset: automatic, 0 below 16 mm/h")
+    intensity: float = field(1.0, range=(0.0, 4.0), unit="×", doc="flash brightness relative to the physical")
+    max_distance_km: float = field(8.0, range=(1.0, 30.0), unit="km", doc="farthest bolts of the storm")
 
 
 @dataclass
@@ -396,6 +406,7 @@ class Settings:
     spray: SpraySection = _section(SpraySection)
     windshield: WindshieldSection = _section(WindshieldSection)
     atmosphere: AtmosphereSection = _section(AtmosphereSection)
+    lightning: LightningSection = _section(LightningSection)
     rainbow: RainbowSection = _section(RainbowSection)
 
     def __post_init__(self):

@@ -4,9 +4,9 @@
    effect is idle (e.g. the last time seen, so waking up does not replay the idle interval). No GL work.
 2. ``active(frame)``: a pure predicate — does the effect update and draw at all this frame? It changes nothing.
 3. For active effects: ``frame_uniforms(frame)`` (uniforms every program of the frame receives, e.g. the rain
-   medium; a function of the frame alone) and ``frame_lights(frame)`` (lights it adds, e.g. a flash), then in order ``update(frame, rc)`` (simulation, reading and writing
-   ``rc.shared``), then ``render(stage, rc)`` for each stage in ``stages``; ``bind_scene`` before the scene
-   pass draws.
+   medium; a function of the frame alone) and ``frame_lights(frame)`` (lights it adds, e.g. a flash), then in
+   order ``update(frame, rc)`` (simulation, reading and writing ``rc.shared``), then ``render(stage, rc)`` for
+   each stage in ``stages``; ``bind_scene`` before the scene pass draws.
    Inactive effects get ``unbind_scene`` so the scene shader sees their neutral values.
 
 Effects never assign renderer attributes; they share data only through ``rc.shared`` (``SharedResources``).
@@ -43,7 +43,7 @@ class Effect:
         return {}
 
     def frame_lights(self, frame: Frame):
-        """Lights this effect adds to the frame (a ``rain_core.lighting.LightSet`` in the wrapped frame, or None):
+        """Lights this effect adds to the frame (a ``rain_core.lighting.LightSet``, world positions, or None):
         e.g. a lightning flash. Active effects only; they come first in the light list, before the nearest lamps
         and vehicle lights, so distance never culls them."""
         return None

@@ -36,6 +36,8 @@ class Frame:
     weather: object | None = None  # rain_core.weather.WeatherState
     settings: object | None = None  # rain_core.settings.Settings
     headlights_on: bool = False
+    flash: object | None = None  # rain_core.effects.lightning.storm.FlashView: the flash lit in this frame
+    storm: object | None = None  # rain_core.effects.lightning.storm.Storm (read-only for effects: thunder delay)
 
     @property
     def rain_rate_mm_h(self) -> float:

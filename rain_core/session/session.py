@@ -37,6 +37,9 @@ MAX_SEED = 2**31 - 1
 MAX_STEP_S = 3600.0  # s, longest single step() (sub-stepped by MAX_FRAME_DT_S, one render each)
 
 
+_LUMA = (0.2126, 0.7152, 0.0722)  # Rec. 709 luminance weights
+
+
 def check_size(size) -> tuple[int, int]:
     """(W, H) in pixels, each an int in [MIN_SIZE, MAX_SIZE]; ValueError naming ``size`` otherwise."""
     ok = isinstance(size, tuple | list) and len(size) == 2 and all(
@@ -204,7 +207,9 @@ class Session:
         wind_m_s (mean), wind_direction_deg, wind_velocity_m_s (gusting, world x, y, z), hour, ego_speed_m_s,
         wiper_mode (the setting), wiper_angle_rad (each blade, rad; empty without the windshield effect),
         camera_mode, fov_y_deg, camera_intrinsics (3×3, px), camera_to_world (4×4; conventions in
-        rain_core.session.capture), seed, time_s, frame (step count)."""
+        rain_core.session.capture), seed, time_s, frame (step count), lightning_lux and lightning_sky_cd_m2 (the
+        flash lit in this frame's shutter: its direct illuminance at the camera, lux, and the luminance it adds
+        to the cloud base, cd/m²; 0 between flashes)."""
         self._check_open()
         if self._frame is None:
             self._frame = self.scene.render(self._camera())
@@ -241,4 +246,8 @@ class Session:
             "fov_y_deg": float(cam.fov_y_deg), "camera_intrinsics": camera_intrinsics(cam.fov_y_deg, self.size),
             "camera_to_world": camera_to_world(cam), "seed": self.seed, "time_s": float(scene.time_s),
             "frame": self.frame_index,
+            # The lightning flash lit during this frame's shutter (0 between flashes): its direct illuminance at
+            # the camera (lux, after the rain's extinction) and the luminance it adds to the cloud base (cd/m²).
+            "lightning_lux": float(frame.flash.illuminance_lux(cam.position)) if frame.flash is not None else 0.0,
+            "lightning_sky_cd_m2": float(frame.flash.sky_cd_m2 @ _LUMA) if frame.flash is not None else 0.0,
         }

@@ -13,7 +13,8 @@ from rain_core.session import Weather, camera_intrinsics, camera_to_world, proje
 SIZE = (64, 40)
 LABEL_KEYS = {"rain_mm_h", "wetness", "cracks", "puddles", "visibility_m", "wind_m_s", "wind_direction_deg",
               "wind_velocity_m_s", "hour", "ego_speed_m_s", "wiper_mode", "wiper_angle_rad", "camera_mode",
-              "fov_y_deg", "camera_intrinsics", "camera_to_world", "seed", "time_s", "frame"}
+              "fov_y_deg", "camera_intrinsics", "camera_to_world", "seed", "time_s", "frame", "lightning_lux",
+              "lightning_sky_cd_m2"}
 
 
 def test_round_trip_steps_weather_and_capture(session):

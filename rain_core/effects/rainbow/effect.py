@@ -23,7 +23,7 @@ from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import ColorView
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms
-from rain_core.settings import RainbowSection
+from rain_core.settings import AtmosphereSection, RainbowSection
 
 MAX_SUN_ELEVATION_DEG = 54.0  # above it the secondary's top (≈ 53.5° from the antisolar point) is below the horizon
 LUT_SAMPLES = 384
@@ -71,6 +71,10 @@ class RainbowEffect(Effect):
     def _section(self, frame) -> RainbowSection:
         settings = getattr(frame, "settings", None) or self.settings
         return getattr(settings, "rainbow", None) or RainbowSection()
+
+    def _atmosphere(self, frame) -> AtmosphereSection:
+        settings = getattr(frame, "settings", None) or self.settings
+        return getattr(settings, "atmosphere", None) or AtmosphereSection()
 
     # --- per frame ------------------------------------------------------------------------------------------
     def observe(self, frame: Frame) -> None:
@@ -130,7 +134,7 @@ class RainbowEffect(Effect):
             "u_theta_range": tuple(math.radians(a) for a in THETA_RANGE_DEG),
             "u_rain_beta": float(rain_extinction_per_m(column.rate_mm_h)),
             "u_rain_span_m": (float(column.near_m), float(far)),
-            "u_cloud_base_m": float(sec.cloud_base_m), "u_strength": float(sec.strength)})
+            "u_cloud_base_m": float(self._atmosphere(rc.frame).cloud_base_m), "u_strength": float(sec.strength)})
         ctx = self.ctx
         self._depth_sampler.use(units.RAINBOW_DEPTH)
         rc.hdr.depth.use(units.RAINBOW_DEPTH)
