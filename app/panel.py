@@ -27,12 +27,12 @@ SECTIONS = (
     ("rain", "Rain"), ("road", "Road"), ("wind", "Wind"), ("wipers", "Wipers"), ("camera", "Camera"),
     ("time_of_day", "Time of day"), ("traffic", "Traffic"), ("quality", "Quality"), ("ripples", "Ripples"),
     ("rainfall", "Rainfall"), ("spray", "Spray"), ("windshield", "Windshield"), ("atmosphere", "Atmosphere"),
-    ("lightning", "Lightning"), ("rainbow", "Rainbow"),
+    ("drips", "Drips"), ("lightning", "Lightning"), ("rainbow", "Rainbow"),
 )
 # The panel's groups, in the README's order (Rain first and open, then Effects, View and quality; Performance last).
 GROUPS = (
     ("Effects", ("road", "wind", "wipers", "ripples", "rainfall", "spray", "windshield", "atmosphere",
-                 "lightning", "rainbow")),
+                 "drips", "lightning", "rainbow")),
     ("View and quality", ("camera", "time_of_day", "traffic", "quality")),
 )
 SECTION_TITLES = dict(SECTIONS)

@@ -380,6 +380,14 @@ class RainbowSection(_Section):
 
 
 @dataclass
+class DripsSection(_Section):
+    SECTION: ClassVar[str] = "drips"
+    enabled: bool = field(True, doc="water dripping from the bridge, the canopy and awnings")
+    strength: float = field(1.0, range=(0.0, 4.0), unit="×", doc="water the roofs catch relative to the rain")
+    reach_m: float = field(60.0, range=(10.0, 200.0), unit="m", doc="drips drawn this far along the street")
+
+
+@dataclass
 class LightningSection(_Section):
     SECTION: ClassVar[str] = "lightning"
     enabled: bool = field(True, doc="lightning in convective rain (thunderstorms)")
@@ -406,6 +414,7 @@ class Settings:
     spray: SpraySection = _section(SpraySection)
     windshield: WindshieldSection = _section(WindshieldSection)
     atmosphere: AtmosphereSection = _section(AtmosphereSection)
+    drips: DripsSection = _section(DripsSection)
     lightning: LightningSection = _section(LightningSection)
     rainbow: RainbowSection = _section(RainbowSection)
 

@@ -78,6 +78,31 @@ for cls in (WindshieldSim, WindshieldSimReference):
         sim.step(1 / 30, GlassInputs.for_speed(60.0, 8.0, wiper_mode='high'))
     assert sim.count > 0 and len(drop_splats(sim, 0.003)) and len(film_splats(sim, 0.003))
 """,
+    "rainbow": """
+from rain_core.effects.rainbow import ShowerTracker, bow_lut
+t = ShowerTracker()
+t.observe(0.0, 4.0)
+assert t.column(0.0, 4.0, 10.0, 3000.0) is not None and bow_lut(4.0, 64).max() > 0.0
+""",
+    "lightning": """
+from rain_core.effects.lightning.storm import Storm
+from rain_core.settings import Settings
+s = Settings()
+s.lightning.flashes_per_min = 30.0
+storm = Storm(seed=1)
+views = [storm.frame_view(s, i / 30, 1 / 30, np.zeros(3), 20.0) for i in range(30 * 20)]
+assert any(v is not None for v in views)
+""",
+    "drips": """
+from rain_core.effects.drips import RoofReservoirs, find_drip_sites, landings
+grid = np.full((40, 60), -np.inf, np.float32)
+grid[10:20, 20:40] = 5.0
+sites = find_drip_sites(grid, -7.5, 0.25, street_half_x_m=100.0)
+roofs = RoofReservoirs(sites.area_m2, sites.drain_s)
+for _ in range(30):
+    roofs.step(1 / 30, 8.0)
+assert len(sites) and roofs.outflow_m3_s.sum() > 0.0
+""",
     "water film": """
 from rain_core.water_film import film_depth_mm
 assert np.all(np.asarray(film_depth_mm(np.zeros(4), np.arange(4.0), 1.0, 1.0, wetness=1.0)) >= 0.0)

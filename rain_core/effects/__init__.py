@@ -12,6 +12,7 @@ def effect_classes() -> tuple:
     standing water, the spray its droplets landing in water, and the ripples read both and publish the water
     normals the road's scene binding reads."""
     from rain_core.effects.atmosphere import AtmosphereEffect
+    from rain_core.effects.drips import DripsEffect
     from rain_core.effects.lightning import LightningEffect
     from rain_core.effects.rainbow import RainbowEffect
     from rain_core.effects.rainfall import RainfallEffect
@@ -20,8 +21,8 @@ def effect_classes() -> tuple:
     from rain_core.effects.spray import SprayEffect
     from rain_core.effects.windshield import WindshieldEffect
 
-    return (RoadEffect, SprayEffect, RipplesEffect, RainfallEffect, RainbowEffect, LightningEffect, AtmosphereEffect,
-            WindshieldEffect)
+    return (RoadEffect, SprayEffect, DripsEffect, RipplesEffect, RainfallEffect, RainbowEffect, LightningEffect,
+            AtmosphereEffect, WindshieldEffect)
 
 
 def default_effects(ctx, settings, seed: int = 0, shaders=None) -> list:

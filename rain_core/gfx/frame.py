@@ -85,7 +85,7 @@ class SharedResources:
     | field            | producer (stage)   | consumers                  |
     |------------------|--------------------|----------------------------|
     | film_depth_fn    | road (update)      | ripples (update)           |
-    | droplet_impacts  | spray (update)     | ripples (update)           |
+    | droplet_impacts  | spray, drips       | ripples (update)           |
     | water_normals    | ripples (update)   | road (scene binding)       |
     | rain_rings       | ripples (update)   | road (scene binding)       |
 

@@ -39,5 +39,8 @@ SPRAY_DEPTH = 16
 RAINBOW_LUT = 20
 RAINBOW_DEPTH = 21
 
+# Drips (vertex-shader inputs: the sites' two tables and the roofs' outflow).
+DRIPS = (22, 23, 24)
+
 # What the scene shader samples in one draw: these must all differ (tests/gfx/test_units.py).
 SCENE_SHADER = (SHADOW_MAP, ROAD_RAIN_RINGS, ROAD_HEIGHT, ROAD_MAPS, ROAD_REFLECTION, ROAD_RIPPLES)
