@@ -172,7 +172,7 @@ class DripsEffect(Effect):
             "u_pixel_rad": 2.0 * math.tan(fov / 2.0) / rc.size[1]})
         ctx = self.ctx
         ctx.enable(moderngl.DEPTH_TEST)
-        ctx.depth_mask = False
+        rc.hdr.fbo.depth_mask = False  # test against the scene's depth, never write it
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         for first, count, z_base in self._ranges:  # changes between draws: always written
@@ -181,7 +181,7 @@ class DripsEffect(Effect):
             self._vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=count * SLOTS)
         ctx.blend_func = moderngl.DEFAULT_BLENDING
         ctx.disable(moderngl.BLEND)
-        ctx.depth_mask = True
+        rc.hdr.fbo.depth_mask = True
 
     def _release_textures(self) -> None:
         for tex in self._tex.values():

@@ -97,13 +97,13 @@ class LightningEffect(Effect):
             "u_bolt_color": tuple(float(c) for c in BOLT_COLOR)})
         ctx = self.ctx
         ctx.enable(moderngl.DEPTH_TEST)
-        ctx.depth_mask = False
+        rc.hdr.fbo.depth_mask = False  # test against the scene's depth, never write it
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
         self._vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self._segment_count)
         ctx.blend_func = moderngl.DEFAULT_BLENDING
         ctx.disable(moderngl.BLEND)
-        ctx.depth_mask = True
+        rc.hdr.fbo.depth_mask = True
 
     def _release_buffers(self) -> None:
         if self._vao is not None:
