@@ -256,6 +256,7 @@ class RoadSection(_Section):
     reflections: bool = field(True, doc="planar reflections in water")
     reflection_scale: float = field(0.5, range=(0.125, 1.0), unit="× frame", doc="reflection resolution")
     debug_regions: bool = field(False, doc="colour dry / wet / drenched / puddle regions")
+    kerb_streams: bool = field(True, doc="rainwater running along the kerbs to the drains (HEC-22 gutter flow)")
 
 
 @dataclass

@@ -27,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 
 from rain_core import checks, layout
+from rain_core.gutter import gutter_depth_mm
 from rain_core.world import HEIGHTMAP_TEXEL_M, sample_heightmap
 
 # shaders/road/film.glsl holds the same numbers.
@@ -155,9 +156,11 @@ def _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount):
     return np.maximum(crack, puddle) * (1.0 - shelter)
 
 
-def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0):
-    """(standing water, film) depths in mm at road points x, z (m; arrays broadcast): standing water in cracks
-    and puddles, and the wet film WET_FILM_MM·wetness. Both 0 off the asphalt (|x| > 7 m) and under roofs."""
+def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0, gutter_k=0.0):
+    """(standing water, film) depths in mm at road points x, z (m; arrays broadcast): standing water in cracks,
+    puddles and the kerb streams (``gutter_k``: the spread coefficient of rain_core.gutter, 0 without), and the
+    wet film WET_FILM_MM·wetness. Both 0 off the asphalt (|x| > 7 m); cracks, puddles and film 0 under roofs
+    (the gutter stream runs on under them)."""
     cracks, puddles, puddle_amount, wetness = (
         checks.number(name, v, 0.0, 1.0) for name, v in (("cracks", cracks), ("puddles", puddles),
                                                         ("puddle_amount", puddle_amount), ("wetness", wetness)))
@@ -182,18 +185,22 @@ def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=
                                    xr, zr)
     n, shelter = sample_road_map((puddle_noise(int(seed)), shelter_map_for(world)), xr, zr)
     standing[on_road] = _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount)
+    if gutter_k > 0.0:
+        standing[on_road] = np.maximum(standing[on_road], gutter_depth_mm(xr, zr, gutter_k))
     film[on_road] = WET_FILM_MM * wetness * (1.0 - shelter)
     return standing, film
 
 
-def film_depth_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0) -> np.ndarray:
+def film_depth_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0,
+                  gutter_k=0.0) -> np.ndarray:
     """Water film depth (mm, ≤ PUDDLE_MAX_MM = 10) on the road at x, z (m; vectorised, any world z).
 
     cracks, puddles: the weather's two flood levels in [0, 1]; puddle_amount in [0, 1] (settings.road): how much
     of the road can hold puddles; seed: the puddle noise map's seed (settings.road.puddle_seed); world: gives
     the road heightmap and the roofs (None: the default street, ``build_world(seed=1)``); wetness in [0, 1]
     adds the thin film of a wet road (WET_FILM_MM at 1; default 0 = standing water only). 0 off the asphalt
-    (|x| > 7 m) and under roofs. The GLSL twin is ``road_film_depth_mm`` in shaders/road/film.glsl.
+    (|x| > 7 m) and under roofs; gutter_k adds the kerb streams (rain_core.gutter; up to GUTTER_MAX_MM). The GLSL
+    twin is ``road_film_depth_mm`` in shaders/road/film.glsl.
     """
-    standing, film = water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount, seed, world, wetness)
+    standing, film = water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount, seed, world, wetness, gutter_k)
     return np.maximum(standing, film)

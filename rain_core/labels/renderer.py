@@ -23,6 +23,7 @@ import numpy as np
 
 from rain_core import layout
 from rain_core.gfx.uniforms import mat4_bytes, set_uniform
+from rain_core.gutter import frame_spread_coefficient
 from rain_core.labels.classes import CLASS_IDS, cabin_classes, world_classes
 from rain_core.labels.images import BLENDED_MASKS, CLEAR_GEOMETRY, LabelImages, check_mask_names, decode
 
@@ -175,7 +176,8 @@ class LabelRenderer:
 
         settings = rc.frame.settings.road if rc.frame.settings is not None else RoadSection()
         wetness, cracks, puddles = road.levels(rc.frame)
-        road.bind_film_uniforms(self.prog, wetness, cracks, puddles, settings.puddle_amount, settings.puddle_seed)
+        road.bind_film_uniforms(self.prog, wetness, cracks, puddles, settings.puddle_amount, settings.puddle_seed,
+                                frame_spread_coefficient(rc.frame))
         set_uniform(self.prog, "u_label_road", 1.0)
 
     def _draw_geometry(self, rc) -> None:

@@ -4,7 +4,7 @@
 // periodic in 1200 m along z, so the wrapped and world frames give the same water.
 uniform sampler2D u_road_height;  // units.ROAD_HEIGHT: heightmap R (0 lowest), G smoothed (no cracks); clamp x, wrap z
 uniform sampler2D u_road_maps;    // units.ROAD_MAPS: R puddle noise (uniform in 0..1), G shelter (1 under a roof)
-uniform vec4 u_road_levels;       // wetness, crack level (cracks·CRACK_LEVEL), puddle level L, unused
+uniform vec4 u_road_levels;       // wetness, crack level (cracks·CRACK_LEVEL), puddle level L, gutter k (m^⅝)
 uniform vec2 u_road_height_extent;  // m: heightmap size across x, along z (14, 48)
 
 const float ROAD_HALF_WIDTH_M = 7.0;
@@ -29,6 +29,20 @@ vec2 road_maps(vec2 xz) {
     return texture(u_road_maps, uv).rg;
 }
 
+// Kerb streams (rain_core/gutter.py): HEC-22 gutter flow, spread T = k·L^(3/8) from the inlet upstream, depth
+// S_x·(T − s) at distance s from the kerb face, in mm.
+const float GUTTER_CROSS_SLOPE = 0.02;
+const float GUTTER_INLET_SPACING_M = 50.0;
+const float GUTTER_MAX_MM = 40.0;
+float road_gutter_depth_mm(vec2 xz) {
+    if (u_road_levels.w <= 0.0) return 0.0;
+    float offset = xz.x >= 0.0 ? 0.0 : 25.0;
+    float upstream = GUTTER_INLET_SPACING_M - mod(xz.y - offset, GUTTER_INLET_SPACING_M);
+    float spread = u_road_levels.w * pow(upstream, 0.375);
+    float s = ROAD_HALF_WIDTH_M - abs(xz.x);
+    return min(GUTTER_CROSS_SLOPE * max(spread - s, 0.0) * 1000.0, GUTTER_MAX_MM);
+}
+
 // (standing water in cracks and puddles, wet film) depths in mm at xz (m) on the road; 0 off the asphalt.
 vec2 road_water_depths_mm(vec2 xz) {
     if (abs(xz.x) > ROAD_HALF_WIDTH_M) return vec2(0.0);
@@ -38,7 +52,7 @@ vec2 road_water_depths_mm(vec2 xz) {
     float ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h.y + PUDDLE_NOISE_WEIGHT * maps.r;
     float puddle = PUDDLE_MAX_MM * clamp((u_road_levels.z - ground) / PUDDLE_DEPTH_SPAN, 0.0, 1.0);
     float dry = 1.0 - maps.g;
-    return vec2(max(crack, puddle) * dry, WET_FILM_MM * u_road_levels.x * dry);
+    return vec2(max(max(crack, puddle) * dry, road_gutter_depth_mm(xz)), WET_FILM_MM * u_road_levels.x * dry);
 }
 
 // Water film depth (mm, ≤ 10): what the ripples and the spray read.

@@ -14,6 +14,7 @@ from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext, WaterNormals
 from rain_core.gfx.targets import float_target
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform
+from rain_core.gutter import frame_spread_coefficient
 from rain_core.settings import RoadSection
 from rain_core.water_film import (
     crack_level,
@@ -69,6 +70,7 @@ class RoadEffect(Effect):
         self._film_vao = None
         self._film_target = None
         self._levels = (0.0, 0.0, 0.0)
+        self._gutter_k = 0.0  # the kerb streams' spread coefficient this frame (rain_core.gutter)
         self._road = None
         self._waves = (0.0, 0.0, 0.0)
         self._film_values = None  # (levels key, film uniforms) last bound
@@ -137,18 +139,19 @@ class RoadEffect(Effect):
             texture, (float(origin_xz_m[0]), float(origin_xz_m[1])), float(extent_m))
 
     def bind_film_uniforms(self, program, wetness: float, cracks: float, puddles: float, puddle_amount: float,
-                           seed: int) -> None:
+                           seed: int, gutter_k: float = 0.0) -> None:
         """Bind the maps and levels of shaders/road/film.glsl on a program that includes it:
-        road_film_depth_mm(xz) then gives the film depth at wrapped-frame positions."""
+        road_film_depth_mm(xz) then gives the film depth at wrapped-frame positions. gutter_k: the kerb streams'
+        spread coefficient (rain_core.gutter; 0 without)."""
         if self.world is None:
             raise RuntimeError("RoadEffect has no world yet: call set_world or render a frame first")
         self._height_tex.use(units.ROAD_HEIGHT)
         self._maps(int(seed)).use(units.ROAD_MAPS)
-        key = (float(wetness), float(cracks), float(puddles), float(puddle_amount))
+        key = (float(wetness), float(cracks), float(puddles), float(puddle_amount), float(gutter_k))
         if self._film_values is None or self._film_values[0] != key or self._film_values[2] is not self.world:
             self._film_values = (key, {
                 "u_road_height": units.ROAD_HEIGHT, "u_road_maps": units.ROAD_MAPS,
-                "u_road_levels": (key[0], crack_level(cracks), puddle_level(puddles, puddle_amount), 0.0),
+                "u_road_levels": (key[0], crack_level(cracks), puddle_level(puddles, puddle_amount), key[4]),
                 "u_road_height_extent": tuple(float(v) for v in self.world.heightmap_extent_m)}, self.world)
         owned_uniforms(program).update(self._film_values[1])
 
@@ -163,13 +166,14 @@ class RoadEffect(Effect):
         wind = getattr(getattr(frame.weather, "wind", None), "velocity_m_s", (0.0, 0.0, 0.0))
         self._waves = wave_parameters(wind, road.wave_strength)
         amount, seed, world = float(road.puddle_amount), int(road.puddle_seed), self.world
+        self._gutter_k = k = frame_spread_coefficient(frame)
 
         def standing(x_m, z_m):
-            return film_depth_mm(x_m, z_m, c, p, amount, seed, world)
+            return film_depth_mm(x_m, z_m, c, p, amount, seed, world, gutter_k=k)
 
         # Everything the depths depend on besides (x, z): consumers may cache depths while the key is unchanged
         # (the ripples then ask only for cells that scrolled into their field).
-        standing.cache_key = ("film", c, p, amount, seed, id(world))
+        standing.cache_key = ("film", c, p, amount, seed, id(world), k)
         rc.shared.film_depth_fn = standing
         self._reflection_valid = False
 
@@ -212,7 +216,7 @@ class RoadEffect(Effect):
         road = self._road if self._road is not None else self._road_settings(rc.frame)
         w, c, p = self._levels
         mirror = self._mirror_pass
-        self.bind_film_uniforms(program, w, c, p, road.puddle_amount, road.puddle_seed)
+        self.bind_film_uniforms(program, w, c, p, road.puddle_amount, road.puddle_seed, self._gutter_k)
         out = owned_uniforms(program)
         out.update(self._scene_values(road))
         out.set("u_road_mirror", 1.0 if mirror else 0.0)
@@ -271,7 +275,8 @@ class RoadEffect(Effect):
         owned_uniforms(program).update(_UNBOUND)
 
     # --- GPU twin of film_depth_mm ---
-    def film_depth_gpu(self, x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, wetness=0.0) -> np.ndarray:
+    def film_depth_gpu(self, x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, wetness=0.0,
+                       gutter_k=0.0) -> np.ndarray:
         """The shader's road_water_depths_mm at points x, z (m, arrays of one shape; world z): float32 array of
         shape (…, 2) = (standing water, wet film) in mm. For tests and for CPU-side users of the GPU model."""
         x = np.asarray(x_m, dtype=np.float64)
@@ -301,7 +306,7 @@ class RoadEffect(Effect):
         points = self.ctx.texture((width, height), 2, pts.tobytes(), dtype="f4")
         points.filter = (moderngl.NEAREST, moderngl.NEAREST)
         try:
-            self.bind_film_uniforms(prog, wetness, cracks, puddles, puddle_amount, seed)
+            self.bind_film_uniforms(prog, wetness, cracks, puddles, puddle_amount, seed, gutter_k)
             points.use(units.SCRATCH[0])
             set_uniform(prog, "u_points", units.SCRATCH[0])
             self.ctx.disable(moderngl.BLEND)

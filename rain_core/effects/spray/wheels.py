@@ -16,6 +16,7 @@ from rain_core.effects.spray.water import (
     hydroplaning_risk,
     hydroplaning_risk_unchecked,
 )
+from rain_core.gutter import frame_spread_coefficient
 from rain_core.water_film import film_depth_mm
 
 
@@ -32,11 +33,12 @@ def road_film_depth_fn(frame):
     amount = float(getattr(road_settings, "puddle_amount", 0.5))
     seed = int(getattr(road_settings, "puddle_seed", 0))
     world = getattr(frame, "world", None)
+    gutter_k = frame_spread_coefficient(frame)  # the kerb streams: more water, more spray near the kerb
 
     def depth(x, z):
         x, z = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64))
         return np.asarray(film_depth_mm(x, z, cracks, puddles, puddle_amount=amount, seed=seed, world=world,
-                                        wetness=wetness), dtype=np.float64)
+                                        wetness=wetness, gutter_k=gutter_k), dtype=np.float64)
 
     return depth
 
