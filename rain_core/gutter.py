@@ -56,6 +56,13 @@ def gutter_flow_m3_s(spread_m, cross_slope: float = CROSS_SLOPE, grade: float = 
     return KU_SI / n * cross_slope ** (5.0 / 3.0) * math.sqrt(grade) * t ** (8.0 / 3.0)
 
 
+def gutter_speed_m_s(spread_m, cross_slope: float = CROSS_SLOPE, grade: float = GRADE, n: float = MANNING_N):
+    """Mean flow speed (m/s) in a triangular gutter of spread T (m): Manning's V = (0.752/n)·S_L^½·S_x^⅔·T^⅔
+    (HEC-22 eq. 4-5, SI), which is Q / (S_x·T²/2) of eq. 4-2. The road shader drifts the stream's surface with it."""
+    t = np.asarray(spread_m, dtype=np.float64)
+    return 0.752 / n * math.sqrt(grade) * cross_slope ** (2.0 / 3.0) * t ** (2.0 / 3.0)
+
+
 def upstream_length_m(x_m, z_m):
     """Distance (m) along the kerb from the inlet upstream (the flow runs towards −z, into the next inlet)."""
     x = np.asarray(x_m, dtype=np.float64)

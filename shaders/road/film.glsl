@@ -34,13 +34,23 @@ vec2 road_maps(vec2 xz) {
 const float GUTTER_CROSS_SLOPE = 0.02;
 const float GUTTER_INLET_SPACING_M = 50.0;
 const float GUTTER_MAX_MM = 40.0;
-float road_gutter_depth_mm(vec2 xz) {
+// The stream's spread T (m) at xz: k·L^(3/8), L the distance from the inlet upstream; 0 without streams.
+float road_gutter_spread_m(vec2 xz) {
     if (u_road_levels.w <= 0.0) return 0.0;
     float offset = xz.x >= 0.0 ? 0.0 : 25.0;
     float upstream = GUTTER_INLET_SPACING_M - mod(xz.y - offset, GUTTER_INLET_SPACING_M);
-    float spread = u_road_levels.w * pow(upstream, 0.375);
+    return u_road_levels.w * pow(upstream, 0.375);
+}
+
+float road_gutter_depth_mm(vec2 xz) {
     float s = ROAD_HALF_WIDTH_M - abs(xz.x);
-    return min(GUTTER_CROSS_SLOPE * max(spread - s, 0.0) * 1000.0, GUTTER_MAX_MM);
+    return min(GUTTER_CROSS_SLOPE * max(road_gutter_spread_m(xz) - s, 0.0) * 1000.0, GUTTER_MAX_MM);
+}
+
+// Mean speed (m/s) of the stream at xz, Manning's for the triangular gutter (HEC-22 eq. 4-5, SI):
+// V = (0.752 / n)·S_L^½·S_x^⅔·T^⅔ with n = 0.016 and S_L = 0.005 (rain_core/gutter.py).
+float road_gutter_speed_m_s(vec2 xz) {
+    return 0.752 / 0.016 * sqrt(0.005) * pow(GUTTER_CROSS_SLOPE, 2.0 / 3.0) * pow(road_gutter_spread_m(xz), 2.0 / 3.0);
 }
 
 // (standing water in cracks and puddles, wet film) depths in mm at xz (m) on the road; 0 off the asphalt.

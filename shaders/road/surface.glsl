@@ -217,8 +217,12 @@ vec3 road_water_layer(Surface s, vec3 V, vec3 radiance) {
     float a = g_road_standing;
     vec3 N = s.normal;
     if (a > 0.0) {
-        vec2 slope = (road_wave_slope(s.position.xz) + road_ripple_slope(s.position.xz)
-                      + road_rain_ring_slope(s.position.xz)) * a;
+        // In a kerb stream the water's pattern and the raindrop rings drift downstream (−z) with the flow.
+        vec2 xz = s.position.xz;
+        float stream = road_gutter_depth_mm(xz) > 0.0 ? 1.0 : 0.0;
+        vec2 carried = xz + vec2(0.0, road_gutter_speed_m_s(xz) * u_time) * stream;
+        vec2 flow = stream * 0.25 * road_noise_gradient(carried / vec2(0.6, 0.25), ROAD_PERIOD_M / 0.25);
+        vec2 slope = (road_wave_slope(xz) + road_ripple_slope(xz) + road_rain_ring_slope(carried) + flow) * a;
         N = normalize(vec3(N.x - slope.x, N.y, N.z - slope.y));  // UDN blend onto the surface normal
     }
     float roughness = mix(FILM_ROUGHNESS, WATER_ROUGHNESS, a);

@@ -21,6 +21,12 @@ def test_spread_satisfies_the_hec22_gutter_equation():
         assert gutter.gutter_flow_m3_s(spread) == pytest.approx(inflow, rel=1e-9)
 
 
+def test_speed_is_the_flow_over_the_wetted_area():
+    spread = np.array([0.3, 1.0, 2.0])
+    area = gutter.CROSS_SLOPE * spread**2 / 2.0
+    np.testing.assert_allclose(gutter.gutter_speed_m_s(spread), gutter.gutter_flow_m3_s(spread) / area, rtol=2e-3)
+
+
 def test_published_magnitudes():
     # 50 mm/h on a 2 % crown, 0.5 % grade, n = 0.016, 50 m to the inlet: a spread of a metre or two and a few
     # centimetres at the kerb, the range HEC-22's design examples work in (spread limits of 1.5–3 m).
