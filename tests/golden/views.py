@@ -16,7 +16,7 @@ import numpy as np
 
 SIZE = (160, 90)  # w, h
 FPS = 30.0
-EFFECTS = ("road", "ripples", "rainfall", "spray", "windshield", "atmosphere")
+EFFECTS = ("road", "ripples", "rainfall", "spray", "windshield", "atmosphere", "drips", "lightning", "rainbow")
 
 # Cheap quality for every view: the pictures are 160×90, so full-size simulations would only cost time.
 _QUALITY = {"quality.ripple_grid": 128, "quality.windshield_resolution": 128, "quality.particle_budget": 20_000,
@@ -34,6 +34,7 @@ class View:
     settings: dict = field(default_factory=dict)
     steps: int = 20  # 1/30 s steps, each rendered
     seed: int = 1
+    camera: tuple | None = None  # (eye m, target m, vertical fov deg) of a fixed camera; None: the scene's own
 
 
 _WET = {"rain.wetness": 1.0, "rain.cracks": 1.0, "rain.puddles": 1.0, "road.puddle_amount": 0.8}
@@ -61,6 +62,21 @@ VIEWS: dict[str, View] = {
     "atmosphere": View("heavy rain fog and glow around lamps and headlights at night; atmosphere only",
                        {**_only("atmosphere"), "rain.rate_mm_h": 60.0, "time_of_day.hour": 22.0,
                         "camera.mode": "chase", "traffic.count": 4}, steps=4),
+    "drips": View("streams pouring off the bridge deck's south edge in the rain, looked up at from 3 m; drips only",
+                  {**_only("drips"), "rain.rate_mm_h": 8.0, "time_of_day.hour": 15.0, "traffic.count": 0},
+                  steps=4, camera=((-2.0, 1.6, 309.0), (-2.0, 4.5, 306.0), 40.0)),
+    "kerb_streams": View("water running along the kerb to the drains at 30 mm/h; road only",
+                         {**_only("road"), "rain.rate_mm_h": 30.0, "rain.wetness": 1.0, "rain.cracks": 0.0,
+                          "rain.puddles": 0.0, "time_of_day.hour": 15.0, "traffic.count": 0},
+                         steps=4, camera=((4.0, 1.6, 520.0), (7.0, 0.0, 500.0), 50.0)),
+    "rainbow": View("primary and secondary bow on the rain, sun 16° behind, from above the roofs; rainbow only",
+                    {**_only("rainbow"), "rain.rate_mm_h": 1.0, "time_of_day.hour": 17.0, "traffic.count": 0},
+                    steps=3, camera=((-1.75, 40.0, 700.0), (94.84, 76.4, 674.12), 80.0)),
+    "lightning": View("a flash 620 m away at night, the sky lit and the bolt in view (seed 145's first near "
+                      "flash, 3.2 s in); lightning only",
+                      {**_only("lightning"), "rain.rate_mm_h": 20.0, "time_of_day.hour": 22.0, "traffic.count": 0,
+                       "lightning.flashes_per_min": 10.0},
+                      steps=97, seed=145, camera=((-5.75, 40.0, 600.0), (-12.75, 54.0, 500.25), 70.0)),
     "frame_driver": View("whole frame from the driver's seat, every effect on, rain at dusk",
                          {**_only(*EFFECTS), **_WET, "rain.rate_mm_h": 12.0, "time_of_day.hour": 18.5,
                           "camera.mode": "driver", "traffic.count": 5}, steps=12),
@@ -102,9 +118,14 @@ def render_view(ctx, name: str, *, seed: int | None = None, steps: int | None = 
     scene = Scene(ctx, SIZE, settings, seed=view.seed if seed is None else seed, gpu_timing=False)
     try:
         _pin_ripple_backend(scene, ripple_backend)
+        camera = None
+        if view.camera is not None:
+            from rain_core.camera import look_at
+
+            camera = look_at(view.camera[0], view.camera[1], fov_y_deg=view.camera[2])
         for _ in range(view.steps if steps is None else steps):
             scene.step(1.0 / FPS)
-            scene.render()
+            scene.render(camera)
         return np.ascontiguousarray(scene.image()[..., :3])
     finally:
         scene.release()
