@@ -13,7 +13,8 @@ FLAG_FIELDS = {"--rain-rate": ("rain_rate", "rain.rate_mm_h"), "--hour": ("hour"
 
 
 def settings_from_args(args) -> Settings:
-    """Scenario file, then preset, then single flags. Bad input exits 2 with the flag and the reason."""
+    """Scenario file, then an OpenSCENARIO file's weather, then preset, then single flags. Bad input exits 2 with
+    the flag and the reason."""
     fail = args.parser.error
     settings = Settings()
     try:
@@ -21,6 +22,19 @@ def settings_from_args(args) -> Settings:
             settings = load_scenario(args.scenario)
     except (OSError, ValueError) as exc:
         fail(f"argument --scenario: {exc}")
+    if getattr(args, "openscenario", None) is not None:
+        import warnings
+
+        from rain_core.openscenario import load as load_openscenario
+
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                settings = load_openscenario(args.openscenario, base=settings)
+            for w in caught:
+                print(f"rainroad: warning: {w.message}", file=sys.stderr)
+        except (OSError, ValueError) as exc:
+            fail(f"argument --openscenario: {exc}")
     try:
         if args.preset is not None and args.scenario is not None:
             apply_rain_preset(settings, args.preset)  # the scenario keeps everything but the rain

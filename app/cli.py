@@ -126,6 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hour", type=_finite(0.0, 24.0, "h"), help="time of day in hours, in [0, 24] (12 noon, 22 night)")
     p.add_argument("--traffic", type=_int_in(0, 20), help="number of traffic vehicles, in [0, 20]")
     p.add_argument("--scenario", type=_path, help="scenario TOML file (see assets/scenarios/)")
+    p.add_argument("--openscenario", type=_path, metavar="FILE.xosc",
+                   help="take the weather of an OpenSCENARIO file's Init (rain, time of day, wind, fog, road "
+                        "wetness); applied after --scenario, before --preset and the single flags")
     p.add_argument("--preset", help="named rain preset (drizzle, light, moderate, heavy, very_heavy, extreme)")
     p.add_argument("--rain-rate", type=_finite(0.0, 500.0, "mm/h"), help="rain rate in mm/h, in [0, 500]")
     p.add_argument("--panel", action="store_true", help="headless: draw the Rain Manager panel into the frames")

@@ -220,6 +220,9 @@ class RainManagerPanel:
         imgui.push_style_color(imgui.Col_.plot_histogram.value, color)
         imgui.progress_bar(risk, imgui.ImVec2(-1, 0), f"{risk:.2f}" + ("  grip going!" if risk > 0.3 else ""))
         imgui.pop_style_color()
+        # What grip is left: the water's share lifted off, times the road's grip (road.friction_scale).
+        grip = (1.0 - risk) * float(self.scene.settings.road.friction_scale)
+        imgui.text(f"grip left {grip:.2f} (x road friction {self.scene.settings.road.friction_scale:.2f})")
 
     def _ripple_heights(self) -> None:
         """The simulated height field as a picture: red above rest, blue below, scaled to its largest swing."""

@@ -257,6 +257,8 @@ class RoadSection(_Section):
     reflection_scale: float = field(0.5, range=(0.125, 1.0), unit="× frame", doc="reflection resolution")
     debug_regions: bool = field(False, doc="colour dry / wet / drenched / puddle regions")
     kerb_streams: bool = field(True, doc="rainwater running along the kerbs to the drains (HEC-22 gutter flow)")
+    friction_scale: float = field(1.0, range=(0.0, 2.0), unit="×",
+                                  doc="tyre-road grip relative to dry asphalt (OpenSCENARIO frictionScaleFactor)")
 
 
 @dataclass
