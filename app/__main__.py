@@ -1,4 +1,4 @@
-"""``python -m app`` / ``rainroad``: the driving window, or ``--headless`` rendering to PNG."""
+"""``python -m app`` / ``rainroad``: the driving window, ``--headless`` rendering to PNG, or ``sweep``."""
 
 from __future__ import annotations
 
@@ -53,6 +53,11 @@ def settings_from_args(args) -> Settings:
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] == "sweep":  # rainroad sweep SWEEP.toml --out DIR
+        from app.sweep import main as sweep_main
+
+        return sweep_main(argv[1:])
     args = parse_args(argv)
     settings = settings_from_args(args)
     if args.headless:
