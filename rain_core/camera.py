@@ -31,6 +31,7 @@ class Camera:
     near_m: float = 0.05
     far_m: float = 2000.0
     inside_car: bool = False  # the windshield effect draws only when the camera looks through the glass
+    focus_m: float = math.inf  # distance the eye/lens is focused at (m): the glass is defocused unless near it
 
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(right, up, forward) orthonormal, world frame."""
@@ -79,6 +80,18 @@ def driver_camera(car, eye_local, fov_y_deg: float = 70.0, pitch_deg: float = -4
     return Camera(position=eye, forward=fwd, fov_y_deg=fov_y_deg, near_m=0.05, inside_car=True)
 
 
+def glass_camera(car, eye_local, look_local, fov_y_deg: float = 12.0) -> Camera:
+    """A close-up of the windshield from the driver's eye (car-local m), looking at ``look_local`` (a car-local
+    point on the glass) with a narrow field of view and focused on that point: the drops are sharp, the street
+    behind them is what the eye sees through them."""
+    m = car.model_matrix()
+    eye = m[:3, :3] @ np.asarray(eye_local, dtype=np.float64) + m[:3, 3]
+    look = m[:3, :3] @ np.asarray(look_local, dtype=np.float64) + m[:3, 3]
+    cam = look_at(eye, look, fov_y_deg=fov_y_deg, near_m=0.05, inside_car=True)
+    cam.focus_m = float(np.linalg.norm(look - eye))
+    return cam
+
+
 class ChaseRig:
     """A camera behind and above a car that follows it smoothly (critically damped, frame-rate independent).
 
@@ -90,15 +103,21 @@ class ChaseRig:
         self.stiffness_per_s = stiffness_per_s
         self._pos: np.ndarray | None = None
 
-    def camera(self, car, dt_s: float, fov_y_deg: float = 60.0) -> Camera:
+    def camera(self, car, dt_s: float, fov_y_deg: float = 60.0, keep_inside=None) -> Camera:
+        """The camera for ``car`` after dt_s (s). keep_inside: a rain_core.collision.StreetCollider; the camera is
+        then pulled in from the façades (a car against a wall never puts it inside the building)."""
         target_pos = (car.position - car.forward() * self.distance_m + car.right() * self.side_m
                       + np.array([0.0, self.height_m, 0.0]))
+        if keep_inside is not None:
+            target_pos[0] = keep_inside.keep_inside(float(target_pos[0]), float(target_pos[2]))
         if self._pos is None or not np.all(np.isfinite(self._pos)):
             self._pos = target_pos
         else:
             # Exact exponential approach: the same result for one big step or many small ones.
             a = 1.0 - math.exp(-self.stiffness_per_s * max(dt_s, 0.0))
             self._pos = self._pos + (target_pos - self._pos) * a
+        if keep_inside is not None:
+            self._pos[0] = keep_inside.keep_inside(float(self._pos[0]), float(self._pos[2]))
         look = car.position + car.forward() * 6.0 + np.array([0.0, 1.0, 0.0])
         return look_at(self._pos, look, fov_y_deg=fov_y_deg)
 

@@ -12,6 +12,7 @@ from rain_core.atmosphere import sky_overcast
 from rain_core.camera import Camera, ChaseRig, driver_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.checks import MAX_FRAME_DT_S  # noqa: F401  (re-exported: older imports of rain_core.scene keep working)
+from rain_core.collision import StreetCollider, street_solids
 from rain_core.effects import default_effects
 from rain_core.effects.lightning.storm import Storm
 from rain_core.gfx.frame import Frame
@@ -41,6 +42,8 @@ class Scene:
         self.ego = EgoCar(position=np.array([layout.LANE_CENTRES_X[0], 0.0, layout.PERIOD_M * 0.5]),
                           speed_m_s=16.0)
         self.autopilot = Autopilot(lane_index=0, target_speed_m_s=22.0, seed=self.seed)
+        self.collider = StreetCollider(street_solids(self.world))  # kerbs, façades, posts: the car stays in
+        self.ego.collider = self.collider
         self.traffic = Traffic(count=self.settings.traffic.count, seed=self.seed + int(self.settings.traffic.seed),
                                ego=self.ego)
         self.weather = Weather.from_settings(self.settings)
@@ -64,7 +67,7 @@ class Scene:
         self.weather_state = self.weather.step(dt_s, self.settings.rain.rate_mm_h)
         if drive is None:
             throttle, brake, steer = self.autopilot.controls(self.ego, dt_s, others=self.traffic.vehicles)
-            self.ego.step(dt_s, throttle, brake, steer)
+            self.ego.step(dt_s, throttle, brake, steer, reverse=self.autopilot.reverse)
         else:
             self.ego.step(dt_s, drive.throttle, drive.brake, drive.steer, reverse=drive.reverse)
         self.set_traffic_count(self.settings.traffic.count)
@@ -81,7 +84,7 @@ class Scene:
         fov = self.settings.camera.fov_deg
         if mode == "driver":
             return driver_camera(self.ego, DRIVER_EYE_LOCAL, fov_y_deg=fov)
-        return self.chase.camera(self.ego, self.last_dt_s, fov_y_deg=min(fov, 65.0))
+        return self.chase.camera(self.ego, self.last_dt_s, fov_y_deg=min(fov, 65.0), keep_inside=self.collider)
 
     def frame(self, camera: Camera | None = None) -> Frame:
         # Rain greys and darkens the sky (atmosphere effect's model; manual override in its settings).

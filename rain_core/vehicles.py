@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rain_core import checks, layout
+from rain_core.collision import kerb_crossings, kerb_speed
 
 PERIOD_M = layout.PERIOD_M
 KINDS = ("car", "van", "truck")
@@ -288,6 +289,7 @@ class EgoCar(Vehicle):
         if position is None:
             position = (layout.LANE_CENTRES_X[0], 0.0, 0.0)
         super().__init__(spec, position, yaw, speed_m_s, color)
+        self.collider = None  # rain_core.collision.StreetCollider: the street's kerbs, walls and posts (None: none)
 
     def step(self, dt_s: float, throttle: float, brake: float, steer: float, reverse: bool = False) -> None:
         """Advance dt_s seconds (≥ 0, clamped to MAX_STEP_DT_S; sub-stepped at EGO_SUBSTEP_S)."""
@@ -301,7 +303,15 @@ class EgoCar(Vehicle):
         n = max(1, math.ceil(dt_s / EGO_SUBSTEP_S - 1e-9))
         h = dt_s / n
         for _ in range(n):
+            if self.collider is None:
+                self._substep(h, throttle, brake, steer, bool(reverse))
+                continue
+            before = self.wheel_contacts()
             self._substep(h, throttle, brake, steer, bool(reverse))
+            up, down = kerb_crossings(before, self.wheel_contacts())
+            if up or down:
+                self.speed_m_s = kerb_speed(self.speed_m_s, up, down)
+            self.collider.resolve(self)
 
     def _substep(self, h: float, throttle: float, brake: float, steer: float, reverse: bool) -> None:
         spec = self.spec
@@ -423,6 +433,7 @@ class Autopilot:
         rng = np.random.default_rng(seed)
         self._phases = rng.uniform(0.0, math.tau, 2)
         self.time_s = 0.0
+        self.reverse = False  # backing away from a wall (recovery): the gear the caller passes to the car
 
     def lateral_target_m(self) -> float:
         """Where the autopilot aims now, m to the right of the lane centre (seeded slow wander)."""
@@ -449,6 +460,9 @@ class Autopilot:
         alpha = math.atan2(float(w @ left), float(w @ fwd))
         delta = math.atan(2.0 * spec.wheelbase_m * math.sin(alpha) / max(float(np.linalg.norm(w)), 1e-6))
         steer = min(max(delta / spec.max_steer_at(v), -1.0), 1.0)
+        recovery = self._recover(car, fwd, alpha)
+        if recovery is not None:
+            return recovery
         # Speed: P control on speed, feed-forward of drag and rolling, capped by an IDM gap to the car ahead.
         accel = min(max(0.8 * (self.target_speed_m_s - v), -spec.max_brake_m_s2), spec.max_accel_m_s2)
         if others:
@@ -457,6 +471,29 @@ class Autopilot:
         if need >= 0.0:
             return min(need / spec.engine_accel(v), 1.0), 0.0, steer
         return 0.0, min(-need / spec.max_brake_m_s2, 1.0), steer
+
+    def _recover(self, car: Vehicle, fwd: np.ndarray, alpha: float) -> tuple[float, float, float] | None:
+        """From a pose off its lane (across the kerb, facing a façade): brake before the wall, back away with the
+        wheels turned so the nose swings towards the lane, then drive on. None: drive normally."""
+        from rain_core.collision import WALL_X_M
+
+        v = car.speed_m_s
+        heading_x = float(fwd[0])
+        ahead = math.inf  # m along the heading to the wall it points at
+        if abs(heading_x) > 1e-3:
+            ahead = (WALL_X_M - math.copysign(1.0, heading_x) * float(car.position[0])) / abs(heading_x)
+        front = ahead - car.spec.length_m / 2.0
+        if self.reverse and (abs(alpha) < math.radians(40.0) or front > 8.0):
+            self.reverse = False
+        elif not self.reverse and front < 2.5 + max(v, 0.0) ** 2 / 8.0 and abs(alpha) > math.radians(25.0):
+            if v > 0.5:
+                return 0.0, 1.0, 0.0  # stop short of the wall first
+            self.reverse = True
+        if not self.reverse:
+            return None
+        if v > 0.2:
+            return 0.0, 1.0, 0.0
+        return 0.5, 0.0, -math.copysign(1.0, alpha)  # reversing: turning against alpha swings the nose to it
 
     def _follow_accel(self, car: Vehicle, others, d: np.ndarray) -> float:
         s_self = float(car.position @ d)

@@ -75,7 +75,7 @@ def _rebuilt_parts(seed: int) -> list[tuple[list[np.ndarray], str | None]]:
     segments, subdiv = 8, 1
     return [(street._road_and_streetside(r_road), None), (street._bridge()[0], "bridge"),
             (street._station()[0], "building"), (street._street_lamps(segments)[0], "pole"),
-            (street._trees(r_trees, segments, subdiv), "vegetation"),
+            (street._trees(r_trees, segments, subdiv)[0], "vegetation"),
             (street._buildings(r_build, 1.0)[0], "building")]
 
 

@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 
 import numpy as np
 import trimesh
@@ -20,6 +21,7 @@ from rain_core.world.occluders import (
     _rasterise_top,
 )
 from rain_core.world.street import (
+    _LAMP_POLE_D,
     GROUND_HALF_X_M,
     StreetLamp,
     _bridge,
@@ -43,6 +45,8 @@ class World:
     heightmap_extent_m: tuple[float, float]  # (size_x_m, size_z_m) of the whole heightmap
     occluder_map: OccluderMap  # 0.25 m cells over |x| < OCCLUDER_HALF_X_M
     occluder_map_coarse: OccluderMap  # 2 m cells over |x| < GROUND_HALF_X_M + margin
+    # Posts and trunks a car cannot drive through: (N, 3) x, z (m, in the tile), radius (m) (rain_core.collision).
+    solid_circles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def occluder_height(self, x, z) -> np.ndarray:
         """Height (m) at which a raindrop falling straight down at (x, z) (m) first meets a roof; ``-inf`` where
@@ -86,7 +90,9 @@ def build_world(seed: int = 1, detail: float = 1.0) -> World:
     occ += o
     p, lamps = _street_lamps(segments)
     parts += p
-    parts += _trees(r_trees, segments, subdiv)
+    p, trunks = _trees(r_trees, segments, subdiv)
+    parts += p
+    posts = np.array([[math.copysign(_LAMP_POLE_D, lamp.position[0]), lamp.position[2], 0.12] for lamp in lamps])
     p, o = _buildings(r_build, detail)
     parts += p
     occ += o
@@ -106,4 +112,4 @@ def build_world(seed: int = 1, detail: float = 1.0) -> World:
     hmap, _ = make_road_heightmap(r_hmap)
     return World(seed=seed, vertices=vertices, lamps=lamps + bridge_lamps + station_lamps, occluders=occluders,
                  road_heightmap=hmap, heightmap_extent_m=HEIGHTMAP_EXTENT_M, occluder_map=fine,
-                 occluder_map_coarse=coarse)
+                 occluder_map_coarse=coarse, solid_circles=np.concatenate([posts.reshape(-1, 3), trunks]))

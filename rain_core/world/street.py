@@ -217,6 +217,20 @@ def _bridge() -> tuple[list[np.ndarray], list[np.ndarray], list[StreetLamp]]:
     return parts, occ, lamps
 
 
+_PILLAR_X = np.array([_KERB_OUT + 1.5, 14.6])  # m, the canopy's four pillars (0.5 m square)
+_PILLAR_Z = np.array([_CAN_Z0 + 4.0, _CAN_Z1 - 4.0])
+_PUMP_ISLAND = (14.0, 15.2, _CAN_Z0 + 2.0, _CAN_Z1 - 2.0)  # x0, x1, z0, z1 (m)
+_KIOSK = (22.0, 30.0, layout.CANOPY_Z_M + 14.0, layout.CANOPY_Z_M + 32.0)
+
+
+def station_solid_boxes() -> np.ndarray:
+    """(N, 4) x0, x1, z0, z1 (m) of the fuel station's solid parts a car cannot drive through: the canopy's
+    pillars, the pump island, the kiosk."""
+    gx, gz = (a.ravel() for a in np.meshgrid(_PILLAR_X, _PILLAR_Z))
+    pillars = np.stack([gx - 0.25, gx + 0.25, gz - 0.25, gz + 0.25], axis=1)
+    return np.concatenate([pillars, [_PUMP_ISLAND, _KIOSK]])
+
+
 def _station() -> tuple[list[np.ndarray], list[np.ndarray], list[StreetLamp]]:
     parts, occ, lamps = [], [], []
     za, zb = _STATION_Z
@@ -228,15 +242,14 @@ def _station() -> tuple[list[np.ndarray], list[np.ndarray], list[StreetLamp]]:
     parts.append(_boxes(lo, hi, (0.45, 0.02, 0.02), 0.5, 0.0, MAT_GENERIC, faces=(NX_, PX_, NZ_, PZ_)))
     parts.append(_boxes(lo, hi, (0.30, 0.30, 0.30), 0.7, 0.0, MAT_METAL, faces=(PY_,)))
     occ.append(_box_tris(lo, hi))
-    px = np.array([_KERB_OUT + 1.5, 14.6])
-    pz = np.array([_CAN_Z0 + 4.0, _CAN_Z1 - 4.0])
-    gx, gz = (a.ravel() for a in np.meshgrid(px, pz))
+    gx, gz = (a.ravel() for a in np.meshgrid(_PILLAR_X, _PILLAR_Z))
     base_y = np.where(gx < _WALK_OUT, _KH, _KH + 0.15)
     parts.append(_boxes(np.stack([gx - 0.25, base_y, gz - 0.25], 1), np.stack([gx + 0.25, np.full(4, _CAN_Y0),
                                                                                gz + 0.25], 1),
                         (0.6, 0.6, 0.6), 0.5, 0.3, MAT_METAL, faces=(NX_, PX_, NZ_, PZ_)))
     # Pump islands (raised concrete) with pumps between the pillars.
-    parts.append(_boxes((14.0, 0.0, _CAN_Z0 + 2.0), (15.2, _KH + 0.15, _CAN_Z1 - 2.0), (0.5, 0.5, 0.48), 0.7,
+    ix0, ix1, iz0, iz1 = _PUMP_ISLAND
+    parts.append(_boxes((ix0, 0.0, iz0), (ix1, _KH + 0.15, iz1), (0.5, 0.5, 0.48), 0.7,
                         0.0, MAT_CONCRETE, faces=(NX_, PX_, PY_, NZ_, PZ_)))
     pump_z = np.array([layout.CANOPY_Z_M - 4.0, layout.CANOPY_Z_M, layout.CANOPY_Z_M + 4.0])
     n = len(pump_z)
@@ -262,7 +275,7 @@ def _station() -> tuple[list[np.ndarray], list[np.ndarray], list[StreetLamp]]:
         lamps.append(StreetLamp(np.array([x, _CAN_Y0 - 0.01, z]), np.array([0.0, -1.0, 0.0]), cd,
                                 _LED_5000K.copy()))
     # Kiosk: white box, glass shop front facing the road, roof slab overhanging the entrance.
-    kx0, kx1, kz0, kz1 = 22.0, 30.0, layout.CANOPY_Z_M + 14.0, layout.CANOPY_Z_M + 32.0
+    kx0, kx1, kz0, kz1 = _KIOSK
     parts.append(_boxes((kx0, _KH, kz0), (kx1, 3.6, kz1), (0.6, 0.6, 0.58), 0.7, 0.0, MAT_CONCRETE,
                         faces=(NX_, PX_, NZ_, PZ_)))
     parts.append(_facade_quads(kx0 - 0.02, -1.0, 0.45, 2.8, kz0 + 1.0, kz1 - 1.0, _emissive(_LED_5000K, 250.0),
@@ -315,8 +328,9 @@ def _street_lamps(detail_segments: int) -> tuple[list[np.ndarray], list[StreetLa
     return parts, lamps
 
 
-def _trees(rng: np.random.Generator, detail_segments: int, subdiv: int) -> list[np.ndarray]:
-    parts = []
+def _trees(rng: np.random.Generator, detail_segments: int, subdiv: int) -> tuple[list[np.ndarray], np.ndarray]:
+    """The street trees' meshes and their trunks, (N, 3) x, z, radius (m)."""
+    parts, trunks = [], []
     s = _P / _LAMPS_PER_SIDE
     template = trimesh.creation.icosphere(subdivisions=subdiv)
     for side, phase in ((1.0, 0.25), (-1.0, 0.75)):
@@ -334,14 +348,16 @@ def _trees(rng: np.random.Generator, detail_segments: int, subdiv: int) -> list[
         trunk_h = rng.uniform(3.0, 3.8, n)
         r_x = rng.uniform(1.5, 1.9, n)
         r_y = rng.uniform(1.8, 2.6, n)
-        parts.append(_cylinders(np.stack([x, np.full(n, _KH), z], 1), rng.uniform(0.12, 0.18, n), trunk_h + r_y,
+        trunk_r = rng.uniform(0.12, 0.18, n)
+        trunks.append(np.stack([x, z, trunk_r], axis=1))
+        parts.append(_cylinders(np.stack([x, np.full(n, _KH), z], 1), trunk_r, trunk_h + r_y,
                                 max(4, detail_segments - 2), (0.08, 0.055, 0.035), 0.9, 0.0, MAT_GENERIC))
         centre = np.stack([x + side * rng.uniform(0.0, 0.3, n), _KH + trunk_h + 0.8 * r_y, z], 1)
         radii = np.stack([r_x, r_y, rng.uniform(1.8, 2.6, n)], 1)
         jitter = rng.uniform(-0.12, 0.12, (n, len(template.vertices)))
         green = np.stack([rng.uniform(0.04, 0.08, n), rng.uniform(0.09, 0.15, n), rng.uniform(0.025, 0.05, n)], 1)
         parts.append(_blobs(centre, radii, template, jitter, green))
-    return parts
+    return parts, np.concatenate(trunks)
 
 
 def _buildings(rng: np.random.Generator, detail: float) -> tuple[list[np.ndarray], list[np.ndarray]]:

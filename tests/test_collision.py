@@ -1,0 +1,127 @@
+"""The ego car stays in the street: walls where the sidewalks end, posts and trunks solid, the kerb a step that
+costs speed; the autopilot backs off a wall and finds its lane; the chase camera never enters a building."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rain_core import layout
+from rain_core.collision import WALL_X_M, StreetCollider, box_outline, kerb_speed, street_solids
+from rain_core.vehicles import Autopilot, EgoCar
+from rain_core.world import build_world
+
+
+@pytest.fixture(scope="module")
+def collider():
+    return StreetCollider(street_solids(build_world(seed=1)))
+
+
+def _car(collider, x=layout.LANE_CENTRES_X[0], z=500.0, yaw=0.0, speed=16.0):
+    car = EgoCar(position=np.array([x, 0.0, z]), yaw=yaw, speed_m_s=speed)
+    car.collider = collider
+    return car
+
+
+def _max_corner_x(car) -> float:
+    h_l, h_w = car.spec.length_m / 2, car.spec.width_m / 2
+    f, r = car.forward(), car.right()
+    return max(abs(float((car.position + f * a * h_l + r * b * h_w)[0])) for a in (-1, 1) for b in (-1, 1))
+
+
+@pytest.mark.parametrize("steer", [1.0, -1.0])
+@pytest.mark.parametrize("dt", [1 / 60, 1 / 10, 1.0])
+def test_full_lock_full_throttle_never_passes_the_facades(collider, steer, dt):
+    class Recording(StreetCollider):
+        hits = 0
+
+        def resolve(self, car):
+            touched = super().resolve(car)
+            Recording.hits += touched
+            return touched
+
+    car = _car(Recording(collider.solids), z=100.0)  # clear of the forecourt (which opens the +x wall)
+    first_hit, speeds = None, []
+    t = 0.0
+    while t < 20.0:
+        before = abs(car.speed_m_s)
+        hits = Recording.hits
+        car.step(dt, throttle=1.0, brake=0.0, steer=steer)
+        t += dt
+        assert _max_corner_x(car) <= WALL_X_M + 0.05
+        if first_hit is None and Recording.hits > hits:
+            first_hit = (t, before)
+        speeds.append((t, abs(car.speed_m_s)))
+    assert first_hit is not None, "never hit anything"
+    after = [v for t, v in speeds if first_hit[0] <= t <= first_hit[0] + 1.0]
+    assert min(after) < 0.8 * first_hit[1]  # the impact (a post, a trunk or the wall) costs speed
+
+
+def test_head_on_into_a_wall_stops_and_bounces_a_little(collider):
+    car = _car(collider, x=0.0, yaw=-math.pi / 2, speed=20.0)  # heading +x at 72 km/h
+    for _ in range(60):
+        car.step(1 / 30, throttle=0.0, brake=0.0, steer=0.0)
+    assert _max_corner_x(car) <= WALL_X_M + 0.05 and car.speed_m_s <= 0.5
+
+
+def test_posts_and_trunks_are_solid(collider):
+    world = build_world(seed=1)
+    post = world.solid_circles[0]
+    x, z = float(post[0]), float(post[1])
+    car = _car(collider, x=x, z=z + 15.0, speed=12.0)  # driving −z along the sidewalk, straight at the post
+    for _ in range(90):
+        car.step(1 / 30, throttle=0.3, brake=0.0, steer=0.0)
+        front = float(car.position[2]) - car.spec.length_m / 2
+        assert front >= z - post[2] - 0.05 or abs(float(car.position[0]) - x) > car.spec.width_m / 2 + post[2]
+
+
+def test_kerb_costs_speed():
+    assert kerb_speed(20.0, 1, 0) == pytest.approx(20.0 * 0.88)
+    assert kerb_speed(20.0, 0, 0) == 20.0
+
+
+def test_box_outline_has_no_gaps():
+    c = box_outline(0.0, 2.0, 0.0, 8.0, 0.3)
+    gaps = np.hypot(*np.diff(np.vstack([c, c[:1]])[:, :2], axis=0).T)
+    assert gaps.max() <= 0.3 + 1e-9
+
+
+@pytest.mark.parametrize("x,yaw", [(7.9, -math.pi / 2), (8.2, -math.pi / 2 - 0.5), (-7.9, math.pi / 2),
+                                   (6.0, math.pi)])
+def test_autopilot_recovers_without_crossing_a_facade(collider, x, yaw):
+    car = _car(collider, x=x, z=450.0, yaw=yaw, speed=0.0)
+    pilot = Autopilot(lane_index=0, target_speed_m_s=14.0, seed=1)
+    recovered = None
+    for i in range(int(60 / (1 / 30))):
+        throttle, brake, steer = pilot.controls(car, 1 / 30)
+        car.step(1 / 30, throttle, brake, steer, reverse=pilot.reverse)
+        assert _max_corner_x(car) <= WALL_X_M + 0.05
+        heading_ok = abs(math.remainder(car.yaw - layout.LANE_YAW[0], math.tau)) < 0.1
+        if abs(float(car.position[0]) - layout.LANE_CENTRES_X[0]) < 0.5 and heading_ok and car.speed_m_s > 5.0:
+            recovered = i / 30
+            break
+    assert recovered is not None, f"still off the lane after 60 s at x={car.position[0]:.2f}, yaw={car.yaw:.2f}"
+
+
+def test_scene_crash_keeps_the_chase_camera_in_the_street_and_r_restores_the_lane(gl_ctx):
+    from app.controls import DriveInput, reset_to_lane
+    from rain_core.scene import Scene
+    from rain_core.settings import Settings
+
+    s = Settings()
+    s.rain.rate_mm_h = 0.0
+    s.camera.mode = "chase"
+    scene = Scene(gl_ctx, (64, 36), s, seed=1, gpu_timing=False)
+    try:
+        for _ in range(300):  # 10 s of full left lock and throttle: into the −x façades and along them
+            scene.step(1 / 30, DriveInput(throttle=1.0, steer=1.0))
+            cam = scene.camera()
+            assert abs(float(cam.position[0])) < scene.collider.wall_x(float(cam.position[0]),
+                                                                        float(cam.position[2]))
+        reset_to_lane(scene)
+        assert scene.ego.position[0] == layout.LANE_CENTRES_X[0] and scene.ego.yaw == layout.LANE_YAW[0]
+    finally:
+        scene.release()
+        gl_ctx.detect_framebuffer(0).use()
