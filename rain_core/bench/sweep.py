@@ -49,7 +49,10 @@ def main(argv=None) -> int:
             lines = run_sweep(spec, out, progress=False, **kw)
             wall = time.perf_counter() - t0
             inside = sum(line["seconds"] for line in lines) / len(lines)
-            per_sequence[label] = wall / len(lines) * kw["workers"]
+            failed = [line for line in lines if line["status"] != "complete"]
+            if failed:
+                print(f"{label}: {len(failed)} failed, e.g. {failed[0]['error']}")
+            per_sequence[label] = wall / len(lines)
             rows.append((label, wall, 3600.0 * len(lines) / wall, inside,
                          "yes" if all(line["status"] == "complete" for line in lines) else "NO"))
         table = markdown_table(["backend", "wall s (4 sequences)", "sequences/hour", "s per sequence in a worker",
@@ -57,8 +60,8 @@ def main(argv=None) -> int:
         note = ""
         if "Ray (local), 2 CPUs" in per_sequence:
             extra = per_sequence["Ray (local), 2 CPUs"] - per_sequence["pool, 2 workers"]
-            note = (f"\nRay adds about {extra:.1f} s per sequence over the pool with the same 2 CPUs "
-                    f"(start-up included).\n")
+            note = (f"\nRay adds {extra:+.1f} s of wall time per sequence over the pool with the same 2 CPUs "
+                    f"(its start-up spread over the sequences; a loaded machine makes this noisy).\n")
         md = (f"# Sweep\n\n4 sequences × {spec.frames} frames at {size} with labels, this machine:\n\n{table}\n"
               f"{note}")
         print(md)
