@@ -6,6 +6,8 @@ may be numbers, tuples, raw bytes (written as-is) or NumPy arrays (written as co
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 
@@ -43,11 +45,15 @@ class OwnedUniforms:
     program), skipping a write whose value equals the one this object wrote last: most of them do not change
     from frame to frame. Anything else writing the same names in the same program would make it skip wrongly."""
 
-    __slots__ = ("program", "_last")
+    __slots__ = ("_program", "_last")
 
     def __init__(self, program):
-        self.program = program
+        self._program = weakref.ref(program)  # the cache below must not keep a program alive
         self._last: dict[str, object] = {}
+
+    @property
+    def program(self):
+        return self._program()
 
     def set(self, name: str, value) -> None:
         if isinstance(value, np.ndarray):
@@ -63,15 +69,16 @@ class OwnedUniforms:
             self.set(name, value)
 
 
-_OWNED: dict[int, OwnedUniforms] = {}
+# Program → its OwnedUniforms, held weakly: a dropped program leaves with its entry (a strong cache once kept
+# programs of dropped shader libraries alive until an eviction, and they then died "unreleased" in whatever
+# scene happened to evict them).
+_OWNED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def owned_uniforms(program) -> OwnedUniforms:
     """The one ``OwnedUniforms`` of ``program``, shared by every owner instance (two road effects drawing through
     one shader library's scene program must see each other's writes)."""
-    owned = _OWNED.get(program.glo)
-    if owned is None or owned.program is not program:  # a released program's GL name may be reused
-        if len(_OWNED) > 256:
-            _OWNED.clear()  # forgetting only costs a write
-        owned = _OWNED[program.glo] = OwnedUniforms(program)
+    owned = _OWNED.get(program)
+    if owned is None:
+        owned = _OWNED[program] = OwnedUniforms(program)
     return owned
