@@ -1,4 +1,5 @@
-"""Camera modes of the app: driver (in-cabin, default), chase, and a free-fly camera."""
+"""Camera modes of the app: driver (in-cabin, default), chase, a free-fly camera, and a close-up of the
+windshield from the driver's eye (glass)."""
 
 from __future__ import annotations
 
@@ -6,9 +7,10 @@ import math
 
 import numpy as np
 
-from rain_core.camera import Camera, ChaseRig, driver_camera
+from rain_core.camera import Camera, ChaseRig, driver_camera, glass_camera
 
-MODES = ("driver", "chase", "free")
+MODES = ("driver", "chase", "free", "glass")
+_CYCLE = ("driver", "chase", "free")  # C cycles these; G toggles the glass close-up
 
 
 class FreeFly:
@@ -51,7 +53,12 @@ class CameraModes:
         self.free = FreeFly()
 
     def cycle(self, car=None):
-        self.set_mode(MODES[(MODES.index(self.mode) + 1) % len(MODES)], car)
+        nxt = _CYCLE[(_CYCLE.index(self.mode) + 1) % len(_CYCLE)] if self.mode in _CYCLE else "driver"
+        self.set_mode(nxt, car)
+
+    def toggle_glass(self, car=None):
+        """The G key: the windshield close-up, and back to the driver's seat."""
+        self.set_mode("driver" if self.mode == "glass" else "glass", car)
 
     def set_mode(self, mode: str, car=None):
         """Switch camera (from the C key or the panel); free-fly starts behind the car, not where it was left."""
@@ -65,9 +72,22 @@ class CameraModes:
             self.free.yaw = getattr(car, "yaw", 0.0)
         self.chase.reset()
 
+    def _glass_point(self, car, eye_local) -> np.ndarray:
+        """The car-local glass point ahead of the eye (kept: the glass geometry is not rebuilt each frame)."""
+        key = (id(getattr(car, "spec", None)), tuple(np.asarray(eye_local, dtype=np.float64)))
+        if getattr(self, "_glass_key", None) != key:
+            from rain_core.effects.windshield.glass import GlassGeometry
+
+            spec = getattr(car, "spec", None)
+            glass = GlassGeometry(spec) if spec is not None else GlassGeometry()
+            self._glass_key, self._glass_look = key, glass.point_ahead_of(eye_local)
+        return self._glass_look
+
     def camera(self, car, eye_local, dt_s: float, fov_y_deg: float = 70.0) -> Camera:
         if self.mode == "driver":
             return driver_camera(car, eye_local, fov_y_deg=fov_y_deg)
+        if self.mode == "glass":
+            return glass_camera(car, eye_local, self._glass_point(car, eye_local))
         if self.mode == "chase":
             return self.chase.camera(car, dt_s, fov_y_deg=min(fov_y_deg, 65.0))
         return self.free.camera(fov_y_deg)

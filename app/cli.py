@@ -19,7 +19,7 @@ from pathlib import Path
 
 from rain_core.checks import quote
 
-CAMERA_MODES = ("driver", "chase", "free")
+CAMERA_MODES = ("driver", "chase", "free", "glass")
 WINDOW_BACKENDS = ("pyglet", "glfw", "sdl2", "pygame2", "pyqt5", "pyside2", "tk", "headless")
 MAX_SIZE = 8192
 NAME_MAX_BYTES = 255  # longest file or folder name (one path component) on the usual file systems

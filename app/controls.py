@@ -16,6 +16,7 @@ KEY_HELP = (
     ("A / Left, D / Right", "steer"),
     ("R", "reset: the car back on its lane at cruise speed"),
     ("C", "camera: driver's seat -> chase -> free-fly (free: WASD/arrows fly, drag the mouse to look)"),
+    ("G", "close-up of the windshield from the driver's eye (G again: back to the seat)"),
     ("Tab", "hide / show the Rain Manager"),
     ("F1", "this list of keys"),
     ("F12", "screenshot to screenshots/"),

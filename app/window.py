@@ -69,7 +69,7 @@ class RainroadApp:
         self.panel.cameras = self.cameras
         self.panel.on_reset = self.reset_car
         self._keys = {getattr(wnd.keys, name, None): name
-                      for name in (*KEY_NAMES, "C", "R", "TAB", "F1", "F12", "ESCAPE")}
+                      for name in (*KEY_NAMES, "C", "G", "R", "TAB", "F1", "F12", "ESCAPE")}
         self._keys.pop(None, None)
         self._last = time.perf_counter()
         wnd.render_func = self.render
@@ -104,6 +104,9 @@ class RainroadApp:
             self.driver.press(KEY_NAMES[name], key)
         elif pressed and name == "C":
             self.cameras.cycle(self.scene.ego)
+            self.scene.settings.camera.mode = self.cameras.mode
+        elif pressed and name == "G":
+            self.cameras.toggle_glass(self.scene.ego)
             self.scene.settings.camera.mode = self.cameras.mode
         elif pressed and name == "R":
             self.reset_car()

@@ -9,7 +9,7 @@ import numpy as np
 
 from rain_core import checks, layout
 from rain_core.atmosphere import sky_overcast
-from rain_core.camera import Camera, ChaseRig, driver_camera
+from rain_core.camera import Camera, ChaseRig, driver_camera, glass_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.checks import MAX_FRAME_DT_S  # noqa: F401  (re-exported: older imports of rain_core.scene keep working)
 from rain_core.collision import StreetCollider, street_solids
@@ -84,6 +84,12 @@ class Scene:
         fov = self.settings.camera.fov_deg
         if mode == "driver":
             return driver_camera(self.ego, DRIVER_EYE_LOCAL, fov_y_deg=fov)
+        if mode == "glass":  # the windshield close-up from the driver's eye
+            if getattr(self, "_glass_look", None) is None:
+                from rain_core.effects.windshield.glass import GlassGeometry
+
+                self._glass_look = GlassGeometry(self.ego.spec).point_ahead_of(DRIVER_EYE_LOCAL)
+            return glass_camera(self.ego, DRIVER_EYE_LOCAL, self._glass_look)
         return self.chase.camera(self.ego, self.last_dt_s, fov_y_deg=min(fov, 65.0), keep_inside=self.collider)
 
     def frame(self, camera: Camera | None = None) -> Frame:

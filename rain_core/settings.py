@@ -285,7 +285,8 @@ class WipersSection(_Section):
 @dataclass
 class CameraSection(_Section):
     SECTION: ClassVar[str] = "camera"
-    mode: str = field("driver", choices=("driver", "chase", "free"), doc="in-cabin, behind the car, or free")
+    mode: str = field("driver", choices=("driver", "chase", "free", "glass"),
+                      doc="in-cabin, behind the car, free, or a close-up of the windshield")
     fov_deg: float = field(60.0, range=(20.0, 120.0), unit="deg", doc="vertical field of view")
     exposure_s: float = field(1.0 / 60.0, range=(1e-4, 0.25), unit="s", doc="shutter time (sets streak length)")
 

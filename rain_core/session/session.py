@@ -31,7 +31,7 @@ from rain_core.session.offline import Accumulator, check_subframes
 from rain_core.session.weather import Weather
 from rain_core.settings import Settings, field_info, load_scenario, set_value
 
-CAMERAS = ("driver", "chase")
+CAMERAS = ("driver", "chase", "glass")
 MIN_SIZE, MAX_SIZE = 16, 8192  # pixels per side, as the command line's --size
 MAX_SEED = 2**31 - 1
 MAX_STEP_S = 3600.0  # s, longest single step() (sub-stepped by MAX_FRAME_DT_S, one render each)

@@ -1,7 +1,7 @@
 """Contact sheet of the windshield effect (issue 8), and the committed frame sequence.
 
 ``python -m rain_core.sheets windshield`` writes ``docs/sheets/windshield.png`` (parked, 60 and 120 km/h,
-heavy rain with slow and fast wipers, a wiper stroke, night glints, a close-up) and
+heavy rain with slow and fast wipers, a wiper stroke, night glints, the glass camera's close-up) and
 ``docs/sequences/windshield/sequence.png``: 24 frames from the driver's seat in moderate rain, accelerating
 from 0 to 120 km/h with the wipers on intermittent. ``--only sheet`` / ``--only sequence`` renders one of
 them.
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rain_core.camera import driver_camera
+from rain_core.camera import glass_camera
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.sheets import DEFAULT_OUT, save_sheet
 
@@ -116,10 +116,13 @@ def render_sheet(ctx, out_dir=DEFAULT_OUT) -> Path:
     scene.release()
     scene, effect = _scene(ctx, 2.0, "off", seed=5)
 
-    def close_up(sc):
-        return driver_camera(sc.ego, DRIVER_EYE_LOCAL, fov_y_deg=14.0, pitch_deg=-3.0)
+    look = effect.glass.point_ahead_of(DRIVER_EYE_LOCAL)
 
-    shot("close-up (14° view), parked 2 mm/h", _advance(scene, effect, 30.0, camera=close_up))
+    def close_up(sc):  # the glass camera (camera.mode "glass", G in the app): focused on the glass
+        return glass_camera(sc.ego, DRIVER_EYE_LOCAL, look)
+
+    shot("glass close-up (12° view, focused on the glass), parked 2 mm/h",
+         _advance(scene, effect, 30.0, camera=close_up))
     scene.release()
     return save_sheet(shots, labels, "windshield", out_dir, columns=3)
 

@@ -24,6 +24,8 @@ uniform float u_drop_lod;     // mip level of u_frame for the slight blur throug
 uniform vec4 u_blade[2];      // pivot s, t (m), r inner, r outer (m)
 uniform float u_blade_angle[2];
 uniform float u_aperture_m;   // radius of the eye's pupil (m): the blur circle on the glass when focused far
+uniform float u_focus_m;      // distance the eye is focused at (m; 1e9: the road): the glass blurs by the pupil
+                              // scaled by |1 - distance / focus| (thin lens), sharp when focused on the glass
 uniform vec3 u_cabin;         // luminance seen by total internal reflection (the dark cabin), pre-exposed
 in vec3 v_pos;
 in vec3 v_nrm;
@@ -110,7 +112,7 @@ void main() {
     // grows with its thickness, and a blur.
     vec3 in_water = refract(V, -N, 1.0 / N_WATER);
     float foot = max(length(dFdx(st)), length(dFdy(st)));
-    float radius = max(u_aperture_m, 0.5 * foot);
+    float radius = max(u_aperture_m * abs(1.0 - length(v_pos - u_camera_pos) / u_focus_m), 0.5 * foot);
     float cover = 0.0;
     float drop_cover = 0.0;
     vec3 wet_col = vec3(0.0);
@@ -124,8 +126,17 @@ void main() {
         float c_film = 1.0 - exp(-w.y / 5.0);
         float c = max(c_drop, c_film);
         if (c <= 0.002) continue;
-        ivec2 cell = ivec2(floor(st_k / 0.002));
-        vec2 jitter = vec2(ws_rand(cell, 3u), ws_rand(cell, 7u)) - 0.5;
+        // Smooth (value-noise) tilt over 2 mm cells: constant per cell it shows as squares once the eye focuses
+        // on the glass (the glass camera), where no pupil blur averages the cells.
+        vec2 g = st_k / 0.002;
+        ivec2 cell = ivec2(floor(g));
+        vec2 f = g - vec2(cell);
+        f = f * f * (3.0 - 2.0 * f);
+        vec2 j00 = vec2(ws_rand(cell, 3u), ws_rand(cell, 7u));
+        vec2 j10 = vec2(ws_rand(cell + ivec2(1, 0), 3u), ws_rand(cell + ivec2(1, 0), 7u));
+        vec2 j01 = vec2(ws_rand(cell + ivec2(0, 1), 3u), ws_rand(cell + ivec2(0, 1), 7u));
+        vec2 j11 = vec2(ws_rand(cell + ivec2(1, 1), 3u), ws_rand(cell + ivec2(1, 1), 7u));
+        vec2 jitter = mix(mix(j00, j10, f.x), mix(j01, j11, f.x), f.y) - 0.5;
         vec2 slope = w.zw + jitter * 0.5 * (1.0 - exp(-w.y / 10.0));
         vec3 Nw = normalize(N - u_refraction * (slope.x * Ts + slope.y * Tt));
         vec3 out_dir = refract(in_water, -Nw, N_WATER);

@@ -186,7 +186,7 @@ class RainfallEffect(Effect):
         s = self._settings(frame)
         pos = np.asarray(frame.camera.position, dtype=np.float64)
         ego = frame.ego
-        if ego is not None and s.camera.mode in ("driver", "chase"):
+        if ego is not None and s.camera.mode in ("driver", "chase", "glass"):
             rel = pos - np.asarray(ego.position, dtype=np.float64)
             rel[2] = wrap_near(rel[2], 0.0)
             v = np.asarray(ego.velocity(), dtype=np.float64).copy()

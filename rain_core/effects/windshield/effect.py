@@ -370,6 +370,7 @@ class WindshieldEffect(Effect):
             u_blade_angle=np.array(self.sim.blade_angles(), np.float32).tobytes(),
             u_cabin=tuple(float(c) for c in cabin),
             u_aperture_m=PUPIL_RADIUS_M,
+            u_focus_m=min(float(getattr(frame.camera, "focus_m", math.inf)), 1e9),
             u_near_far=(frame.camera.near_m, frame.camera.far_m),
             u_cabin_depth=CABIN_DEPTH_M,
             u_water=_UNIT_A,

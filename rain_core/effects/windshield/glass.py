@@ -64,6 +64,20 @@ class GlassGeometry:
             + bulge[..., None] * self.normal
         )
 
+    def point_ahead_of(self, eye_local, pitch_deg: float = -8.0) -> np.ndarray:
+        """Car-local point (m) on the glass that an eye at ``eye_local`` (car-local m) sees looking straight
+        ahead (−z), pitched by ``pitch_deg`` (deg, negative = down); kept 5 cm inside the glass's edges. The
+        close-up glass camera looks there."""
+        eye = np.asarray(eye_local, dtype=np.float64)
+        p = np.radians(pitch_deg)
+        d = np.array([0.0, np.sin(p), -np.cos(p)])
+        lam = float(np.dot(self.bottom_center - eye, self.normal) / np.dot(d, self.normal))
+        rel = eye + lam * d - self.bottom_center
+        t = min(max(float(np.dot(rel, self.up)), 0.05), self.height - 0.05)
+        half = 0.5 * float(self.width(t)) - 0.05
+        s = min(max(float(np.dot(rel, self.right)), -half), half)
+        return self.local_points(np.array([s, t]))
+
     def gravity(self, st) -> np.ndarray:
         """Acceleration of gravity along the curved glass, (…, 2) m/s² in (s, t) (the car is level)."""
         st = np.asarray(st, dtype=np.float64)
