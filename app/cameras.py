@@ -83,9 +83,13 @@ class CameraModes:
             self._glass_key, self._glass_look = key, glass.point_ahead_of(eye_local)
         return self._glass_look
 
-    def camera(self, car, eye_local, dt_s: float, fov_y_deg: float = 70.0) -> Camera:
+    def camera(self, car, eye_local, dt_s: float, fov_y_deg: float = 70.0, view=None) -> Camera:
+        """The current mode's camera. ``fov_y_deg`` (deg) is the chase and free cameras' field of view; ``view``
+        (the settings' ``camera`` section) gives the driver's field of view and pitch, else their defaults."""
         if self.mode == "driver":
-            return driver_camera(car, eye_local, fov_y_deg=fov_y_deg)
+            if view is None:
+                return driver_camera(car, eye_local)
+            return driver_camera(car, eye_local, fov_y_deg=view.driver_fov_deg, pitch_deg=view.driver_pitch_deg)
         if self.mode == "glass":
             return glass_camera(car, eye_local, self._glass_point(car, eye_local))
         if self.mode == "chase":

@@ -161,7 +161,8 @@ class RainroadApp:
             self.scene.renderer.resize(self.render_size())
         self.scene.step(dt, drive)
         self.scene.settings.camera.mode = self.cameras.mode
-        camera = self.cameras.camera(ego, DRIVER_EYE_LOCAL, self.scene.last_dt_s, self.scene.settings.camera.fov_deg)
+        view = self.scene.settings.camera
+        camera = self.cameras.camera(ego, DRIVER_EYE_LOCAL, self.scene.last_dt_s, view.fov_deg, view=view)
         self.scene.render(camera)
         self.scene.renderer.present(self.wnd.fbo, (0, 0, *self.wnd.buffer_size))
         self.panel.draw(dt, self.wnd.fbo)

@@ -49,7 +49,7 @@ _HUB = ((0.55, 0.55, 0.56), 0.35, 1.0, MAT_METAL)
 _CHASSIS = ((0.03, 0.03, 0.03), 0.7, 0.5, MAT_METAL)
 _PAINT_ROUGHNESS, _PAINT_METALLIC = 0.25, 0.6
 _WHEEL_RIM = (0.09, 0.085, 0.08)
-_MIRROR = ((0.05, 0.055, 0.06), 0.08, 0.0, MAT_GENERIC)  # the door mirror's face (it does not show the scene)
+_MIRROR = ((0.05, 0.055, 0.06), 0.08, 0.0, MAT_GENERIC)  # the door mirror's glass (dark where no view is drawn)
 _WHEEL_SPOKE = (0.16, 0.16, 0.17)  # brushed-metal-look spokes
 
 
@@ -281,23 +281,48 @@ def _bumpers(spec: VehicleSpec, prof: _Profile) -> list[np.ndarray]:
     return parts
 
 
-def _mirrors(spec: VehicleSpec, prof: _Profile, paint) -> list[np.ndarray]:
-    """Door mirrors: a painted housing on a stalk that starts at the door's top edge beside the A-pillar base (so
-    it never floats when seen through the side glass), with a dark mirror face at its rear."""
+def _mirror_boxes(spec: VehicleSpec, prof: _Profile) -> list[tuple[tuple, tuple, tuple]]:
+    """(stalk, housing, glass) boxes, each (lo, hi) car-local m, of the left then the right door mirror."""
     zc, yc = prof.cowl
     top = np.asarray(prof.top)
-    parts = []
+    sides = []
     for sgn in (-1.0, 1.0):
         z0, z1 = zc + 0.20, zc + 0.30
         y_door = float(np.interp(z0, top[:, 0], top[:, 1]))
         x_in = sgn * (spec.width_m / 2.0 - 0.04)
         x_root, x_tip = sgn * (spec.width_m / 2.0 + 0.03), sgn * (spec.width_m / 2.0 + 0.19)
-        stalk = _box((min(x_in, x_root), y_door - 0.04, z0 + 0.02), (max(x_in, x_root), y_door + 0.06, z1 - 0.02))
-        housing = _box((min(x_root, x_tip), y_door + 0.02, z0), (max(x_root, x_tip), y_door + 0.15, z1))
-        glass = _box((min(x_root, x_tip) + 0.01, y_door + 0.03, z1), (max(x_root, x_tip) - 0.01, y_door + 0.14,
-                                                                       z1 + 0.005))
-        parts += [_triangles(stalk, paint), _triangles(housing, paint), _triangles(glass, _MIRROR)]
+        stalk = ((min(x_in, x_root), y_door - 0.04, z0 + 0.02), (max(x_in, x_root), y_door + 0.06, z1 - 0.02))
+        housing = ((min(x_root, x_tip), y_door + 0.02, z0), (max(x_root, x_tip), y_door + 0.15, z1))
+        glass = ((min(x_root, x_tip) + 0.01, y_door + 0.03, z1), (max(x_root, x_tip) - 0.01, y_door + 0.14, z1 + 0.005))
+        sides.append((stalk, housing, glass))
+    return sides
+
+
+def _mirrors(spec: VehicleSpec, prof: _Profile, paint) -> list[np.ndarray]:
+    """Door mirrors: a painted housing on a stalk that starts at the door's top edge beside the A-pillar base (so
+    it never floats when seen through the side glass), with a mirror glass at its rear (in the driver's view it
+    shows the scene behind: rain_core.gfx.mirrors)."""
+    parts = []
+    for stalk, housing, glass in _mirror_boxes(spec, prof):
+        parts += [_triangles(_box(*stalk), paint), _triangles(_box(*housing), paint), _triangles(_box(*glass), _MIRROR)]
     return parts
+
+
+def door_mirror_faces(spec: VehicleSpec = CAR_SPEC) -> np.ndarray:
+    """The reflecting faces of the door mirrors, car-local m: (2, 4, 3) corners of the left and the right glass's
+    rear face, counter-clockwise seen from behind; both face +z, the car's rear."""
+    faces = []
+    for _, _, (lo, hi) in _mirror_boxes(spec, _profile(spec)):
+        z = hi[2]
+        faces.append([(lo[0], lo[1], z), (hi[0], lo[1], z), (hi[0], hi[1], z), (lo[0], hi[1], z)])
+    return np.array(faces, dtype=np.float64)
+
+
+def mirror_glass_mask(vertices: np.ndarray) -> np.ndarray:
+    """Which vertices of a car or cabin mesh (VERTEX_DTYPE) belong to a door mirror's glass."""
+    albedo, rough, metal, mat = _MIRROR
+    return (np.all(np.abs(vertices["albedo"] - np.asarray(albedo, np.float32)) < 1e-6, axis=1)
+            & (np.round(vertices["params"][:, 2]) == mat) & (np.abs(vertices["params"][:, 0] - rough) < 1e-6))
 
 
 def _greenhouse_parts(spec: VehicleSpec, prof: _Profile, paint) -> list[np.ndarray]:

@@ -81,9 +81,11 @@ class Scene:
 
     def camera(self, mode: str | None = None) -> Camera:
         mode = mode or self.settings.camera.mode
-        fov = self.settings.camera.fov_deg
+        view = self.settings.camera
+        fov = view.fov_deg
         if mode == "driver":
-            return driver_camera(self.ego, DRIVER_EYE_LOCAL, fov_y_deg=fov)
+            return driver_camera(self.ego, DRIVER_EYE_LOCAL, fov_y_deg=view.driver_fov_deg,
+                                 pitch_deg=view.driver_pitch_deg)
         if mode == "glass":  # the windshield close-up from the driver's eye
             if getattr(self, "_glass_look", None) is None:
                 from rain_core.effects.windshield.glass import GlassGeometry

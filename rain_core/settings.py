@@ -287,8 +287,19 @@ class CameraSection(_Section):
     SECTION: ClassVar[str] = "camera"
     mode: str = field("driver", choices=("driver", "chase", "free", "glass"),
                       doc="in-cabin, behind the car, free, or a close-up of the windshield")
-    fov_deg: float = field(60.0, range=(20.0, 120.0), unit="deg", doc="vertical field of view")
+    fov_deg: float = field(60.0, range=(20.0, 120.0), unit="deg",
+                           doc="vertical field of view of the chase and free cameras")
+    driver_fov_deg: float = field(40.0, range=(20.0, 120.0), unit="deg",
+                                  doc="vertical field of view from the driver's seat (40: hood and dash ~23%)")
+    driver_pitch_deg: float = field(0.0, range=(-15.0, 15.0), unit="deg",
+                                    doc="driver's gaze above (+) or below (-) the car's horizon")
     exposure_s: float = field(1.0 / 60.0, range=(1e-4, 0.25), unit="s", doc="shutter time (sets streak length)")
+    auto_exposure: bool = field(True, doc="meter what the camera sees and adapt like an eye (off: the hour's "
+                                          "incident-light meter)")
+    exposure_compensation_ev: float = field(0.0, range=(-4.0, 4.0), unit="EV",
+                                            doc="brighter (+) or darker (-) than the meter, in stops")
+    adaptation_s: float = field(1.5, range=(0.05, 20.0), unit="s", doc="eye adaptation time constant")
+    mirrors: bool = field(True, doc="door mirrors show the scene behind (drawn only while one is in view)")
 
 
 @dataclass

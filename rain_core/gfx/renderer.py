@@ -20,8 +20,10 @@ import numpy as np
 from rain_core import layout
 from rain_core.gfx import units
 from rain_core.gfx.effect import STAGES, Effect
+from rain_core.gfx.exposure import AutoExposure
 from rain_core.gfx.frame import Frame, PassStat, RenderContext, SharedResources
 from rain_core.gfx.frame_block import FrameBlocks
+from rain_core.gfx.mirrors import DoorMirrors
 from rain_core.gfx.scene_draw import SceneDrawer
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
@@ -68,6 +70,8 @@ class Renderer:
         self.tonemap_prog = self.shaders.program("common/fullscreen.vert", "core/tonemap.frag")
         self.blit_prog = self.shaders.program("common/fullscreen.vert", "core/blit.frag")
         self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
+        self.exposure = AutoExposure(ctx, self.shaders)
+        self.mirrors = DoorMirrors(ctx)
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._timers: dict[str, PassTimer] = {}
         self.frame_blocks = FrameBlocks(ctx)
@@ -168,9 +172,9 @@ class Renderer:
             self._lights_cache = (key, lights)
         return lights
 
-    def _draw_scene(self, rc: RenderContext, include_sky: bool = True, clip_plane=None) -> None:
+    def _draw_scene(self, rc: RenderContext, include_sky: bool = True, clip_plane=None, mirror_view=None) -> None:
         self.shadow.bind()  # re-bound per draw: a GPU simulation may have used the unit
-        self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane)
+        self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane, mirror_view=mirror_view)
 
     def draw_mirror_view(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray,
                          clip_plane: tuple[float, float, float, float]) -> None:
@@ -251,11 +255,18 @@ class Renderer:
             if "prepare" in effect.stages:
                 self._timed(f"{effect.name}.prepare", lambda e=effect: e.render("prepare", rc))
 
+        view = getattr(frame.settings, "camera", None)  # a Frame without settings: defaults, no mirrors
+        mirrors = self.mirrors.views(rc) if view is not None and view.mirrors else []
+        if mirrors:
+            self._timed("mirrors", lambda: self.mirrors.render(rc, mirrors))
+        else:  # outside the car, out of view, too small or switched off
+            self.stats.append(PassStat("mirrors", False))
+
         def scene():
             self.hdr.fbo.use()
             self.hdr.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
             ctx.disable(moderngl.CULL_FACE)  # meshes are not all consistently wound; shading flips back faces
-            self._draw_scene(rc)
+            self._draw_scene(rc, mirror_view=self.mirrors.texture if mirrors else None)
 
         self._timed("scene", scene)
         for stage in STAGES[1:]:
@@ -266,12 +277,27 @@ class Renderer:
                         e.render(s, rc)
                     self._timed(f"{effect.name}.{stage}", draw)
 
+        auto = bool(view is not None and view.auto_exposure)
+        compensation = float(view.exposure_compensation_ev) if view is not None else 0.0
+        self._display_ev = (auto, compensation)
+        if auto:
+            self._timed("exposure", lambda: self.exposure.update(self.hdr.color, frame.dt_s, view.adaptation_s,
+                                                                 compensation))
+        else:
+            self.stats.append(PassStat("exposure", False))
+            self.exposure.reset()  # switched back on later: adapt from what the eye sees then
+
         def tonemap():
             ctx.disable(moderngl.DEPTH_TEST)
             ctx.disable(moderngl.BLEND)
             self.ldr.use()
             self.hdr.color.use(units.IMAGE)
-            self.tonemap_prog["u_hdr"].value = units.IMAGE
+            self.exposure.texture.use(units.SCRATCH[1])
+            prog = self.tonemap_prog
+            prog["u_hdr"].value = units.IMAGE
+            prog["u_exposure_ev"].value = units.SCRATCH[1]
+            prog["u_auto_exposure"].value = auto
+            prog["u_compensation_ev"].value = compensation
             self._tonemap_vao.render(moderngl.TRIANGLES, vertices=3)
 
         self._timed("tonemap", tonemap)
@@ -282,6 +308,12 @@ class Renderer:
         data = self.ldr.read(components=3, alignment=1)
         img = np.frombuffer(data, dtype=np.uint8).reshape(self.size[1], self.size[0], 3)
         return np.ascontiguousarray(img[::-1])
+
+    def display_ev100(self, lighting) -> float:
+        """The EV100 the last frame was displayed at: the hour's meter (``lighting.ev100``) less the stops the
+        automatic exposure (or the compensation) added. Reads the GPU back: for labels, not per frame."""
+        auto, compensation = getattr(self, "_display_ev", (False, 0.0))
+        return float(lighting.ev100) - (self.exposure.read_ev() if auto else compensation)
 
     def hdr_image(self) -> np.ndarray:
         """The last pre-exposed HDR frame, float32 (H, W, 3), top row first (for tests: NaN checks, ratios)."""
@@ -311,6 +343,8 @@ class Renderer:
         self.ldr.release()
         self.ldr_color.release()
         self.shadow.release()
+        self.exposure.release()
+        self.mirrors.release()
         self.scene.release()
         for obj in (self._tonemap_vao, self._blit_vao):
             obj.release()

@@ -12,6 +12,7 @@ import moderngl
 import numpy as np
 
 from rain_core import layout
+from rain_core.gfx import units
 from rain_core.gfx.frame import RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms
@@ -61,6 +62,7 @@ class SceneDrawer:
         # id(vehicle) → (vehicle, mesh): holding the vehicle keeps its id from being reused by a new one.
         self._vehicles: dict[int, tuple[object, GpuMesh]] = {}
         self._cabin: list[tuple[GpuMesh, float]] | None = None
+        self._mirror_glass: GpuMesh | None = None  # the cabin's door mirror glass (one of self._cabin's meshes)
         self._items: dict | None = None  # the frame's draw items while the renderer draws a frame
         self._models: dict | None = None  # and its vehicles' model bytes
 
@@ -87,16 +89,20 @@ class SceneDrawer:
             self._vehicles.pop(key)[1].release()
 
     def _cabin_meshes(self, ego):
-        """The cabin as (mesh, direct-light share): painted outside parts (hood, mirrors) get full direct light,
-        the interior the share its roof lets in."""
+        """The cabin as (mesh, direct-light share): painted outside parts (hood, mirror housings) get full direct
+        light, the interior the share its roof lets in; the mirror glass is a mesh of its own (it shows the
+        mirror view when one was drawn)."""
         if self._cabin is None:
-            from rain_core.car_mesh import cabin_mesh
+            from rain_core.car_mesh import cabin_mesh, mirror_glass_mask
             from rain_core.mesh import MAT_CAR_PAINT
 
             vertices = cabin_mesh(ego.spec)
             outside = np.round(vertices["params"][:, 2]) == MAT_CAR_PAINT
-            self._cabin = [(self._mesh(part), share) for part, share in
-                           ((vertices[outside], 1.0), (vertices[~outside], CABIN_DIRECT_LIGHT)) if len(part)]
+            glass = mirror_glass_mask(vertices)
+            parts = ((vertices[outside], 1.0), (vertices[~outside & ~glass], CABIN_DIRECT_LIGHT),
+                     (vertices[glass], CABIN_DIRECT_LIGHT))
+            self._cabin = [(self._mesh(part), share) for part, share in parts if len(part)]
+            self._mirror_glass = self._cabin[-1][0] if glass.any() else None
         return self._cabin
 
     def draw_list(self, rc: RenderContext, include_cabin: bool):
@@ -178,9 +184,11 @@ class SceneDrawer:
 
     # --- drawing --------------------------------------------------------------------------------------------
     def draw(self, rc: RenderContext, effects, include_sky: bool = True,
-             clip_plane: tuple[float, float, float, float] | None = None) -> None:
+             clip_plane: tuple[float, float, float, float] | None = None,
+             mirror_view: moderngl.Texture | None = None) -> None:
         """Sky, world tiles, vehicles and (inside the car) the cabin, into the bound framebuffer. ``effects``: all
-        of the renderer's; the active ones (``rc.active``) bind their scene inputs, the rest their neutral ones."""
+        of the renderer's; the active ones (``rc.active``) bind their scene inputs, the rest their neutral ones.
+        ``mirror_view``: the door mirrors' view of this frame (rain_core.gfx.mirrors), shown on their glass."""
         ctx = self.ctx
         ctx.disable(moderngl.BLEND)
         if include_sky:
@@ -203,10 +211,17 @@ class SceneDrawer:
                 effect.bind_scene(prog, rc)
             else:
                 effect.unbind_scene(prog, rc)
+        items = self.draw_items(rc, include_cabin=True)  # builds the cabin meshes, the mirror glass among them
+        live_glass = self._mirror_glass if mirror_view is not None else None
+        if live_glass is not None:
+            mirror_view.use(units.DOOR_MIRROR)
+            prog["u_mirror_view"].value = units.DOOR_MIRROR
+            prog["u_mirror_uv_scale"].value = (1.0 / rc.size[0], 1.0 / rc.size[1])
         model_u, set_owned = prog["u_model"], owned.set
-        for mesh, model, share in self.draw_items(rc, include_cabin=True):
+        for mesh, model, share in items:
             model_u.write(model)
             set_owned("u_direct_scale", share)
+            set_owned("u_mirror_live", mesh is live_glass)
             mesh.vao.render(moderngl.TRIANGLES, vertices=mesh.count)
         if clip_plane is not None:
             ctx.disable_direct(GL_CLIP_DISTANCE0)

@@ -209,7 +209,8 @@ class Session:
         camera_mode, fov_y_deg, camera_intrinsics (3×3, px), camera_to_world (4×4; conventions in
         rain_core.session.capture), seed, time_s, frame (step count), lightning_lux and lightning_sky_cd_m2 (the
         flash lit in this frame's shutter: its direct illuminance at the camera, lux, and the luminance it adds
-        to the cloud base, cd/m²; 0 between flashes)."""
+        to the cloud base, cd/m²; 0 between flashes), exposure_ev100 (the exposure the frame was displayed at,
+        after the automatic exposure's adaptation)."""
         self._check_open()
         if self._frame is None:
             self._frame = self.scene.render(self._camera())
@@ -250,4 +251,7 @@ class Session:
             # the camera (lux, after the rain's extinction) and the luminance it adds to the cloud base (cd/m²).
             "lightning_lux": float(frame.flash.illuminance_lux(cam.position)) if frame.flash is not None else 0.0,
             "lightning_sky_cd_m2": float(frame.flash.sky_cd_m2 @ _LUMA) if frame.flash is not None else 0.0,
+            # The exposure the frame was displayed at (the hour's meter less the eye's adaptation): a tone-map
+            # input x (linear, before the ACES curve) is a scene luminance of x·1.2·2^EV100 cd/m².
+            "exposure_ev100": scene.renderer.display_ev100(frame.lighting),
         }

@@ -8,8 +8,16 @@ in vec3 v_world;
 in vec3 v_normal;
 in vec3 v_albedo;
 in vec3 v_params;
+uniform bool u_mirror_live;       // this draw is the door mirror glass and a mirror view was drawn
+uniform sampler2D u_mirror_view;  // the scene reflected by the glass, pre-exposed (rain_core/gfx/mirrors.py)
+uniform vec2 u_mirror_uv_scale;   // 1 / frame size in pixels: the view is addressed by screen position
+const float MIRROR_REFLECTANCE = 0.5;  // rain_core/gfx/mirrors.py REFLECTANCE
 out vec4 f_color;
 void main() {
+    if (u_mirror_live) {  // a plane mirror 0.7 m away: its picture is the reflected scene, already fogged and exposed
+        f_color = vec4(MIRROR_REFLECTANCE * texture(u_mirror_view, gl_FragCoord.xy * u_mirror_uv_scale).rgb, 1.0);
+        return;
+    }
     int material = int(v_params.z + 0.5);
     vec3 V = normalize(u_camera_pos - v_world);
     float dist = length(u_camera_pos - v_world);

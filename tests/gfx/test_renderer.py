@@ -9,8 +9,9 @@ from rain_core.settings import Settings, set_value
 SIZE = (128, 72)
 
 
-def make_scene(gl_ctx, hour=12.0, camera="driver", seed=1, rate=0.0):
+def make_scene(gl_ctx, hour=12.0, camera="driver", seed=1, rate=0.0, auto_exposure=True):
     settings = Settings()
+    set_value(settings, "camera.auto_exposure", auto_exposure)
     set_value(settings, "time_of_day.hour", hour)
     set_value(settings, "camera.mode", camera)
     set_value(settings, "rain.rate_mm_h", rate)
@@ -54,8 +55,9 @@ def test_passes_are_recorded(noon_chase):
 
 
 def test_night_is_darker_but_lamps_light_the_road(gl_ctx):
-    day = make_scene(gl_ctx, hour=12.0)
-    night = make_scene(gl_ctx, hour=22.0)
+    """At the hour's meter (automatic exposure lifts the night towards the day's key: tests/gfx/test_exposure.py)."""
+    day = make_scene(gl_ctx, hour=12.0, auto_exposure=False)
+    night = make_scene(gl_ctx, hour=22.0, auto_exposure=False)
     day_img, night_img = run(day, 3).astype(float), run(night, 3).astype(float)
     assert night_img.mean() < 0.6 * day_img.mean()
     assert night_img.max() > 200  # lamps and lit windows still glow

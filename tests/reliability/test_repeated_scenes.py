@@ -11,6 +11,7 @@ import gc
 import os
 import sys
 
+import numpy as np
 import pytest
 
 from rain_core.scene import Scene
@@ -59,8 +60,10 @@ def test_thirty_scenes_keep_memory_flat(gl_ctx):
     finally:
         gl_ctx.objects.clear()
         gl_ctx.gc_mode = old_mode
-    growth = rss[-1] - rss[WARMUP - 1]
-    per_scene = growth / (SCENES - WARMUP)
+    # Medians of five scenes at each end: one allocator spike in a long suite run is not a trend (a leak of the
+    # old kind still shows as ~34 MB per scene).
+    growth = float(np.median(rss[-5:]) - np.median(rss[WARMUP - 1: WARMUP + 4]))
+    per_scene = growth / (SCENES - WARMUP - 4)
     print(f"RSS after scene 1: {rss[0]:.0f} MB, after {WARMUP}: {rss[WARMUP - 1]:.0f} MB, after {SCENES}: "
           f"{rss[-1]:.0f} MB ({per_scene:+.2f} MB per scene)")
     assert growth < RSS_GROWTH_LIMIT_MB, f"RSS grew {growth:.1f} MB over {SCENES - WARMUP} scenes: {rss}"

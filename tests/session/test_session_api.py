@@ -14,7 +14,7 @@ SIZE = (64, 40)
 LABEL_KEYS = {"rain_mm_h", "wetness", "cracks", "puddles", "visibility_m", "wind_m_s", "wind_direction_deg",
               "wind_velocity_m_s", "hour", "ego_speed_m_s", "wiper_mode", "wiper_angle_rad", "camera_mode",
               "fov_y_deg", "camera_intrinsics", "camera_to_world", "seed", "time_s", "frame", "lightning_lux",
-              "lightning_sky_cd_m2"}
+              "lightning_sky_cd_m2", "exposure_ev100"}
 
 
 def test_round_trip_steps_weather_and_capture(session):
@@ -31,6 +31,9 @@ def test_round_trip_steps_weather_and_capture(session):
     assert lab["seed"] == 3 and lab["frame"] == 3 and lab["time_s"] == pytest.approx(0.1)
     assert lab["camera_mode"] == "driver" and len(lab["wiper_angle_rad"]) == 2
     assert 0.0 < lab["ego_speed_m_s"] < 40.0 and 100.0 < lab["visibility_m"] < 40_000.0
+    # Displayed at the hour's meter less the eye's adaptation, within the stops the eye adapts.
+    adapted = sim.scene.frame().lighting.ev100 - lab["exposure_ev100"]
+    assert -3.0 <= adapted <= 3.0 and adapted != 0.0
     assert np.array_equal(sim.render().rgb, cap.rgb)  # render() is the last step's picture, not a new frame
     assert sim.weather.rain_mm_h == 8.0 and sim.settings.rain.rate_mm_h == 8.0
 

@@ -21,6 +21,10 @@ def _scene(gl_ctx, enabled=True):
     s.time_of_day.hour = 22.0
     s.lightning.flashes_per_min = 10.0
     s.lightning.enabled = enabled
+    # One frame is rendered, the flash's: an eye with no history would take its exposure from the flash itself.
+    # The flash is measured against the night's exposure (rendering continuously, the eye's τ of 1.5 s does not
+    # follow a 1 ms stroke).
+    s.camera.auto_exposure = False
     return Scene(gl_ctx, SIZE, s, seed=SEED, gpu_timing=False)
 
 

@@ -29,6 +29,7 @@ def _draw_without_effects(renderer, rc, include_sky, clip_plane):
 
 def _settings(hour=12.0, camera="driver", wetness=1.0, cracks=0.0, puddles=0.0, **road_values) -> Settings:
     s = Settings()
+    set_value(s, "camera.auto_exposure", False)  # colours are checked against the road's model at the hour's meter
     set_value(s, "time_of_day.hour", hour)
     set_value(s, "camera.mode", camera)
     set_value(s, "traffic.count", 2)
