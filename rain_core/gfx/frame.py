@@ -57,8 +57,9 @@ class PassStat:
 
 @dataclass(frozen=True)
 class WaterNormals:
-    """The ripple field's slopes: ``texture`` RG = (dh/dx, dh/dz); ``origin_xz_m`` the world (x, z) in m of the
-    centre of texel 0; ``extent_m`` from the first texel centre to the last."""
+    """The ripple field: ``texture`` RG = slopes (dh/dx, dh/dz), B = height (m, a tyre's trough is negative);
+    ``origin_xz_m`` the world (x, z) in m of the centre of texel 0; ``extent_m`` from the first texel centre to the
+    last."""
 
     texture: moderngl.Texture
     origin_xz_m: tuple[float, float]

@@ -13,7 +13,7 @@ uniform float u_road_debug;           // 1: flat colours for the dry / wet / dre
 uniform float u_road_reflect;         // 1: this frame's planar reflection is bound on u_road_reflection
 uniform sampler2D u_road_reflection;  // units.ROAD_REFLECTION: the mirrored scene, pre-exposed HDR, mipmapped
 uniform vec2 u_road_proj_scale;       // (0.5·P00, 0.5·P11): texture uv per radian near the view axis
-uniform sampler2D u_road_ripples;     // units.ROAD_RIPPLES: ripple slopes RG = (dh/dx, dh/dz), world-anchored
+uniform sampler2D u_road_ripples;     // units.ROAD_RIPPLES: slopes RG = (dh/dx, dh/dz), height B (m), world-anchored
 uniform vec4 u_road_ripple_window;    // origin x, z (m, wrapped; centre of texel 0), extent (m), 1 if bound
 uniform sampler2D u_road_rain_rings;   // units.ROAD_RAIN_RINGS: tiled raindrop-ring slopes RG (rc.shared.rain_rings)
 uniform vec2 u_road_rain_rings_tile;   // tile size (m), 1 while it rains
@@ -75,15 +75,19 @@ vec2 road_wave_slope(vec2 xz) {
     return u_road_waves.z * (0.65 * g1 + 0.35 * g2);
 }
 
-// Slope from the ripple simulation (ripples.py), faded out at the window's edge.
-vec2 road_ripple_slope(vec2 xz) {
-    if (u_road_ripple_window.w < 0.5) return vec2(0.0);
+// Slope (RG) and height (B, m) from the ripple simulation (ripples.py), faded out at the window's edge.
+vec3 road_ripple_sample(vec2 xz) {
+    if (u_road_ripple_window.w < 0.5) return vec3(0.0);
     vec2 t = (xz - u_road_ripple_window.xy) / u_road_ripple_window.z;
     float edge = min(min(t.x, t.y), min(1.0 - t.x, 1.0 - t.y));
-    if (edge <= 0.0) return vec2(0.0);
+    if (edge <= 0.0) return vec3(0.0);
     vec2 n = vec2(textureSize(u_road_ripples, 0));
     vec2 uv = (t * (n - 1.0) + 0.5) / n;
-    return texture(u_road_ripples, uv).rg * smoothstep(0.0, 0.05, edge);
+    return texture(u_road_ripples, uv).rgb * smoothstep(0.0, 0.05, edge);
+}
+
+vec2 road_ripple_slope(vec2 xz) {
+    return road_ripple_sample(xz).xy;
 }
 
 // Raindrop rings on all standing water: the tiled map (the simulated window's own drops are too small to see).
@@ -121,7 +125,9 @@ void road_wet_surface(inout Surface s, int material) {
         && s.normal.y > 0.9) {
         g_road_plane = true;
         standing = road_water_depths_mm(s.position.xz).x;
-        a = clamp(standing / MACROTEXTURE_MM, 0.0, 1.0);
+        // The ripples move the surface: where a tyre's trough is deeper than the water, the asphalt is bared.
+        float surface = standing > 0.0 ? standing + 1000.0 * road_ripple_sample(s.position.xz).z : 0.0;
+        a = clamp(surface / MACROTEXTURE_MM, 0.0, 1.0);
         g_road_standing = a;
     }
     float soaked = max(w, a);  // under standing water the asphalt is soaked whatever the film does

@@ -1,8 +1,9 @@
-"""Interactive water (DESIGN §3, issue 5): a wave-equation heightfield around the ego car that wheel wakes and
-raindrops disturb, its normals for the road's water, and a tiled rain-ring normal map for far puddles.
+"""Interactive water (DESIGN §3, issue 5): a wave-equation heightfield around and ahead of the ego car that wheel
+wakes and raindrops disturb, its normals for the road's water, and a tiled rain-ring normal map for far puddles.
 
 GL-free (NumPy only): ``constants``, ``solver`` (the scheme and the float64 reference ``WaveSolver``),
-``solver_f32`` (``WaveSolverF32``), ``field`` (``RippleField``, ``WheelSweep``, ``WheelBatch``). GL side: ``gpu``
+``solver_f32`` (``WaveSolverF32``), ``field`` (``RippleField``, ``WheelSweep``, ``WheelBatch``, and
+``window_centre_xz`` / ``window_offset_m``: where the window sits ahead of the car). GL side: ``gpu``
 (``WaveSolverGPU``), ``backend`` (``make_solver``, ``choose_backend``, ``make_field``), ``textures``
 (``RippleTextures``: the field's height and slope textures), ``rain_tiles`` (``RainRippleTexture``), ``effect``
 (``RipplesEffect``). The GL names are imported on first use, so the simulation imports and runs without
@@ -33,6 +34,8 @@ from rain_core.effects.ripples.field import (
     WheelBatch,
     WheelSweep,
     field_grid,
+    window_centre_xz,
+    window_offset_m,
 )
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
@@ -57,4 +60,4 @@ def __getattr__(name: str):
 __all__ = ["BACKENDS", "CAPILLARY_SPEED_M_S", "CPU_SOLVERS", "CRATER_RADIUS_PER_D", "DEFAULT_DAMPING_PER_S",
            "DEFAULT_MAX_SUBSTEPS", "MAX_COURANT2", "MAX_IMPULSE_M", "MIN_FOOTPRINT_CELLS", "RAIN_DENT_M_PER_KG_M_S",
            "SLEEP_SLOPE", "WAKE_REF_SPEED_M_S", "FilmDepthFn", "RippleField", "WaveSolver", "WaveSolverF32",
-           "WheelBatch", "WheelSweep", "field_grid", *_GL_NAMES]
+           "WheelBatch", "WheelSweep", "field_grid", "window_centre_xz", "window_offset_m", *_GL_NAMES]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from rain_core.effects.ripples.backend import make_field
-from rain_core.effects.ripples.field import RippleField, WheelBatch, WheelSweep
+from rain_core.effects.ripples.field import RippleField, WheelBatch, WheelSweep, window_centre_xz
 from rain_core.effects.ripples.rain_tiles import RainRippleTexture
 from rain_core.effects.ripples.textures import RippleTextures
 from rain_core.gfx.effect import Effect
@@ -16,7 +16,9 @@ from rain_core.gfx.shaders import ShaderLibrary
 
 class RipplesEffect(Effect):
     """Interactive water (DESIGN §3): wakes of every wheel in the window and raindrop rings on the simulated field
-    around the ego car, plus the tiled rain-ring map for puddles beyond it.
+    ahead of the ego car (``window_centre``: the window reaches from behind the car, or the chase camera, to
+    ~20 m ahead, where the driver sees the wakes of the cars in front), plus the tiled rain-ring map for puddles
+    beyond it.
 
     It only runs where there is standing water (flood levels above 0) — a dry or merely wet road costs nothing —
     and the solver itself sleeps once the water has settled. It reads the road's ``rc.shared.film_depth_fn``
@@ -84,6 +86,23 @@ class RipplesEffect(Effect):
             return WheelBatch.of(())
         return WheelBatch(np.concatenate(p0), np.concatenate(p1), np.concatenate(speeds), np.concatenate(widths))
 
+    @staticmethod
+    def window_centre(frame, field: RippleField) -> tuple[float, float] | None:
+        """World (x, z) in m where the window is centred this frame (None: no ego car, keep the window): ahead
+        of the ego car along its heading, by ``field.window_offset_m`` for the frame's camera (driver's seat: the
+        window reaches ~21 m ahead, so the wakes of the cars ahead are simulated where the driver sees them;
+        chase: from behind the camera over the car to ~16 m ahead)."""
+        ego = frame.ego
+        if ego is None:
+            return None
+        heading = ego.forward()
+        camera = frame.camera
+        return window_centre_xz((ego.position[0], ego.position[2]), (heading[0], heading[2]), field.extent_m,
+                                None if camera is None else camera.position,
+                                None if camera is None else camera.basis()[2],
+                                car_half_length_m=0.5 * float(ego.spec.length_m),
+                                margin_m=field.recenter_margin_cells * field.cell_m)
+
     def wheel_sweeps(self, frame, field: RippleField) -> list[WheelSweep]:
         """``wheel_batch`` as a list of ``WheelSweep`` (one per wheel)."""
         batch = self.wheel_batch(frame, field)
@@ -95,8 +114,7 @@ class RipplesEffect(Effect):
         film_fn = rc.shared.film_depth_fn
         if film_fn is None:  # the road effect is off: keep the water flat rather than guessing where it is
             return
-        ego = frame.ego
-        center = None if ego is None else (float(ego.position[0]), float(ego.position[2]))
+        center = self.window_centre(frame, field)
         rate = frame.rain_rate_mm_h
         # Rain, wakes and the spray's droplets reach the solver as one batch (one draw on the GPU backend).
         self.last_report = field.update(frame.dt_s, center_xz=center, rate_mm_h=rate,

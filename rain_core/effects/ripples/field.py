@@ -22,8 +22,10 @@ from rain_core.effects.ripples.constants import (
     DEFAULT_DAMPING_PER_S,
     MAX_CELLS_PER_SIDE,
     MAX_IMPULSE_M,
+    MIN_FOOTPRINT_CELLS,
     RAIN_DENT_M_PER_KG_M_S,
     WAKE_REF_SPEED_M_S,
+    WINDOW_EDGE_FADE,
 )
 from rain_core.effects.ripples.solver import WaveSolver, shift_in_place
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
@@ -135,6 +137,46 @@ def field_grid(n: int, extent_m: float) -> tuple[int, float, float]:
         raise ValueError(f"n must be an int in [8, {MAX_CELLS_PER_SIDE}] (cells per side), got {checks.quote(n)}")
     extent = checks.number("extent_m", extent_m, 1e-3, 1e5, "m")
     return int(n), extent, extent / (int(n) - 1)
+
+
+def window_offset_m(extent_m: float, camera_along_m: float | None, car_half_length_m: float,
+                    margin_m: float = 0.0) -> float:
+    """How far ahead of the car's centre, in m along its heading, the window's centre goes: the window's rear
+    edge sits ``margin_m`` + WINDOW_EDGE_FADE × extent behind whichever lies further back of the car's rear
+    (``car_half_length_m`` behind its centre) and the camera (``camera_along_m``: the camera's position along
+    the heading, m from the car's centre; None: a camera that does not look ahead along the heading), and the
+    window reaches forward from there: the rest of the extent lies ahead, where a driver looks.
+
+    The effect passes its re-centring hysteresis as ``margin_m`` (4 cells: 0.2 m on the default 512-cell, 25 m
+    grid). The driver's eye (0.4 m behind the centre) puts the rear edge behind the car's: the window spans
+    −3.75 … +21.25 m, so the wakes of the cars 10–20 m ahead are simulated. The chase camera (7 m behind) puts
+    it behind the camera: −8.45 … +16.55 m, the car and the road the camera sees near it. Never negative: the
+    window stays centred on the car, as before, when the camera does not look ahead, is far behind (a fixed
+    camera), or the window is too short to reach past the car."""
+    if camera_along_m is None:
+        return 0.0
+    rear = min(float(camera_along_m), -float(car_half_length_m)) - float(margin_m) - WINDOW_EDGE_FADE * extent_m
+    return max(0.0, 0.5 * extent_m + rear)
+
+
+def window_centre_xz(position_xz, heading_xz, extent_m: float, camera_position=None, camera_forward=None,
+                     car_half_length_m: float = 2.3, margin_m: float = 0.0) -> tuple[float, float]:
+    """World (x, z) in m of the window's centre for a car at ``position_xz`` (m) heading along ``heading_xz``
+    (a horizontal direction, any length) seen from a camera at ``camera_position`` (3-vector, world m) looking
+    along ``camera_forward``: the car's position plus the heading × ``window_offset_m``. No camera, or one
+    looking backwards along the heading: centred on the car."""
+    x, z = float(position_xz[0]), float(position_xz[1])
+    hx, hz = float(heading_xz[0]), float(heading_xz[1])
+    norm = math.hypot(hx, hz)
+    if norm == 0.0 or not math.isfinite(norm):
+        return x, z
+    hx, hz = hx / norm, hz / norm
+    along = None
+    if camera_position is not None and camera_forward is not None:
+        if float(camera_forward[0]) * hx + float(camera_forward[2]) * hz > 0.0:  # the camera looks ahead
+            along = (float(camera_position[0]) - x) * hx + (float(camera_position[2]) - z) * hz
+    offset = window_offset_m(extent_m, along, car_half_length_m, margin_m)
+    return x + hx * offset, z + hz * offset
 
 
 class RippleField:
@@ -375,8 +417,9 @@ class RippleField:
 
     def add_wheel_sweep(self, p0_xz, p1_xz, speed_m_s: float, film_depth_mm: float, tire_width_m: float) -> int:
         """Disturb the water along a wheel's path from p0_xz to p1_xz (world m) this frame: a trough as wide as
-        the tyre and film_depth × speed / WAKE_REF_SPEED_M_S deep (× wake_gain), laid as bumps at most one cell
-        apart so a fast wheel leaves a continuous wake. speed in m/s (≥ 0), film depth in mm (≥ 0), tyre
+        the tyre and film_depth × speed / WAKE_REF_SPEED_M_S deep (× wake_gain), its water in a crest on either
+        side (the wake keeps the film's volume), laid as bumps at most one cell apart so a fast wheel leaves a
+        continuous wake. speed in m/s (≥ 0), film depth in mm (≥ 0), tyre
         width in m (> 0). Returns the number of bumps laid (the part of the path inside the window)."""
         x0, z0 = (checks.number("p0_xz", v, unit="m") for v in p0_xz)
         x1, z1 = (checks.number("p1_xz", v, unit="m") for v in p1_xz)
@@ -387,7 +430,7 @@ class RippleField:
 
     def _wakes(self, wheels: np.ndarray) -> np.ndarray:
         """``add_wheel_sweep`` for W valid wheels at once: rows (x0, z0, x1, z1 world m, speed m/s, film depth
-        mm, tyre width m). Returns the bumps laid per wheel."""
+        mm, tyre width m). Returns the bumps laid per wheel (trough and crests)."""
         x0, z0, x1, z1, speed, depth_mm, width = wheels.T
         radius = np.minimum(0.5 * width, self.solver.max_radius_m)
         trough = self.wake_gain * depth_mm * 1e-3 * speed / WAKE_REF_SPEED_M_S
@@ -401,14 +444,30 @@ class RippleField:
         ax, az, bx, bz, radius, trough = (v[live] for v in (ax, az, bx, bz, radius, trough))
         length = np.hypot(bx - ax, bz - az)
         count = np.maximum(1, np.ceil(length / self.cell_m)).astype(np.int64)
-        counts[live] = count
         # A row of raised cosines of radius R spaced ds sums to R/ds times one peak along its axis: scale each
         # peak by ds/R so the trough depth does not depend on the frame rate or the grid.
         spacing = np.where(length > 0.0, length / count, radius)
         peak = -trough * np.minimum(spacing / radius, 1.0)
         wheel = np.repeat(np.arange(count.size), count)
         t = (np.arange(wheel.size) - np.repeat(np.cumsum(count) - count, count) + 0.5) / count[wheel]
-        self._emit(ax[wheel] + t * (bx - ax)[wheel], az[wheel] + t * (bz - az)[wheel], radius[wheel], peak[wheel])
+        xs, zs = ax[wheel] + t * (bx - ax)[wheel], az[wheel] + t * (bz - az)[wheel]
+        # The water under the tyre is not lost: it is pushed out sideways (the side waves of DESIGN §3's
+        # Flintsch allocation). Each trough bump gets a crest on either side, touching its rim (2 × the
+        # footprint radius the solver will use off the path), each holding half its volume, so a wake leaves
+        # the film's mean level unchanged (a net trough would drain the puddle). Paths of zero length (a wheel
+        # that did not move) have no sideways direction: they press the trough alone.
+        reach = np.maximum(radius, MIN_FOOTPRINT_CELLS * self.cell_m)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nx = np.where(length > 0.0, -(bz - az) / length, 0.0) * 2.0 * reach
+            nz = np.where(length > 0.0, (bx - ax) / length, 0.0) * 2.0 * reach
+        side = (length > 0.0)[wheel]
+        sx, sz = nx[wheel][side], nz[wheel][side]
+        crest = -0.5 * peak[wheel][side]
+        r = radius[wheel]
+        self._emit(np.concatenate([xs, xs[side] + sx, xs[side] - sx]),
+                   np.concatenate([zs, zs[side] + sz, zs[side] - sz]),
+                   np.concatenate([r, r[side], r[side]]), np.concatenate([peak[wheel], crest, crest]))
+        counts[live] = count * np.where(length > 0.0, 3, 1)
         return counts
 
     def _clip_segments(self, ax, az, bx, bz, pad):

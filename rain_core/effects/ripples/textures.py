@@ -1,4 +1,5 @@
-"""The ripple field's GL face: its height as a texture and its slopes (the normals pass) for the road's water."""
+"""The ripple field's GL face: its height as a texture and its slopes and height (the normals pass) for the road's
+water."""
 
 from __future__ import annotations
 
@@ -15,8 +16,8 @@ from rain_core.gfx.uniforms import set_uniforms
 
 
 class RippleTextures:
-    """``height_texture`` (R = height in m) and ``normal_texture`` (RG16F slopes dh/dx, dh/dz) of a
-    ``RippleField``, both n×n with [iz, ix] = row, column, brought up to date on access when the field has
+    """``height_texture`` (R = height in m) and ``normal_texture`` (RGBA16F: slopes dh/dx, dh/dz in RG, height in m
+    in B) of a ``RippleField``, both n×n with [iz, ix] = row, column, brought up to date on access when the field has
     changed (``field.version``). On the GPU backend the height texture is the solver's own state texture;
     otherwise the float32 height is uploaded. ``RippleTextures(ctx, field, shaders=None)``."""
 
@@ -26,7 +27,8 @@ class RippleTextures:
         self.ctx = ctx
         self.field = field
         n = field.n
-        self._normals = float_target(ctx, (n, n), 2, "f2", filter_linear=True)
+        # Four channels: RGBA16F is colour-renderable everywhere in GL 3.3 (RGB16F need not be).
+        self._normals = float_target(ctx, (n, n), 4, "f2", filter_linear=True)
         self._prog = shaders.program("common/fullscreen.vert", "ripples/normals.frag")
         self._vao = fullscreen_triangle(ctx, self._prog)
         self._height_tex = None
@@ -64,13 +66,14 @@ class RippleTextures:
 
     @property
     def normal_texture(self):
-        """RG16F texture of the slopes (dh/dx, dh/dz) of the height (dimensionless), linear filtering."""
+        """RGBA16F texture of the slopes (dh/dx, dh/dz) of the height (dimensionless) in RG and the height (m)
+        in B, linear filtering."""
         self.refresh()
         return self._normals.color
 
     def water_normals(self) -> WaterNormals:
-        """What the road reads from ``rc.shared.water_normals``: the slope texture, the world (x, z) in m of the
-        centre of its texel 0, and the extent in m from the first texel centre to the last."""
+        """What the road reads from ``rc.shared.water_normals``: the slope (RG) and height (B, m) texture, the world
+        (x, z) in m of the centre of its texel 0, and the extent in m from the first texel centre to the last."""
         return WaterNormals(self.normal_texture, self.field.origin_xz, self.field.extent_m)
 
     def release(self):

@@ -19,13 +19,15 @@ def test_normal_texture_is_central_difference(gl_ctx, shaders, backend):
         field.solver.add_impulse(3.0, 3.1, 0.5, 2e-2)
         field.step(1 / 30)
         z = field.height.astype(np.float64)
-        slopes = np.frombuffer(textures.normal_texture.read(), np.float16).reshape(64, 64, 2).astype(np.float64)
+        slopes = np.frombuffer(textures.normal_texture.read(), np.float16).reshape(64, 64, 4).astype(np.float64)
         dx = (z[1:-1, 2:] - z[1:-1, :-2]) / (2 * field.cell_m)
         dz = (z[2:, 1:-1] - z[:-2, 1:-1]) / (2 * field.cell_m)
         scale = max(np.abs(dx).max(), np.abs(dz).max())
         assert scale > 0
         assert np.max(np.abs(slopes[1:-1, 1:-1, 0] - dx)) < 2e-3 * scale
         assert np.max(np.abs(slopes[1:-1, 1:-1, 1] - dz)) < 2e-3 * scale
+        # B: the height itself (m, half precision), for the road's water depth.
+        assert np.max(np.abs(slopes[..., 2] - z)) < 2e-3 * np.abs(z).max()
         resource = textures.water_normals()
         assert resource.texture is textures.normal_texture
         assert resource.origin_xz_m == field.origin_xz and resource.extent_m == pytest.approx(6.3)
