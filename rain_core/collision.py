@@ -1,8 +1,9 @@
 """The street as the ego car feels it: the kerbs (a step that costs speed), the end of the sidewalks where the
-façades stand (a wall), and the posts, tree trunks and station parts on the way (solid). GL-free.
+façades stand (a wall), and the posts, tree trunks, parked cars and station parts on the way (solid). GL-free.
 
 Everything solid is a wall along the street (x beyond ``wall_x``, which opens onto the fuel station's forecourt)
-or a circle (a lamp post, a trunk, a pillar; a box is its outline in circles), so one contact rule serves all:
+or a circle (a lamp post, a sign post, a trunk, a pillar; a box — a parked car, a pump island — is its outline in
+circles), so one contact rule serves all:
 the car's footprint (its spec's length × width, a rectangle) is pushed out along the contact normal and the part
 of its velocity into the obstacle is reversed with restitution ``RESTITUTION`` and Coulomb friction on the rest.
 The kinematic car keeps the share of that velocity along its heading, and a glancing hit turns it part of the way
@@ -49,12 +50,22 @@ def box_outline(x0: float, x1: float, z0: float, z1: float, radius: float = 0.3)
     return np.concatenate(circles)
 
 
+def inset_box_outline(x0: float, x1: float, z0: float, z1: float, radius: float = 0.3) -> np.ndarray:
+    """Circles whose union's outer edge is the box [x0, x1] × [z0, z1] (m) with corners rounded by ``radius``
+    (m): the outline of the box shrunk by the radius (a parked car is solid up to its body, not 0.3 m beyond)."""
+    r = min(radius, (x1 - x0) / 2, (z1 - z0) / 2)
+    return box_outline(x0 + r, x1 - r, z0 + r, z1 - r, r)
+
+
 def street_solids(world) -> StreetSolids:
-    """The solids of ``world`` (rain_core.world.World): its lamp posts, tree trunks and station parts."""
+    """The solids of ``world`` (rain_core.world.World): its lamp posts, sign posts, tree trunks, parked cars
+    (``world.solid_boxes``) and station parts."""
     from rain_core.world.street import station_solid_boxes
 
     circles = [np.asarray(getattr(world, "solid_circles", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)]
     circles += [box_outline(*box) for box in station_solid_boxes()]
+    boxes = np.asarray(getattr(world, "solid_boxes", np.zeros((0, 4))), dtype=np.float64).reshape(-1, 4)
+    circles += [inset_box_outline(*box) for box in boxes]
     return StreetSolids(np.concatenate(circles), (layout.CANOPY_Z_M - 28.0, layout.CANOPY_Z_M + 48.0))
 
 
@@ -106,15 +117,22 @@ class StreetCollider:
             car.position[2] += normal[1] * depth
             self._respond(car, normal)
             touched = True
+        # A car squeezed between a solid and a wall (a parked car beside the façade) may have been pushed over
+        # the wall by the last pass: the walls have the last word.
+        wall = self._wall_contact(car, half_l, half_w)
+        if wall is not None:
+            depth, normal = wall
+            car.position[0] += normal[0] * depth
+            self._respond(car, normal)
+            touched = True
         return touched
 
-    def _deepest(self, car, half_l: float, half_w: float):
-        """(depth m, outward normal (nx, nz)) of the deepest overlap, or None."""
+    def _wall_contact(self, car, half_l: float, half_w: float):
+        """(depth m, normal) of the footprint's deepest corner beyond a wall, or None."""
         fx, fz = -math.sin(car.yaw), -math.cos(car.yaw)
         rx, rz = math.cos(car.yaw), -math.sin(car.yaw)
         px, pz = float(car.position[0]), float(car.position[2])
         best = None
-        # Walls: the footprint's corners beyond |x| = wall.
         for sl, sw in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
             cx = px + fx * half_l * sl + rx * half_w * sw
             cz = pz + fz * half_l * sl + rz * half_w * sw
@@ -122,6 +140,15 @@ class StreetCollider:
             over = abs(cx) - self.wall_x(cx, cz)
             if over > 0.0 and (best is None or over > best[0]):
                 best = (over, (-side, 0.0))
+        return best
+
+    def _deepest(self, car, half_l: float, half_w: float):
+        """(depth m, outward normal (nx, nz)) of the deepest overlap, or None."""
+        fx, fz = -math.sin(car.yaw), -math.cos(car.yaw)
+        rx, rz = math.cos(car.yaw), -math.sin(car.yaw)
+        px, pz = float(car.position[0]), float(car.position[2])
+        # Walls: the footprint's corners beyond |x| = wall.
+        best = self._wall_contact(car, half_l, half_w)
         # Circles: the nearest point of the footprint (in the car's frame) to each centre.
         circles = self._nearby_circles(pz)
         if len(circles):

@@ -88,10 +88,21 @@ def test_box_outline_has_no_gaps():
     assert gaps.max() <= 0.3 + 1e-9
 
 
+def _clear_kerb_z(solids, side: float, start: float = 450.0, reach: float = 12.0) -> float:
+    """The first z (m) from ``start`` on with no parked car within ``reach`` (m) on ``side``: room to
+    recover from a pose across the kerb (a pose inside a parked car is no pose)."""
+    boxes = np.asarray(build_world(seed=1).solid_boxes)
+    boxes = boxes[np.sign(boxes[:, 0]) == side]
+    for z in np.arange(start, start + 600.0, 1.0):
+        if not np.any((boxes[:, 3] > z - reach) & (boxes[:, 2] < z + reach)):
+            return float(z)
+    raise AssertionError("no free stretch of kerb")
+
+
 @pytest.mark.parametrize("x,yaw", [(7.9, -math.pi / 2), (8.2, -math.pi / 2 - 0.5), (-7.9, math.pi / 2),
                                    (6.0, math.pi)])
 def test_autopilot_recovers_without_crossing_a_facade(collider, x, yaw):
-    car = _car(collider, x=x, z=450.0, yaw=yaw, speed=0.0)
+    car = _car(collider, x=x, z=_clear_kerb_z(collider.solids, math.copysign(1.0, x)), yaw=yaw, speed=0.0)
     pilot = Autopilot(lane_index=0, target_speed_m_s=14.0, seed=1)
     recovered = None
     for i in range(int(60 / (1 / 30))):
@@ -125,3 +136,48 @@ def test_scene_crash_keeps_the_chase_camera_in_the_street_and_r_restores_the_lan
     finally:
         scene.release()
         gl_ctx.detect_framebuffer(0).use()
+
+
+def test_parked_cars_are_solid_and_stop_the_car(collider):
+    world = build_world(seed=1)
+    boxes = world.solid_boxes
+    assert len(boxes) > 20
+    assert np.all(np.minimum(np.abs(boxes[:, 0]), np.abs(boxes[:, 1])) >= 6.6 - 1e-6)  # traffic lanes stay free
+    assert np.all(np.maximum(np.abs(boxes[:, 0]), np.abs(boxes[:, 1])) < WALL_X_M)
+    circles = world.solid_circles
+
+    def clear_approach(b):  # nothing else on the 14 m of sidewalk behind this car
+        x0, x1, z0, z1 = b
+        near_c = (np.abs(circles[:, 0] - (x0 + x1) / 2) < 2.0) & (circles[:, 1] > z1) & (circles[:, 1] < z1 + 14.0)
+        near_b = (boxes[:, 2] > z1) & (boxes[:, 2] < z1 + 14.0) & (np.sign(boxes[:, 0]) == 1)
+        return x0 > 0 and not near_c.any() and not near_b.any()
+
+    x0, x1, z0, z1 = next(b for b in boxes if clear_approach(b))  # a car on the +x side
+    xc = (x0 + x1) / 2
+    car = _car(collider, x=xc, z=z1 + 12.0, speed=10.0)  # along the sidewalk, −z, straight at its rear
+    speeds = []
+    for _ in range(90):
+        car.step(1 / 30, throttle=0.5, brake=0.0, steer=0.0)
+        f, r = car.forward(), car.right()
+        corners = [car.position + f * a * car.spec.length_m / 2 + r * b * car.spec.width_m / 2
+                   for a in (-1, 1) for b in (-1, 1)]
+        assert min(float(c[2]) for c in corners) >= z1 - 0.05  # never inside the parked car
+        speeds.append(car.speed_m_s)
+    assert min(speeds[30:]) < 2.0  # it stopped at the parked car
+    # Sideways from the lane into it: pushed back, never inside.
+    car = _car(collider, x=x0 - 2.3 - 3.0, z=(z0 + z1) / 2, yaw=-math.pi / 2, speed=8.0)  # heading +x
+    hit = False
+    for _ in range(60):
+        car.step(1 / 30, throttle=0.3, brake=0.0, steer=0.0)
+        assert float(car.position[0]) + car.spec.length_m / 2 <= x0 + 0.05
+        hit |= float(car.position[0]) + car.spec.length_m / 2 > x0 - 0.1
+    assert hit and car.speed_m_s < 2.0
+
+
+def test_sign_posts_are_solid(collider):
+    world = build_world(seed=1)
+    posts = world.solid_circles[np.isclose(np.abs(world.solid_circles[:, 0]), 7.55)]
+    assert len(posts) >= 10
+    circles = collider.solids.circles
+    for x, z, r in posts[:3]:
+        assert np.any(np.all(np.isclose(circles, (x, z, r)), axis=1))

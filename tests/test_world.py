@@ -6,7 +6,18 @@ import numpy as np
 import pytest
 
 from rain_core import layout
-from rain_core.mesh import MAT_ASPHALT, MAT_EMISSIVE, MAT_PAINT, VERTEX_DTYPE
+from rain_core.mesh import (
+    MAT_ASPHALT,
+    MAT_CAR_PAINT,
+    MAT_CONCRETE,
+    MAT_EMISSIVE,
+    MAT_GENERIC,
+    MAT_GLASS,
+    MAT_METAL,
+    MAT_PAINT,
+    MAT_RUBBER,
+    VERTEX_DTYPE,
+)
 from rain_core.world import (
     HEIGHTMAP_TEXEL_M,
     OCCLUDER_HALF_X_M,
@@ -15,6 +26,7 @@ from rain_core.world import (
     make_road_heightmap,
     sample_heightmap,
 )
+from rain_core.world.kerbside import PARKED_INNER_X_M, SIGN_POST_X_M
 
 
 @pytest.fixture(scope="module")
@@ -72,14 +84,18 @@ def test_road_surface_is_flat_at_zero_and_the_carriageway_is_clear(world):
     np.testing.assert_allclose(road[:, 1], 0.0, atol=1e-6)
     assert np.abs(road[:, 0]).max() <= layout.ROAD_HALF_WIDTH_M + 1e-5
     assert road[:, 2].min() <= 1e-3 and road[:, 2].max() >= layout.PERIOD_M - 1e-3
-    paint = p[mat == MAT_PAINT]
+    paint = p[(mat == MAT_PAINT) & (np.abs(p[:, 0]) < layout.ROAD_HALF_WIDTH_M)]  # markings (signs are paint too)
     assert (paint[:, 1] > 0).all() and (paint[:, 1] < 0.01).all()
-    # Over the carriageway nothing hangs below 4.5 m (trucks pass; bridge and canopy are higher).
-    over_road = (np.abs(p[:, 0]) < layout.ROAD_HALF_WIDTH_M - 0.05) & (p[:, 1] > 0.01)
+    # Over the traffic lanes nothing hangs below 4.5 m (trucks pass; bridge and canopy are higher); parked cars
+    # stand up to 0.4 m into the gutter, no nearer the centre line than PARKED_INNER_X_M.
+    over_road = (np.abs(p[:, 0]) < PARKED_INNER_X_M - 0.01) & (p[:, 1] > 0.01)
     assert p[over_road, 1].min() > 4.5
+    gutter = (np.abs(p[:, 0]) < layout.ROAD_HALF_WIDTH_M - 0.05) & (p[:, 1] > 0.01) & (p[:, 1] < 4.5)
+    assert np.all(np.isin(mat[gutter], [MAT_CAR_PAINT, MAT_GLASS, MAT_GENERIC, MAT_RUBBER, MAT_METAL]))
     # Kerb tops and sidewalks at kerb height.
     walk = (np.abs(p[:, 0]) > layout.ROAD_HALF_WIDTH_M + 0.05) & (np.abs(p[:, 0]) < 10.2)
     walk &= np.abs(world.vertices["normal"][:, 1] - 1.0) < 1e-6  # up-facing
+    walk &= mat == MAT_CONCRETE  # not the parked cars' roofs
     assert np.median(p[walk, 1]) == pytest.approx(layout.KERB_HEIGHT_M, abs=1e-6)
 
 
@@ -161,8 +177,8 @@ def test_occluder_height_under_roofs_and_open_road(world):
     under_canopy = world.occluder_height(np.array([4.0, 6.0, 9.0, 14.0]), zc)
     assert np.isfinite(under_canopy).all()
     assert (under_canopy > layout.CANOPY_HEIGHT_M).all() and (under_canopy < layout.CANOPY_HEIGHT_M + 2).all()
-    # Open road: nothing overhead (lamp heads are not occluders).
-    x = np.linspace(-6.9, 6.9, 50)
+    # Open road: nothing overhead (lamp heads are not occluders; parked cars stand beyond the traffic lanes).
+    x = np.linspace(-PARKED_INNER_X_M + 0.15, PARKED_INNER_X_M - 0.15, 50)
     for z in (10.0, 150.0, 500.0, 1000.0):
         assert np.isneginf(world.occluder_height(x, z)).all()
     # Outside the canopy's x range, the other lanes are open.
@@ -244,3 +260,63 @@ def test_detail_scales_tessellation_and_is_validated():
     assert np.array_equal(low.road_heightmap, high.road_heightmap)
     with pytest.raises(ValueError, match="detail"):
         build_world(seed=1, detail=0.0)
+
+
+def test_kerbside_parked_cars_signs_and_crossings(world):
+    from rain_core.labels import CLASS_IDS, world_classes
+
+    p = world.vertices["position"]
+    cls = world_classes(world)
+    # Parked cars: half on the sidewalk beside both kerbs, clear of the traffic lanes, inside the walls.
+    cars = cls == CLASS_IDS["vehicle"]
+    assert cars.sum() > 20_000
+    assert np.abs(p[cars, 0]).min() >= PARKED_INNER_X_M - 1e-4
+    assert np.abs(p[cars, 0]).max() < layout.ROAD_HALF_WIDTH_M + layout.KERB_WIDTH_M + layout.SIDEWALK_WIDTH_M
+    assert p[cars, 1].min() > -0.05
+    boxes = world.solid_boxes
+    for side in (-1, 1):
+        b = boxes[np.sign(boxes[:, 0]) == side]
+        assert len(b) >= 10
+        zs = np.sort(b[:, 2])
+        assert np.all(np.diff(zs) > 3.0)  # no two cars overlap along the kerb
+    # Every car box holds car vertices; none stands under the bridge or on the station's forecourt.
+    zc = (boxes[:, 2] + boxes[:, 3]) / 2
+    assert not np.any(np.abs(zc - layout.BRIDGE_Z_M) < 20.0)
+    assert not np.any((boxes[:, 0] > 0) & (zc > layout.CANOPY_Z_M - 30.0) & (zc < layout.CANOPY_Z_M + 50.0))
+    # Clear of the lamp posts, sign posts and trunks (solid circles) by their radius.
+    c = world.solid_circles
+    for x0, x1, z0, z1 in boxes:
+        inside = ((c[:, 0] + c[:, 2] > x0) & (c[:, 0] - c[:, 2] < x1)
+                  & (c[:, 1] + c[:, 2] > z0) & (c[:, 1] - c[:, 2] < z1))
+        assert not inside.any()
+    # Lights off: no emissive vertex among the parked cars.
+    assert not np.any(np.rint(world.vertices["params"][cars, 2]) == MAT_EMISSIVE)
+    # Signs: plates above head height at the sidewalk's edge, their posts solid.
+    plates = cls == CLASS_IDS["traffic_sign"]
+    assert plates.sum() > 500
+    assert p[plates, 1].min() > 1.4 and p[plates, 1].max() < 4.0
+    ax = np.abs(p[plates, 0])
+    assert ax.min() > layout.ROAD_HALF_WIDTH_M and ax.max() < layout.ROAD_HALF_WIDTH_M + 3.3
+    posts = c[np.isclose(np.abs(c[:, 0]), SIGN_POST_X_M)]
+    assert len(posts) >= 8
+    # Zebra crossings: white bars across the carriageway, just above the lane lines.
+    marks = (cls == CLASS_IDS["marking"]) & (np.abs(p[:, 1] - 0.006) < 1e-4)
+    assert marks.sum() >= 2 * 13 * 6
+
+
+def test_kerbside_keeps_the_other_streams(world):
+    # The kerbside's own streams come after the first four: the road, trees and buildings are what they were.
+    from rain_core.world.street import _buildings, _road_and_streetside, _trees
+
+    rng = np.random.default_rng(1)
+    r_road, _, r_build, r_trees = (np.random.default_rng(s) for s in rng.bit_generator.seed_seq.spawn(4))
+    road = _road_and_streetside(r_road)
+    n = sum(len(a) for a in road)
+    assert np.array_equal(world.vertices[:n], np.concatenate(road))
+    trees, _ = _trees(r_trees, 8, 1)
+    build, _, _ = _buildings(r_build, 1.0)
+    v = world.vertices["position"]
+    for parts in (trees, build):
+        first = parts[0]["position"]
+        hits = np.nonzero(np.all(v == first[0], axis=1))[0]
+        assert any(np.array_equal(v[h:h + len(first)], first) for h in hits)

@@ -20,6 +20,9 @@ never renumber. 0 is "unlabeled" (nothing in this renderer draws it today), ``sk
 |    |             | seen from the driver's seat                                             |
 | 12 | ego_cabin   | the ego car's interior (dashboard, pillars, roof lining, seats)         |
 | 13 | sky         | no opaque surface along the ray                                         |
+| 14 | traffic_sign| road sign plates (their posts are poles)                                |
+
+Parked cars are vehicles; zebra crossings are markings; sign posts are poles.
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ from rain_core.mesh import MAT_ASPHALT, MAT_CAR_PAINT, MAT_CONCRETE, MAT_FOLIAGE
 
 CLASS_IDS: dict[str, int] = {
     "unlabeled": 0, "road": 1, "marking": 2, "kerb": 3, "sidewalk": 4, "terrain": 5, "building": 6, "bridge": 7,
-    "pole": 8, "vegetation": 9, "vehicle": 10, "ego_vehicle": 11, "ego_cabin": 12, "sky": 13,
+    "pole": 8, "vegetation": 9, "vehicle": 10, "ego_vehicle": 11, "ego_cabin": 12, "sky": 13, "traffic_sign": 14,
 }
 CLASS_NAMES: dict[int, str] = {v: k for k, v in CLASS_IDS.items()}
 # False colours for sheets and viewers (sRGB uint8), Cityscapes-like where a class exists there.
@@ -41,7 +44,7 @@ CLASS_COLORS: dict[str, tuple[int, int, int]] = {
     "unlabeled": (0, 0, 0), "road": (128, 64, 128), "marking": (255, 255, 255), "kerb": (196, 196, 0),
     "sidewalk": (244, 35, 232), "terrain": (152, 251, 152), "building": (70, 70, 70), "bridge": (150, 100, 100),
     "pole": (153, 153, 153), "vegetation": (107, 142, 35), "vehicle": (0, 0, 142), "ego_vehicle": (0, 60, 100),
-    "ego_cabin": (120, 10, 10), "sky": (70, 130, 180),
+    "ego_cabin": (120, 10, 10), "sky": (70, 130, 180), "traffic_sign": (220, 220, 0),
 }
 
 _log = logging.getLogger(__name__)
@@ -66,17 +69,12 @@ def _street_side_classes(parts) -> list[np.ndarray]:
 
 
 def _rebuilt_parts(seed: int) -> list[tuple[list[np.ndarray], str | None]]:
-    """build_world's parts in its order, each group with its class (None: by material, the street side). Mirrors
-    rain_core.world.build.build_world at detail 1; world_classes checks the result equals the world's vertices."""
-    from rain_core.world import street
+    """build_world's parts in its order, each group with its class (None: by material, the street side): the
+    world builder's own grouping at detail 1 (rain_core.world.build._world_parts); world_classes checks the
+    result equals the world's vertices."""
+    from rain_core.world.build import _world_parts
 
-    rng = np.random.default_rng(seed)
-    r_road, _r_hmap, r_build, r_trees = (np.random.default_rng(s) for s in rng.bit_generator.seed_seq.spawn(4))
-    segments, subdiv = 8, 1
-    return [(street._road_and_streetside(r_road), None), (street._bridge()[0], "bridge"),
-            (street._station()[0], "building"), (street._street_lamps(segments)[0], "pole"),
-            (street._trees(r_trees, segments, subdiv)[0], "vegetation"),
-            (street._buildings(r_build, 1.0)[0], "building")]
+    return [(group, name) for name, group in _world_parts(seed, 1.0).groups]
 
 
 def material_classes(vertices: np.ndarray) -> np.ndarray:
@@ -92,9 +90,10 @@ def material_classes(vertices: np.ndarray) -> np.ndarray:
 
 def world_classes(world) -> np.ndarray:
     """uint8 class id per vertex of ``world.vertices`` (a rain_core.world.World). The world is one concatenation of
-    parts (road and street side, bridge, station, lamps, trees, buildings); the parts are rebuilt from the world's
-    seed to learn where each ends. If they do not reproduce the world (another detail level, a changed builder),
-    the classes come from the materials alone and a warning is logged."""
+    parts (road and street side, bridge, station, lamps, trees, buildings, zebra crossings, sign posts and plates,
+    parked cars, shop signs); the parts are rebuilt from the world's seed to learn where each ends. If they do not
+    reproduce the world (another detail level, a changed builder), the classes come from the materials alone and a
+    warning is logged."""
     from rain_core.mesh import concat
 
     groups = _rebuilt_parts(int(world.seed))

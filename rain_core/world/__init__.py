@@ -1,5 +1,6 @@
-"""The procedural street: one periodic tile of road, kerbs, sidewalks, buildings, trees, lamps, a railway
-underpass and a fuel station, plus the two maps the rain effects read (roof heights and the road heightmap).
+"""The procedural street: one periodic tile of road, kerbs, sidewalks, buildings (with shop signs), trees, lamps,
+a railway underpass and a fuel station, cars parked half on the sidewalks, road signs and zebra crossings
+(``kerbside``), plus the two maps the rain effects read (roof heights and the road heightmap).
 
 Frame and units: +Y up, metres, the road along Z (see ``rain_core.layout``). The world repeats along Z with period
 ``PERIOD_M``; :func:`build_world` makes ONE tile covering z in [0, PERIOD_M) and the renderer draws it at

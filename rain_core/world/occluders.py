@@ -50,7 +50,9 @@ def _rasterise_top(tris: np.ndarray, x0: float, cell: float, nx: int) -> np.ndar
     grid = np.full((nz, nx), -np.inf, dtype=np.float32)
     a = tris[:, 1] - tris[:, 0]
     b = tris[:, 2] - tris[:, 0]
-    tris = tris[np.abs(a[:, 0] * b[:, 2] - a[:, 2] * b[:, 0]) > 1e-9]  # vertical faces cast no shadow
+    # Only up-facing triangles: vertical faces cast no shadow, and under a closed solid's top the faces that
+    # look down are never the highest (the occluders are closed boxes or up-facing slopes, wound outwards).
+    tris = tris[a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2] > 1e-9]
     zmin, zmax = tris[:, :, 2].min(1), tris[:, :, 2].max(1)
     shift = np.array([0.0, 0.0, _P])
     tris = np.concatenate([tris, tris[zmin < 0] + shift, tris[zmax > _P] - shift])

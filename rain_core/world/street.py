@@ -360,12 +360,22 @@ def _trees(rng: np.random.Generator, detail_segments: int, subdiv: int) -> tuple
     return parts, np.concatenate(trunks)
 
 
-def _buildings(rng: np.random.Generator, detail: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
+@dataclass
+class Frontage:
+    """What later parts need to know of the buildings' street fronts (m). doors: (N, 3) side (±1), z0, z1;
+    shops: (M, 5) side, façade |x|, z0, z1 of the shop front, 1 if it has an awning else 0."""
+
+    doors: np.ndarray
+    shops: np.ndarray
+
+
+def _buildings(rng: np.random.Generator, detail: float) -> tuple[list[np.ndarray], list[np.ndarray], Frontage]:
     """Blocks along both sides, lot by lot, leaving out the underpass and the fuel station."""
     walls_lo, walls_hi, walls_col, roofs_col = [], [], [], []
     slab_lo, slab_hi = [], []
     glass, lit, doors = [], [], []  # rows: (x, facing, y0, y1, z0, z1)
     awn_lo, awn_hi, awn_col = [], [], []
+    door_rows, shop_rows = [], []
     for side in (-1.0, 1.0):
         zones = [(layout.BRIDGE_Z_M - _EMB_BASE_HALF_Z - 3.0, layout.BRIDGE_Z_M + _EMB_BASE_HALF_Z + 3.0)]
         if side > 0:
@@ -427,7 +437,9 @@ def _buildings(rng: np.random.Generator, detail: float) -> tuple[list[np.ndarray
             # Ground floor: a shop front (sometimes under an awning) or windows and a door.
             door_z = rng.uniform(z0 + 1.0, z1 - 2.2)
             doors.append((xf, facing, 0.0, 2.2, door_z, door_z + 1.1))
+            door_rows.append((side, door_z, door_z + 1.1))
             if rng.random() < 0.55:
+                shop_rows.append([side, d0, z0 + 0.5, z1 - 0.5, 0.0])
                 segs = [(z0 + 0.8, door_z - 0.3), (door_z + 1.4, z1 - 0.8)]
                 for a, b in segs:
                     if b - a > 0.8:
@@ -437,6 +449,7 @@ def _buildings(rng: np.random.Generator, detail: float) -> tuple[list[np.ndarray
                     awn_lo.append((ax0, 3.1, z0 + 0.5))
                     awn_hi.append((ax1, 3.25, z1 - 0.5))
                     awn_col.append(_AWNING_PALETTE[rng.integers(len(_AWNING_PALETTE))])
+                    shop_rows[-1][4] = 1.0
             else:
                 for c in zc:
                     a, b = c - pitch * ratio / 2, c + pitch * ratio / 2
@@ -463,5 +476,7 @@ def _buildings(rng: np.random.Generator, detail: float) -> tuple[list[np.ndarray
         tint = _WARM_WINDOW[None] * rng.uniform(0.9, 1.1, (len(r), 3))
         parts.append(_facade_quads(r[:, 0], r[:, 1], r[:, 2], r[:, 3], r[:, 4], r[:, 5],
                                    tint * lum / LUMINOUS_EFFICACY_LM_PER_W, 0.1, MAT_EMISSIVE))
-    return parts, occ
+    frontage = Frontage(np.array(door_rows, dtype=np.float64).reshape(-1, 3),
+                        np.array(shop_rows, dtype=np.float64).reshape(-1, 5))
+    return parts, occ, frontage
 

@@ -10,7 +10,7 @@ import pytest
 
 from rain_core.labels import CLASS_COLORS, CLASS_IDS, CLASS_NAMES, world_classes
 from rain_core.labels.classes import material_classes
-from rain_core.mesh import MAT_ASPHALT, MAT_FOLIAGE, MAT_PAINT
+from rain_core.mesh import MAT_ASPHALT, MAT_CAR_PAINT, MAT_FOLIAGE, MAT_PAINT
 
 SHADERS = Path(__file__).resolve().parents[2] / "shaders"
 
@@ -19,7 +19,7 @@ def test_ids_are_stable_and_unique():
     # Recorded datasets keep their meaning: these numbers never change (new classes go at the end).
     assert CLASS_IDS == {"unlabeled": 0, "road": 1, "marking": 2, "kerb": 3, "sidewalk": 4, "terrain": 5,
                          "building": 6, "bridge": 7, "pole": 8, "vegetation": 9, "vehicle": 10, "ego_vehicle": 11,
-                         "ego_cabin": 12, "sky": 13}
+                         "ego_cabin": 12, "sky": 13, "traffic_sign": 14}
     assert len(set(CLASS_IDS.values())) == len(CLASS_IDS)
     assert set(CLASS_COLORS) == set(CLASS_IDS)
     assert len(set(CLASS_COLORS.values())) == len(CLASS_COLORS)
@@ -39,11 +39,16 @@ def test_world_classes_follow_the_parts(world, caplog):
     assert classes.shape == (len(world.vertices),) and classes.dtype == np.uint8
     mat = np.round(world.vertices["params"][:, 2]).astype(int)
     assert np.all(classes[mat == MAT_ASPHALT] == CLASS_IDS["road"])
-    assert np.all(classes[mat == MAT_PAINT] == CLASS_IDS["marking"])
-    assert np.all(classes[mat == MAT_FOLIAGE] == CLASS_IDS["vegetation"])
     x = world.vertices["position"][:, 0]
     y = world.vertices["position"][:, 1]
-    for name in ("kerb", "sidewalk", "terrain", "building", "bridge", "pole", "vegetation"):
+    on_road = (np.abs(x) < 7.0) & (y < 0.01)
+    assert np.all(classes[(mat == MAT_PAINT) & on_road] == CLASS_IDS["marking"])
+    assert np.all(classes[(mat == MAT_PAINT) & ~on_road] == CLASS_IDS["traffic_sign"])  # signs are painted
+    assert np.all(y[classes == CLASS_IDS["traffic_sign"]] > 1.0)
+    assert np.all(classes[mat == MAT_CAR_PAINT] == CLASS_IDS["vehicle"])  # parked cars
+    assert np.all(classes[mat == MAT_FOLIAGE] == CLASS_IDS["vegetation"])
+    for name in ("kerb", "sidewalk", "terrain", "building", "bridge", "pole", "vegetation", "vehicle",
+                 "traffic_sign"):
         assert np.any(classes == CLASS_IDS[name]), name
     kerb = classes == CLASS_IDS["kerb"]
     assert np.all((np.abs(x[kerb]) >= 6.99) & (np.abs(x[kerb]) <= 7.31))  # between the road and the sidewalk
