@@ -1,6 +1,7 @@
 // Rainfall (rain_core/effects/rainfall/): what a falling drop looks like.
-// A drop is a tiny fish-eye lens: it shows ~94 % of the radiance of a ~165° field of view behind it (Garg &
-// Nayar 2004), so it is usually brighter than what it covers. On top of that it scatters the sun, street lamps
+// A drop is a tiny fish-eye lens: it refracts a ~165° field of view behind it and reflects the rest of the sky
+// (Garg & Nayar 2004, 2007; rainfall/env.frag sums the three orders with their Fresnel weights, optics.py), so it
+// is usually brighter than what it covers. On top of that it scatters the sun, street lamps
 // and headlights towards the eye; for a drop of radius r lit with illuminance E the scattered intensity is
 // E·πr²·p(θ)/4π, i.e. luminance E·p(θ)/4π over its disc. p: two-term Henyey–Greenstein, the same as the
 // atmosphere effect's (forward lobe g = 0.7, back lobe g = −0.5 weighted so p(180°)/4π = 1/18.8 sr).
@@ -29,9 +30,9 @@ float rain_phase(float cos_theta) {
            + RAIN_PHASE_BACK_WEIGHT * rain_hg(RAIN_PHASE_BACK_G, cos_theta);
 }
 
-uniform sampler2D u_rain_env;  // rainfall/env.frag: mean radiance behind a drop, by view direction
+uniform sampler2D u_rain_env;  // rainfall/env.frag: a drop's luminance (cd/m²), by view direction
 
-// Mean radiance (cd/m²) of the environment in the ~165° cone around the view direction d.
+// Luminance (cd/m²) of a drop seen along d (eye → drop) from the sky and the ground (rainfall/env.frag).
 vec3 rain_environment(vec3 d) {
     float u = fract(atan(d.z, d.x) * 0.15915494);  // φ / 2π in [0, 1)
     float v = acos(clamp(d.y, -1.0, 1.0)) * 0.31830989;  // θ / π
@@ -41,7 +42,7 @@ vec3 rain_environment(vec3 d) {
 // Luminance (cd/m²) of a drop at p (wrapped frame) seen along to_eye (unit, from the drop to the camera). The
 // rainfall effect passes only the lights that can reach its container.
 vec3 rain_drop_radiance(vec3 p, vec3 to_eye) {
-    vec3 L = 0.94 * rain_environment(-to_eye);
+    vec3 L = rain_environment(-to_eye);
     L += u_sun_illum * rain_phase(dot(-u_sun_dir, to_eye)) * RAIN_INV_4PI;
     for (int i = 0; i < u_light_count; ++i) {
         vec3 d = u_light_pos[i].xyz - p;

@@ -16,6 +16,7 @@ uniform float u_shape_width[10];
 uniform float u_width_floor_px;
 uniform float u_width_max_px;
 uniform float u_alpha_max;
+uniform float u_alpha_spread;       // constants.SPREAD_ALPHA
 
 out vec2 v_local;   // px from the quad centre: (across, along)
 out vec2 v_half;    // px: half extents of the coverage profile + 0.5
@@ -74,22 +75,31 @@ void main() {
     float len = length(dir);
     vec2 t = len > 1e-4 ? dir / len : vec2(0.0, 1.0);
     vec2 n = vec2(-t.y, t.x);
-    // Light budget in px² of full coverage: the drop's projected area times its weight.
+    // Light budget in px² of full coverage: the drop's projected area times its weight. Coverage (optics.
+    // streak_coverage): a pixel on the path is covered A·(τ/T)/(pixel area) on average over the exposure, so
+    // α = A / (w·(ℓ + h)), h the drop's own chord along the motion (area / true width), w ≥ the 1 px floor.
     float d_m = drop.d_mm * 1e-3;
     float d_px = d_m * u_focal_px / ca.w;
-    float area_px = 0.78539816 * d_px * d_px * shape_lookup(u_shape_area, drop.d_mm) * weight * u_brightness;
-    float w_px = max(d_px * shape_lookup(u_shape_width, drop.d_mm), u_width_floor_px);
-    float alpha = area_px / (w_px * (len + w_px));
-    if (alpha > u_alpha_max) {  // compensation: brighter up to u_alpha_max, then wider up to u_width_max_px
-        float wide = 0.5 * (-len + sqrt(len * len + 4.0 * area_px / u_alpha_max));
+    float area_f = shape_lookup(u_shape_area, drop.d_mm);
+    float width_f = shape_lookup(u_shape_width, drop.d_mm);
+    float area_px = 0.78539816 * d_px * d_px * area_f * weight * u_brightness;
+    float h_px = 0.78539816 * d_px * area_f / width_f;
+    float len_h = len + h_px;
+    float w_px = max(d_px * width_f, u_width_floor_px);
+    float alpha = area_px / (w_px * len_h);
+    if (alpha > u_alpha_spread) {
+        // Compensation: spread like the drops it stands for — wider and as much longer — up to u_width_max_px,
+        // then brighter up to u_alpha_max.
+        float wide = 0.5 * (-len + sqrt(len * len + 4.0 * area_px / u_alpha_spread));
         w_px = min(max(wide, w_px), u_width_max_px);
-        alpha = min(area_px / (w_px * (len + w_px)), u_alpha_max);
+        len_h = len + max(h_px, w_px);
+        alpha = min(area_px / (w_px * len_h), u_alpha_max);
     }
     // Quad corner (triangle strip): across ±1, along ±1 (−1 at the head).
     int c = gl_VertexID;
     float across = (c & 1) == 0 ? -1.0 : 1.0;
     float along = c < 2 ? -1.0 : 1.0;
-    vec2 half_ext = vec2(0.5 * w_px + 0.5, 0.5 * (len + w_px) + 0.5);
+    vec2 half_ext = vec2(0.5 * w_px + 0.5, 0.5 * len_h + 0.5);
     vec2 centre = 0.5 * (sa + sb);
     vec2 pos = centre + t * along * half_ext.y + n * across * half_ext.x;
     vec4 cc = along < 0.0 ? ca : cb;

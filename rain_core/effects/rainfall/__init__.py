@@ -39,8 +39,8 @@ that the drawn count follows the physical count, as before (``drawn_share``: lig
 until the budget is full at heavy rain (``BUDGET_FULL_AT_MM_H``, ~77 % of the instances drawn), and never so
 that a drawn drop stands for less than one real drop. The effect's rate follows the set rate with a
 ``RATE_RAMP_S`` time constant (and the air empties with the same constant when the rain stops). Each drawn drop
-carries its weight's light: first brighter (opacity up to ``ALPHA_MAX``), then wider (up to ``WIDTH_MAX_PX``);
-``python -m rain_core.bench rainfall`` measures the light lost beyond and the density error.
+carries its weight's light: first wider (from ``SPREAD_ALPHA`` up to ``WIDTH_MAX_PX``), then brighter (opacity up
+to ``ALPHA_MAX``); ``python -m rain_core.bench rainfall`` measures the light lost beyond and the density error.
 
 Occlusion in the vertex shader
 ------------------------------
@@ -56,11 +56,21 @@ What the camera sees
 A streak is the drop's path relative to the camera during the exposure (``camera.exposure_s``): from p(t) to
 p(t) − (u − v_cam)·T, so rain tilts towards the windshield by atan(v_car/v(D)) and follows the car's actual
 velocity (taken at the camera point of the ego car, including its yaw rate; finite differences for the free
-camera). Width = the drop's projected diameter (Beard & Chuang's flattened shape for D > 1 mm) with a 1 px floor;
-opacity = (weight × projected drop area) / (streak area). Colour (``shaders/rainfall/drop.glsl``): a drop is a
-tiny fish-eye that shows ~94 % of the radiance of a ~165° view behind it (Garg & Nayar), plus the sun, street
+camera). Width = the drop's projected diameter (Beard & Chuang's flattened shape for D > 1 mm) with a 1 px floor.
+Opacity is the drop's coverage (``optics.streak_coverage``): a pixel on the path is covered A·(τ/T)/(pixel area)
+on average over the exposure, A the projected area (× the weight), so α = A / (w·(ℓ + h)) with ℓ the streak's
+length and h the drop's own chord along its motion (area / true width) — for a sub-pixel drop the footprint is
+its path, not a pixel-long stub. A drawn instance stands for many real drops spread around it: its light is
+spread wider first (above ``SPREAD_ALPHA``, about the opacity of one real streak at 1/60 s), up to
+``WIDTH_MAX_PX``, and only then brightened up to ``ALPHA_MAX`` — a faint band of drops rather than a bright
+flake. Colour (``shaders/rainfall/drop.glsl``, ``env.frag``, ``optics``): a drop is a tiny fish-eye
+(Garg & Nayar 2004, 2007) — refraction through it (its ~165° field of view, mostly what lies just behind it),
+specular reflection and one internal reflection, each with its Fresnel weight, summed over the environment the
+camera sees (the sky through the rain layer, as the sky pass draws it, and the lit ground) — plus the sun, street
 lamps and headlights scattered by the drop (two-term Henyey–Greenstein, the atmosphere effect's), so drops in a
-headlight beam glow. Streaks blend over the HDR frame with the scene's depth test, without depth writes.
+headlight beam glow. By day a drop is several times brighter than the façades it covers and a little darker than
+the sky; seen horizontally it is ~0.7 × the atmosphere's far-rain airlight (0.4–0.5 × before issue 14).
+Streaks blend over the HDR frame with the scene's depth test, without depth writes.
 
 Splashes
 --------
@@ -86,7 +96,8 @@ Modules
 ``constants`` (the numbers above), ``shape`` (Beard & Chuang drop shapes), ``drops`` (hash, drop table, time
 split), ``rates`` (budget share, thinning, splash flux), ``boxes`` (the container), ``vehicle_fate`` (vehicles as
 convex pieces), ``sim`` (``RainfallSim``: the per-frame uniforms, and the twin of every drop and splash),
-``measure`` (weighted counts for tests and the benchmark), ``streaks`` (the NumPy twin of the streak shader) —
+``measure`` (weighted counts for tests and the benchmark), ``streaks`` (the NumPy twin of the streak shader),
+``optics`` (the drop's optics: the env.frag quadrature and its twin, the streak coverage) —
 all NumPy only, no GL — and ``effect`` (``RainfallEffect``, the GL side, imported on first use).
 """
 

@@ -47,8 +47,14 @@ SPLASH_PERIOD_S = 0.3125  # s, each splash slot has one impact per period (≥ t
 
 # --- streak drawing --- (keep the NumPy twin, ``streaks.streak_geometry``, in step with shaders/rainfall/streak.vert).
 WIDTH_FLOOR_PX = 1.0  # px, narrowest streak; thinner drops get less opacity instead
-ALPHA_MAX = 0.7  # a compensated streak gets brighter up to this opacity …
-WIDTH_MAX_PX = 4.0  # … then wider up to this width; beyond, light is lost
+# A drawn instance stands for many real drops (its weight), spread through the volume around it. Their light is
+# spread first: a streak above SPREAD_ALPHA gets wider and as much longer (up to WIDTH_MAX_PX), and only then
+# brighter (up to ALPHA_MAX); beyond both, light is lost. SPREAD_ALPHA is about the opacity of one real streak at 1/60 s
+# (π/4·D/(v·T + D) ≈ 0.02–0.05 for 2–4 mm drops), so a compensated streak reads as a faint band of drops, not a
+# bright flake.
+SPREAD_ALPHA = 0.05
+ALPHA_MAX = 0.7
+WIDTH_MAX_PX = 4.0
 
 # --- splashes ---
 SPLASH_D_MIN_MM = 1.5  # mm, smaller drops make no visible splash

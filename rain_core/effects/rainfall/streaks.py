@@ -7,7 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rain_core.effects.rainfall.constants import ALPHA_MAX, PERIOD_M, WIDTH_FLOOR_PX, WIDTH_MAX_PX
+from rain_core.effects.rainfall.constants import ALPHA_MAX, PERIOD_M, SPREAD_ALPHA, WIDTH_FLOOR_PX, WIDTH_MAX_PX
+from rain_core.effects.rainfall.optics import streak_coverage
 from rain_core.effects.rainfall.shape import drop_shape_factors
 from rain_core.effects.rainfall.sim import RainfallSim
 
@@ -39,7 +40,8 @@ def streak_geometry(sim: RainfallSim, index, time_s: float | None, cam: StreakCa
     Returns arrays: ``visible`` (bool), ``head``/``tail`` (n, 3) m in the wrapped frame (the drop now, and where
     it was relative to the camera when the shutter opened), ``head_px``/``tail_px`` (n, 2) px from the image
     centre (y up), ``width_px``, ``alpha``, ``light_px2`` (the light budget: weight × projected area),
-    ``drawn_px2`` (what the quad carries: alpha × width × (length + width)) and ``d_mm``."""
+    ``drawn_px2`` (what the quad carries: alpha × width × (length + h), h the drop's own chord along its path),
+    ``length_px`` (length + h) and ``d_mm``."""
     d = sim.drops(index, time_s)
     head = d["pos"].copy()
     head[:, 2] -= cam.shift_z
@@ -64,12 +66,16 @@ def streak_geometry(sim: RainfallSim, index, time_s: float | None, cam: StreakCa
     d_px = d_mm * 1e-3 * cam.focal_px / ca[:, 3]
     area_f, width_f = drop_shape_factors(d_mm)
     light = np.pi / 4.0 * d_px**2 * area_f * weight * brightness
+    h = np.pi / 4.0 * d_px * area_f / width_f  # the drop's mean chord along its motion (area / width)
     w = np.maximum(d_px * width_f, WIDTH_FLOOR_PX)
     with np.errstate(divide="ignore", invalid="ignore"):
-        alpha = light / (w * (length + w))
-        over = alpha > ALPHA_MAX
-        wide = 0.5 * (-length + np.sqrt(length**2 + 4.0 * light / ALPHA_MAX))
+        alpha = streak_coverage(light, length, h, w)
+        # Compensation (constants.SPREAD_ALPHA): wider and as much longer up to WIDTH_MAX_PX, then brighter.
+        over = alpha > SPREAD_ALPHA
+        wide = 0.5 * (-length + np.sqrt(length**2 + 4.0 * light / SPREAD_ALPHA))
         w = np.where(over, np.minimum(np.maximum(wide, w), WIDTH_MAX_PX), w)
-        alpha = np.where(over, np.minimum(light / (w * (length + w)), ALPHA_MAX), alpha)
+        h = np.where(over, np.maximum(h, w), h)
+        alpha = np.where(over, np.minimum(streak_coverage(light, length, h, w), ALPHA_MAX), alpha)
     return {"visible": visible, "head": head, "tail": b_w, "head_px": sa, "tail_px": sb, "width_px": w,
-            "alpha": alpha, "light_px2": light, "drawn_px2": alpha * w * (length + w), "d_mm": d_mm}
+            "alpha": alpha, "light_px2": light, "drawn_px2": alpha * w * (length + h), "d_mm": d_mm,
+            "length_px": length + h}
