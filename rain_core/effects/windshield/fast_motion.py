@@ -33,9 +33,13 @@ from rain_core.effects.windshield.constants import (
     drop_radius,
 )
 from rain_core.effects.windshield.drop_rows import BL as _BL
+from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
+from rain_core.effects.windshield.drop_rows import EV as _EV
 from rain_core.effects.windshield.drop_rows import GS as _GS
 from rain_core.effects.windshield.drop_rows import GT as _GT
-from rain_core.effects.windshield.drop_rows import PLACED as _PLACED
+from rain_core.effects.windshield.drop_rows import KEY as _KEY
+from rain_core.effects.windshield.drop_rows import RB as _RB
+from rain_core.effects.windshield.drop_rows import ROW as _ROW
 from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
 from rain_core.effects.windshield.drop_rows import UP as _UP
 from rain_core.effects.windshield.drop_rows import VS as _VS
@@ -50,6 +54,9 @@ from rain_core.physics import RHO_AIR, RHO_WATER
 _MASS_PER_A3 = RHO_WATER * VOLUME_PER_RADIUS3  # kg / m³: a drop's mass over its contact radius cubed
 _EMPTY1 = np.zeros(0)
 _EMPTY_I = np.zeros(0, np.int64)
+# A resting drop whose bound RB (drop_rows; see FastMotion._move) is below this is not tested: the margin covers
+# the rounding of the bound and the Newton radius's tiny lag behind the mass (relative ≲ 1e-8).
+_REST_TEST = 0.999
 
 
 class FastMotion:
@@ -60,75 +67,114 @@ class FastMotion:
     def _move(self, h: float, air_local: np.ndarray, inputs) -> tuple:
         """Forces, pinning, viscous sliding; returns for the merge test (``_merge_moves``) the drop count before
         the step's trail droplets, the drops that slid (``go``), their start (s, t) and displacement (m), as
-        columns: the others did not move."""
+        columns: the others did not move.
+
+        Only the drops that may slide are tested (``cand``): those whose RB column (drop_rows) is at least
+        _REST_TEST. A drop at rest gets RB = max(|G + D|, |G|, |D|) / pin from the forces of its test (G gravity,
+        D the air's drag at rest, pin the static pinning): while it rests in the same air and only loses water
+        (evaporation: its mass m and radius a shrink), its force over pin is α·G/pin + β·D/pin with α = (m/a)
+        over its value then and β = a·profile(a)² over its value then, both in [0, 1] (profile grows with a), so
+        it stays ≤ RB (a convex function on [0, 1]² is largest at a corner) and the drop stays put, as the full
+        test would find. Anything else (moving, placed, grown, a new air) sets RB = +inf."""
         n = self._n
         if n == 0:
             return 0, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
+        if self._dirty:
+            self._flush_placed()
         d = self._buf[:n]
-        s, t, m = d[:, _S], d[:, _T], d[:, _M]
-        a = d[:, _A]  # the radius at the start of the step (the Newton update below comes after its last use)
-        # The air over the glass (airflow.air_velocity), from the position's factors (drop_rows).
         head, cross = float(air_local[2]), float(air_local[0])
-        if head >= 0.0:
-            up = head * d[:, _UP]
-            side = up * FLOW_SPREAD * d[:, _Q] + CROSSWIND_GAIN * cross
-        else:  # a tailwind: a weak, separated flow down the glass
-            up = np.full(n, head * FLOW_AT_BOTTOM)
-            side = abs(head * FLOW_AT_BOTTOM) * FLOW_SPREAD * d[:, _Q] + CROSSWIND_GAIN * cross
-        air_speed = np.sqrt(side * side + up * up)
-        # Drag in the boundary layer (airflow.drag).
-        delta = 5.0 * np.sqrt(d[:, _BL] / np.maximum(air_speed, 1e-3))
-        eta = np.minimum(np.maximum(HEIGHT_PER_RADIUS * a / delta, 0.0), 1.0)
-        profile = 1.5 * eta - 0.5 * (eta * eta * eta)
-        vs, vt = d[:, _VS], d[:, _VT]
-        rel_s = side * profile - vs
-        rel_t = up * profile - vt
-        coef = (0.5 * RHO_AIR * DRAG_CD * FRONTAL_PER_RADIUS2) * a**2 * np.sqrt(rel_s * rel_s + rel_t * rel_t)
-        # Gravity along the curved glass (GlassGeometry.gravity), per unit mass from drop_rows.
-        f_s = m * d[:, _GS] + coef * rel_s
-        f_t = m * d[:, _GT] + coef * rel_t
-        fmag = np.sqrt(f_s * f_s + f_t * f_t)
-        pin = GAMMA_W * 2.0 * a * HYSTERESIS
-        speed = np.sqrt(vs * vs + vt * vt)
-        moving = speed > 0.0
-        go = np.flatnonzero(moving | (fmag > pin))  # moving, or starting to
+        cand = None  # None: every drop
+        if self._rest_air != (head, cross):  # a new air: every drop is tested, its EV and RB rewritten
+            self._rest_air = (head, cross)
+        else:
+            cand = np.flatnonzero(d[:, _RB] >= _REST_TEST)
+            if len(cand) == n:
+                cand = None
+        c = d if cand is None else d.take(cand, axis=0)
+        k = len(c)
         s_g = t_g = ds = dt_ = _EMPTY1
-        if len(go):
-            # The sliding update, for the drops that slide (the others stay at rest).
-            mv = moving[go]
-            fs_g, ft_g, fm_g, pin_g, m_g, a_g = f_s[go], f_t[go], fmag[go], pin[go], m[go], a[go]
-            vs_g, vt_g, sp_g = vs[go], vt[go], speed[go]
-            sp_g, fm_safe = np.maximum(sp_g, 1e-300), np.maximum(fm_g, 1e-300)
-            dir_s = np.where(mv, vs_g / sp_g, fs_g / fm_safe)
-            dir_t = np.where(mv, vt_g / sp_g, ft_g / fm_safe)
-            kp = KINETIC_PIN * pin_g
-            damp = 1.0 + h * (VISCOUS_C * MU_W * a_g / m_g)
-            nv_s = (vs_g + h * ((fs_g - kp * dir_s) / m_g)) / damp
-            nv_t = (vt_g + h * ((ft_g - kp * dir_t) / m_g)) / damp
-            stop = mv & (
-                (nv_s * vs_g + nv_t * vt_g <= 0.0)
-                | ((np.sqrt(nv_s * nv_s + nv_t * nv_t) < V_STOP_M_S) & (fm_g < pin_g))
-            )
-            nv_s[stop] = 0.0
-            nv_t[stop] = 0.0
-            d[go, _VS] = nv_s
-            d[go, _VT] = nv_t
-            ds, dt_ = h * nv_s, h * nv_t
-            s_g, t_g = s[go], t[go]
-            es, et = s_g + ds, t_g + dt_
-            d[go, _S] = es
-            d[go, _T] = et
-            moved = (ds != 0.0) | (dt_ != 0.0)
-            if moved.any():  # (one that left the glass is shed before its columns are read)
-                d[go[moved], _PLACED] = self._placed(es[moved], et[moved])
+        go = _EMPTY_I
+        if k:
+            a = c[:, _A]  # the radius at the start of the step (the Newton update below comes after its last use)
+            m = c[:, _M]
+            # The air over the glass (airflow.air_velocity), from the position's factors (drop_rows).
+            if head >= 0.0:
+                up = head * c[:, _UP]
+                side = up * FLOW_SPREAD * c[:, _Q] + CROSSWIND_GAIN * cross
+            else:  # a tailwind: a weak, separated flow down the glass
+                up = np.full(k, head * FLOW_AT_BOTTOM)
+                side = abs(head * FLOW_AT_BOTTOM) * FLOW_SPREAD * c[:, _Q] + CROSSWIND_GAIN * cross
+            air_speed = np.sqrt(side * side + up * up)
+            ev = np.sqrt(1.0 + air_speed / EVAP_AIR_M_S)  # the air's factor on the evaporation (below)
+            # Drag in the boundary layer (airflow.drag).
+            delta = 5.0 * np.sqrt(c[:, _BL] / np.maximum(air_speed, 1e-3))
+            eta = np.minimum(np.maximum(HEIGHT_PER_RADIUS * a / delta, 0.0), 1.0)
+            profile = 1.5 * eta - 0.5 * (eta * eta * eta)
+            vs, vt = c[:, _VS], c[:, _VT]
+            rel_s = side * profile - vs
+            rel_t = up * profile - vt
+            rel = np.sqrt(rel_s * rel_s + rel_t * rel_t)
+            coef = (0.5 * RHO_AIR * DRAG_CD * FRONTAL_PER_RADIUS2) * a**2 * rel
+            # Gravity along the curved glass (GlassGeometry.gravity), per unit mass from drop_rows.
+            gs, gt = c[:, _GS], c[:, _GT]
+            f_s = m * gs + coef * rel_s
+            f_t = m * gt + coef * rel_t
+            fmag = np.sqrt(f_s * f_s + f_t * f_t)
+            pin = GAMMA_W * 2.0 * a * HYSTERESIS
+            speed = np.sqrt(vs * vs + vt * vt)
+            moving = speed > 0.0
+            slides = moving | (fmag > pin)  # moving, or starting to
+            # The bound that spares a resting drop the test while it stays put (see the docstring).
+            rb = np.maximum(np.maximum(fmag, m * np.sqrt(gs * gs + gt * gt)), coef * rel) / pin
+            rb[slides] = np.inf
+            if cand is None:
+                d[:, _EV] = ev
+                d[:, _RB] = rb
+            else:
+                d[cand, _EV] = ev
+                d[cand, _RB] = rb
+            go_l = np.flatnonzero(slides)
+            if len(go_l):
+                go = go_l if cand is None else cand[go_l]
+                # The sliding update, for the drops that slide (the others stay at rest).
+                mv = moving[go_l]
+                fs_g, ft_g, fm_g, pin_g, m_g, a_g = f_s[go_l], f_t[go_l], fmag[go_l], pin[go_l], m[go_l], a[go_l]
+                vs_g, vt_g, sp_g = vs[go_l], vt[go_l], speed[go_l]
+                sp_g, fm_safe = np.maximum(sp_g, 1e-300), np.maximum(fm_g, 1e-300)
+                dir_s = np.where(mv, vs_g / sp_g, fs_g / fm_safe)
+                dir_t = np.where(mv, vt_g / sp_g, ft_g / fm_safe)
+                kp = KINETIC_PIN * pin_g
+                damp = 1.0 + h * (VISCOUS_C * MU_W * a_g / m_g)
+                nv_s = (vs_g + h * ((fs_g - kp * dir_s) / m_g)) / damp
+                nv_t = (vt_g + h * ((ft_g - kp * dir_t) / m_g)) / damp
+                stop = mv & (
+                    (nv_s * vs_g + nv_t * vt_g <= 0.0)
+                    | ((np.sqrt(nv_s * nv_s + nv_t * nv_t) < V_STOP_M_S) & (fm_g < pin_g))
+                )
+                nv_s[stop] = 0.0
+                nv_t[stop] = 0.0
+                ds, dt_ = h * nv_s, h * nv_t
+                s_g, t_g = c[go_l, _S], c[go_l, _T]
+                g = d.take(go, axis=0)  # whole rows: one gather, one scatter
+                g[:, _VS] = nv_s
+                g[:, _VT] = nv_t
+                g[:, _S] = s_g + ds
+                g[:, _T] = t_g + dt_
+                g[:, _KEY] = _DIRTY  # the position's columns are written before they are read (sim._flush_placed)
+                self._rows[go] = g.view(_ROW).ravel()
+                self._dirty = True
         # Slow evaporation of the drops themselves (hours for a millimetre drop; kept for the balance).
-        loss = np.minimum(DROP_EVAP_KG_M_S * a * np.sqrt(1.0 + air_speed / EVAP_AIR_M_S) * h, m)
+        a = d[:, _A]
+        m = d[:, _M]
+        loss = DROP_EVAP_KG_M_S * a
+        loss *= d[:, _EV]
+        loss *= h
+        np.minimum(loss, m, out=loss)
         m -= loss
         self.evaporated += float(loss.sum())
         # The radius follows the mass: one Newton step from the last radius (see the module docstring).
-        ra = d[:, _A]
-        ra2 = ra * ra
-        ra -= (ra2 * ra - m * (1.0 / _MASS_PER_A3)) / (3.0 * ra2)
+        ra2 = a * a
+        a -= (ra2 * a - m * (1.0 / _MASS_PER_A3)) / (3.0 * ra2)
         if len(go):
             step_len = np.sqrt(ds * ds + dt_ * dt_)
             run = np.flatnonzero(step_len > 0.0)
@@ -199,4 +245,4 @@ class FastMotion:
             if film_part.any():
                 np.add.at(flat, self._cells(ws[film_part], wt[film_part]), m_t[film_part])
             if as_drop.any():
-                self._append(np.column_stack([ws[as_drop], wt[as_drop]]), 0.0, m_t[as_drop])
+                self._append_at_rest(ws[as_drop], wt[as_drop], m_t[as_drop])

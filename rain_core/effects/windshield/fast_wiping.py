@@ -26,28 +26,32 @@ class FastWiping:
         if gone is not None:
             self._keep(~gone)
 
-    def _swept_drops(self, b: int, blade: Blade, ta: float, tb: float, gone: np.ndarray | None):
+    def _swept_drops(self, b: int, blade: Blade, ta: float, tb: float, gone: np.ndarray | None,
+                     a_max: float | None = None):
         """Move the drops blade ``b`` sweeps between angles ta and tb (rad) into its bead, leaving out those
         already ``gone`` (bool over the drops, or None), and mark them gone; returns the mask (None: none gone).
         The caller removes the gone drops (one compaction for both blades: a drop the first swept is not there
-        for the second, as in the reference, which removes them in between)."""
+        for the second, as in the reference, which removes them in between). ``a_max``: the largest drop
+        radius (m), if the caller has it."""
         n = self._n
         if n == 0:
             return gone
         lo, hi = min(ta, tb), max(ta, tb)
         d = self._buf[:n]
         px, py = blade.pivot
-        rs, rt = d[:, _S] - px, d[:, _T] - py
-        a = d[:, _A]
+        px, py = float(px), float(py)
         # The widest angular margin any drop in the blade's reach can have, and the wedge it widens.
-        a_max = float(a.max())
+        if a_max is None:
+            a_max = float(d[:, _A].max())
         margin = (a_max + BLADE_HALF_WIDTH_M) / max(blade.r_inner_m - a_max, 1e-3) + 1e-6
         w_lo, w_hi = (lo - 1e-6, hi + margin) if tb > ta else (lo - margin, hi + 1e-6)
         if w_hi - w_lo < 0.9 * math.pi:
-            # Two half-planes through the pivot bound the wedge (it is narrower than π).
-            in_wedge = (rt * math.cos(w_lo) - rs * math.sin(w_lo) >= 0.0) & (
-                rs * math.sin(w_hi) - rt * math.cos(w_hi) >= 0.0
-            )
+            # Two half-planes through the pivot bound the wedge (it is narrower than π). (Rounding moves the planes
+            # by ~1e-15 m; the wedge is widened by ≥ 1e-6 rad, ≥ 1e-7 m where a drop can be swept.)
+            c_lo, s_lo, c_hi, s_hi = math.cos(w_lo), math.sin(w_lo), math.cos(w_hi), math.sin(w_hi)
+            s, t = d[:, _S], d[:, _T]
+            in_wedge = t * c_lo - s * s_lo >= py * c_lo - px * s_lo
+            in_wedge &= s * s_hi - t * c_hi >= px * s_hi - py * c_hi
             if gone is not None:
                 in_wedge &= ~gone
             cand = np.flatnonzero(in_wedge)
@@ -55,10 +59,11 @@ class FastWiping:
                 return gone
         else:
             cand = np.arange(n) if gone is None else np.flatnonzero(~gone)
-        rel_s, rel_t = rs[cand], rt[cand]
+        rows = d.take(cand, axis=0)
+        rel_s, rel_t = rows[:, _S] - px, rows[:, _T] - py
         r = np.hypot(rel_s, rel_t)
         phi = np.arctan2(rel_t, rel_s)
-        ac = a[cand]
+        ac = rows[:, _A]
         margin_c = (ac + BLADE_HALF_WIDTH_M) / np.maximum(r, 1e-3)
         in_r = (r + ac >= blade.r_inner_m) & (r - ac <= blade.r_outer_m)
         if tb > ta:
@@ -68,7 +73,7 @@ class FastWiping:
         swept = in_r & in_phi
         if swept.any():
             idx = cand[swept]
-            np.add.at(self.beads[b], self._bin_of(blade, r[swept]), d[idx, _M])
+            np.add.at(self.beads[b], self._bin_of(blade, r[swept]), rows[swept, _M])
             if gone is None:
                 gone = np.zeros(n, bool)
             gone[idx] = True
@@ -79,12 +84,13 @@ class FastWiping:
         c0 = 1.0 - math.cos(math.pi * min(max(seg.p_start, 0.0), 1.0))
         c1 = 1.0 - math.cos(math.pi * min(max(seg.p_end, 0.0), 1.0))
         gone = None
+        a_max = float(self._buf[: self._n, _A].max()) if self._n else 0.0
         for b, blade in enumerate(self.blades):
             span = blade.top_rad - blade.park_rad
             ta, tb = blade.park_rad + span * 0.5 * c0, blade.park_rad + span * 0.5 * c1
             if ta != tb:
                 # Wiping._sweep_blade, the swept drops removed once for both blades (below).
-                gone = self._swept_drops(b, blade, ta, tb, gone)
+                gone = self._swept_drops(b, blade, ta, tb, gone, a_max)
                 self._sweep_film(b, blade, min(ta, tb), max(ta, tb), wear)
                 rng = self._sweep_ranges[b]
                 rng[0] = min(rng[0], ta, tb)

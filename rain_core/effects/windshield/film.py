@@ -37,11 +37,10 @@ class FilmBeading:
         m = flat[thick] - keep
         flat[thick] = keep
         iv, iu = np.divmod(thick, FILM_CELLS)
-        uv = np.stack(
-            [
-                (iu + self.rng.random(len(thick))) / FILM_CELLS,
-                (iv + self.rng.random(len(thick))) / FILM_CELLS,
-            ],
-            axis=1,
-        )
-        self._append(self.glass.from_uv(uv), np.zeros((len(thick), 2)), m)
+        u = (iu + self.rng.random(len(thick))) / FILM_CELLS
+        v = (iv + self.rng.random(len(thick))) / FILM_CELLS
+        self._bead_drops(u, v, m)
+
+    def _bead_drops(self, u: np.ndarray, v: np.ndarray, m: np.ndarray) -> None:
+        """New drops at rest at film UV (u, v) of masses m (kg)."""
+        self._append(self.glass.from_uv(np.stack([u, v], axis=1)), np.zeros((len(u), 2)), m)

@@ -136,9 +136,9 @@ def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, member
     ``members``."""
     total = int(counts.sum())
     if total == len(counts):  # one member each: the common case
-        return query_ids, members[heads]
+        return query_ids, members.take(heads)
     shift = np.repeat(heads - (np.cumsum(counts) - counts), counts)
-    return np.repeat(query_ids, counts), members[shift + np.arange(total)]
+    return np.repeat(query_ids, counts), members.take(shift + np.arange(total))
 
 
 def _box_cells(lo0, lo1, hi0, hi1, ids: np.ndarray, n1: int) -> tuple[np.ndarray, np.ndarray]:
@@ -275,7 +275,7 @@ class PairFinder:
             q = np.flatnonzero(active & near) if not all_near else np.flatnonzero(active)
             qk = keys[q] if all_near else keys[np.searchsorted(near_ids, q)]
             looked = (qk[:, None] + self._around).ravel()
-            c = self._count[looked]
+            c = self._count.take(looked)
             hit = np.flatnonzero(c)
             self._count[run_cells] = 0
             if len(hit):
@@ -288,7 +288,7 @@ class PairFinder:
                     deferred[qid[over]] = True
                     keep = ~over
                     hit, c, qid = hit[keep], c[keep], qid[keep]
-                i, j = _expand(qid, c, self._head[looked[hit]], members)
+                i, j = _expand(qid, c, self._head.take(looked.take(hit)), members)
                 budget -= len(i)
                 out_i.append(i)
                 out_j.append(j)

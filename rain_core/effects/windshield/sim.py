@@ -13,11 +13,14 @@ class extends; it computes the same state with far fewer NumPy calls (issue 13: 
   step. Here new and merged drops get an exact one, running drops (whose mass changes by a few per cent) one after
   their run, and the slow evaporation of all drops one Newton step from the last radius (relative error
   ≲ 1e-8 for the smallest drops, not accumulating: each step restarts from the current mass).
-* **Only what moves is moved.** Forces are evaluated for every drop (they decide which start), the sliding update
-  only for the drops that are moving or starting. What depends on a drop's position alone (its film cell, the
-  air's factors there, gravity along the curved glass, its merge-grid key) is kept in its row, written where a
-  drop is placed (``_placed``: born, moved, merged), so the many drops at rest cost a few operations a step.
-  The merge test gets the motion as columns of the drops that slid (``_merge_moves``).
+* **Only what moves is moved.** Forces are evaluated only for the drops that may slide: a drop at rest keeps a
+  bound on its force over its pinning (``fast_motion``: it holds while the drop rests in the same air and only
+  loses water), and is not tested while that bound is below 1 (a test compares the two paths bit for bit); the
+  sliding update runs only for the drops that are moving or starting. What depends on a drop's position alone
+  (its film cell, the air's factors there, gravity along the curved glass, its merge-grid key) is kept in its
+  row, written for all the drops placed (born, moved, merged) at once before it is read (``_flush_placed``), so
+  the many drops at rest cost a few operations a step. The merge test gets the motion as columns of the drops
+  that slid (``_merge_moves``).
 * **Arrivals without binary searches**. The flux-weighted size law is sampled through a bucket table over its
   cumulative distribution (a gather instead of ``np.interp``'s search; only the far tail searches), built only
   for large samples (a frame's few hundred arrivals search the 512-point CDF), and the impact speed comes from
@@ -68,8 +71,10 @@ from rain_core.effects.windshield.constants import (
 )
 from rain_core.effects.windshield.drop_rows import CELL as _CELL
 from rain_core.effects.windshield.drop_rows import COLS as _COLS
+from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
 from rain_core.effects.windshield.drop_rows import KEY as _KEY
 from rain_core.effects.windshield.drop_rows import PLACED as _PLACED
+from rain_core.effects.windshield.drop_rows import RB as _RB
 from rain_core.effects.windshield.drop_rows import ROW as _ROW
 from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
 from rain_core.effects.windshield.drop_rows import VS as _VS
@@ -99,6 +104,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         super().__init__(spec, seed)
         g = self.glass
         self._pairs = PairFinder()
+        self._cell_mark = np.zeros(FILM_CELLS * FILM_CELLS, bool)  # scratch of _give_to_drops, all False
         self._merged_away: np.ndarray | None = None  # rows the last merge emptied, until _shed_outside
         self._sensor: float | None = 0.0
         self._inputs_seen: GlassInputs | None = None
@@ -160,6 +166,9 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         self._buf = np.zeros((512, _COLS))
         self._rows = self._buf.view(_ROW).ravel()  # one element a drop: whole-row gathers are ~7× faster
         self._fresh_buf = np.zeros(512, bool)  # born, grown or merged since the last merge test
+        self._dirty = False  # some drop's position columns are still to be written (drop_rows.DIRTY)
+        self._rest_air = None  # the air (head, cross) the drops' RB and EV columns hold for
+        self._shed_all = False  # test every drop against the glass's edges in the next _shed_outside
 
     @property
     def pos(self) -> np.ndarray:
@@ -170,6 +179,8 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         d = self._buf[: self._n]
         d[:, _S : _T + 1] = value
         d[:, _PLACED] = self._placed(d[:, _S], d[:, _T])
+        d[:, _RB] = np.inf
+        self._shed_all = True
 
     @property
     def vel(self) -> np.ndarray:
@@ -178,6 +189,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
     @vel.setter
     def vel(self, value) -> None:
         self._buf[: self._n, _VS : _VT + 1] = value
+        self._buf[: self._n, _RB] = np.inf
 
     @property
     def mass(self) -> np.ndarray:
@@ -187,6 +199,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
     def mass(self, value) -> None:
         self._buf[: self._n, _M] = value
         self._buf[: self._n, _A] = drop_radius(self._buf[: self._n, _M])
+        self._buf[: self._n, _RB] = np.inf
 
     @property
     def trail(self) -> np.ndarray:
@@ -253,21 +266,63 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         rows[:, _M] = mass
         rows[:, _TRAIL] = 0.0
         rows[:, _A] = drop_radius(mass) if radius is None else radius
-        rows[:, _PLACED] = self._placed(rows[:, _S], rows[:, _T])
+        rows[:, _KEY] = _DIRTY  # the position's columns are written before they are read (_flush_placed)
+        rows[:, _RB] = np.inf
+        self._dirty = True
         self._fresh_buf[n : n + k] = True
         self._n = n + k
 
+    def _append_at_rest(self, s: np.ndarray, t: np.ndarray, mass: np.ndarray, radius: np.ndarray | None = None) -> None:
+        """``_append`` of drops at rest at (s, t) m, given as columns."""
+        k = len(mass)
+        if k == 0:
+            return
+        n = self._n
+        self._reserve(n + k)
+        rows = self._buf[n : n + k]
+        rows[:, _S] = s
+        rows[:, _T] = t
+        rows[:, _VS : _VT + 1] = 0.0
+        rows[:, _M] = mass
+        rows[:, _TRAIL] = 0.0
+        rows[:, _A] = drop_radius(mass) if radius is None else radius
+        rows[:, _KEY] = _DIRTY  # the position's columns are written before they are read (_flush_placed)
+        rows[:, _RB] = np.inf
+        self._dirty = True
+        self._fresh_buf[n : n + k] = True
+        self._n = n + k
+
+    def _bead_drops(self, u: np.ndarray, v: np.ndarray, m: np.ndarray) -> None:
+        """film.FilmBeading._bead_drops: GlassGeometry.from_uv on columns (the same operations)."""
+        t = v * self._height
+        self._append_at_rest((u - 0.5) * (self._w0 + self._dw * t), t, m)
+
     def _keep(self, keep: np.ndarray) -> None:
         n = self._n
-        rows = self._rows[:n][keep]
-        fresh = self._fresh_buf[:n][keep]
-        k = len(rows)
-        self._rows[:k] = rows
-        self._fresh_buf[:k] = fresh
+        first = int(keep.argmin())  # the rows before the first one removed stay where they are
+        if keep[first]:
+            return
+        tail = keep[first:]
+        rows = self._rows[first:n][tail]
+        fresh = self._fresh_buf[first:n][tail]
+        k = first + len(rows)
+        self._rows[first:k] = rows
+        self._fresh_buf[first:k] = fresh
         self._n = k
+
+    def _flush_placed(self) -> None:
+        """Write the position's columns (``_placed``) of the drops placed since they were last written (their KEY
+        is drop_rows.DIRTY): the same values, computed once a step for all of them."""
+        self._dirty = False
+        d = self._buf[: self._n]
+        idx = np.flatnonzero(d[:, _KEY] == _DIRTY)
+        if len(idx):
+            d[idx, _PLACED] = self._placed(d[idx, _S], d[idx, _T])
 
     def _sort_drops(self) -> None:
         """Keep the drops in merge-grid cell order (grid.grid_keys), as the reference does."""
+        if self._dirty:
+            self._flush_placed()
         n = self._n
         if n < 2:
             return
@@ -275,8 +330,12 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         if not (keys[1:] < keys[:-1]).any():
             return
         order = np.argsort(keys, kind="stable")
-        self._rows[:n] = self._rows[:n].take(order)
-        self._fresh_buf[:n] = self._fresh_buf[:n][order]
+        # Only the span of rows that change places is rewritten.
+        moved = np.flatnonzero(order != np.arange(n))
+        lo, hi = int(moved[0]), int(moved[-1]) + 1
+        order = order[lo:hi]
+        self._rows[lo:hi] = self._rows.take(order)
+        self._fresh_buf[lo:hi] = self._fresh_buf.take(order)
 
     # --- glass helpers (GlassGeometry's formulas on columns, without building (n, 2) arrays) -----------------
     def _inside(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -291,26 +350,67 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
     def _placed(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
         """The position's columns (drop_rows CELL … KEY) of drops at (s, t) m, (k, 7): the film cell, the air's
         factors, the boundary layer's run, gravity per unit mass and the merge-grid key, with the operations
-        (so the bits) of the formulas they replace in ``_move`` and ``_sort_drops``."""
+        (so the bits) of the formulas they replace in ``_move`` and ``_sort_drops`` (``_cells``, airflow, the
+        glass's gravity, grid.grid_keys), written in place to save NumPy calls."""
         out = np.empty((len(s), 7))
-        out[:, 0] = self._cells(s, t)
-        height = self._height
-        w = self._w0 + self._dw * t
-        frac = np.minimum(np.maximum(t / height, 0.0), 1.0)
-        out[:, 1] = FLOW_AT_BOTTOM + (FLOW_AT_TOP - FLOW_AT_BOTTOM) * frac
-        out[:, 2] = 2.0 * s / w
-        out[:, 3] = NU_AIR * (BL_RUN_UP_M + np.maximum(t, 0.0))
+        height, dw = self._height, self._dw
+        w = dw * t
+        w += self._w0  # the glass's width at t
+        sw = s / w
+        th = t / height
+        # The film cell (_cells).
+        u = sw * FILM_CELLS
+        u += 0.5 * FILM_CELLS
+        np.minimum(u, FILM_CELLS - 0.5, out=u)
+        v = t * (FILM_CELLS / height)
+        np.minimum(v, FILM_CELLS - 0.5, out=v)
+        cell = v.astype(np.int64)
+        cell *= FILM_CELLS
+        cell += u.astype(np.int64)
+        out[:, 0] = cell
+        # The air's factors and the boundary layer's run (airflow).
+        frac = np.maximum(th, 0.0)
+        np.minimum(frac, 1.0, out=frac)
+        col = out[:, 1]
+        np.multiply(frac, FLOW_AT_TOP - FLOW_AT_BOTTOM, out=col)
+        col += FLOW_AT_BOTTOM
+        col = out[:, 2]
+        np.multiply(s, 2.0, out=col)
+        col /= w
+        run = np.maximum(t, 0.0)
+        run += BL_RUN_UP_M
+        np.multiply(run, NU_AIR, out=out[:, 3])
         # Gravity along the curved glass (GlassGeometry.gravity), per unit mass.
-        x = 2.0 * (s / w + 0.5) - 1.0
-        y = 2.0 * (t / height) - 1.0
-        bv = 1.0 - y * y
-        dbu = -4.0 * x
-        out[:, 4] = self._g_sag * (dbu / w * bv)
-        out[:, 5] = self._g_up + self._g_sag * (dbu * (-s * self._dw / (w * w)) * bv + (1.0 - x * x) * (-4.0 * y)
-                                                / height)
+        x = sw + 0.5
+        x *= 2.0
+        x -= 1.0
+        y = th * 2.0
+        y -= 1.0
+        bv = y * y
+        np.subtract(1.0, bv, out=bv)
+        dbu = x * -4.0
+        g = dbu / w
+        g *= bv
+        np.multiply(g, self._g_sag, out=out[:, 4])
+        g = np.negative(s)
+        g *= dw
+        g /= w * w
+        g *= dbu
+        g *= bv
+        x *= x
+        np.subtract(1.0, x, out=x)
+        y *= -4.0
+        x *= y
+        x /= height
+        g += x
+        g *= self._g_sag
+        np.add(g, self._g_up, out=out[:, 5])
+        # The merge-grid key (grid.grid_keys).
         k0 = np.minimum(np.maximum(((s - _GRID_O[0]) / GRID_CELL_M).astype(np.int64), 0), _G0 - 1)
         k1 = np.minimum(np.maximum(((t - _GRID_O[1]) / GRID_CELL_M).astype(np.int64), 0), _G1 - 1)
-        out[:, 6] = k0 * _G1 + k1
+        k0 *= _G1
+        k0 += k1
+        out[:, 6] = k0
         return out
 
     # --- inputs -------------------------------------------------------------------------------------------
@@ -420,7 +520,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         a_obj = drop_radius(keep[obj])
         self._impacts.append((s, t, d_mm, splash, obj, a_obj, to_film))
         if len(obj):
-            self._append(np.column_stack([s[obj], t[obj]]), 0.0, keep[obj], a_obj)
+            self._append_at_rest(s[obj], t[obj], keep[obj], a_obj)
         if n_all > n:
             self._arrive_as_mist(n_all - n, float(m.mean()))
 
@@ -430,17 +530,27 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         n = self._n
         if n == 0 or len(cells) == 0:
             return placed
+        if self._dirty:
+            self._flush_placed()
         d = self._buf[:n]
+        # The drops in those cells (a table marks the cells), grouped by cell in index order.
         drop_cells = d[:, _CELL].astype(np.int16)
-        counts = np.bincount(drop_cells, minlength=FILM_CELLS * FILM_CELLS)
-        c = counts[cells]
+        cells = cells.astype(np.int16)
+        mark = self._cell_mark
+        mark[cells] = True
+        idx = np.flatnonzero(mark[drop_cells])
+        mark[cells] = False
+        dc = drop_cells[idx]
+        order = np.argsort(dc, kind="stable")  # 16-bit keys: a radix sort
+        dc = dc[order]
+        first = np.searchsorted(dc, cells, "left")
+        c = np.searchsorted(dc, cells, "right") - first
         placed = c > 0
         if placed.any():
-            order = np.argsort(drop_cells, kind="stable")  # 16-bit keys: a radix sort
-            starts = np.cumsum(counts) - counts
-            pick = order[starts[cells[placed]] + self.rng.integers(0, c[placed])]
+            pick = idx[order[first[placed] + self.rng.integers(0, c[placed])]]
             np.add.at(d[:, _M], pick, mass[placed])
             d[pick, _A] = drop_radius(d[pick, _M])
+            d[pick, _RB] = np.inf  # grown: tested again
             self._fresh_buf[pick] = True
         return placed
 
@@ -470,7 +580,17 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         if n == 0:
             return
         d = self._buf[:n]
-        outside = ~self._inside(d[:, _S], d[:, _T])
+        if self._shed_all:  # positions were set from outside (the ``pos`` setter): test them all
+            self._shed_all = False
+            outside = ~self._inside(d[:, _S], d[:, _T])
+        else:
+            # Only the drops placed in this sub-step's motion (moved, merged, trail droplets: their position
+            # columns are still to be written) can be off the glass; the others rest where they were on it, and
+            # arrivals and beads are placed on it.
+            placed = np.flatnonzero(d[:, _KEY] == _DIRTY)
+            outside = np.zeros(n, bool)
+            if len(placed):
+                outside[placed] = ~self._inside(d[placed, _S], d[placed, _T])
         if gone is not None:
             outside[gone] = False  # no longer drops
         if outside.any():

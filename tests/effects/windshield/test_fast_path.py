@@ -214,3 +214,32 @@ def test_sensor_reading_is_the_references():
         sim.step(1 / 30, inputs)
     assert sim.sensor_reading() > 0.0
     assert sim.sensor_reading() == WindshieldSimReference.sensor_reading(sim)
+
+
+def test_resting_drops_skipped_by_their_bound_would_not_have_started(monkeypatch):
+    # fast_motion tests only the drops whose bound RB (drop_rows) may reach the pinning: the others provably stay
+    # at rest. A twin that tests every drop every step (the bound disabled) must give the same glass, bit for bit,
+    # through parking, driving, braking, a tailwind, a crosswind and changing frame lengths.
+    import copy
+
+    from rain_core.effects.windshield import fast_motion
+    from rain_core.effects.windshield.drop_rows import RB
+
+    sim = WindshieldSim(seed=21)
+    twin = copy.deepcopy(sim)
+    skipped = 0
+    for k in range(240):
+        speed = (0.0, 130.0, 130.0, 60.0, -25.0, 0.0)[k // 40]
+        wind = np.array([5.0 if 120 <= k < 200 else 0.0, 0.0, 0.0])
+        inputs = GlassInputs.for_speed(speed, 10.0, wind_m_s=wind, drop_budget=1200, wiper_mode="auto")
+        dt = 0.05 if k % 7 == 0 else 1 / 30
+        skipped += int((sim._buf[: sim.count, RB] < fast_motion._REST_TEST).sum())
+        sim.step(dt, inputs)
+        with monkeypatch.context() as m:
+            m.setattr(fast_motion, "_REST_TEST", -np.inf)
+            twin.step(dt, inputs)
+        if k % 40 == 39:
+            # Every column but the bound itself (which the twin rewrites each step).
+            assert np.array_equal(sim._buf[: sim.count, :RB], twin._buf[: twin.count, :RB])
+            assert np.array_equal(sim.film, twin.film) and sim.evaporated == twin.evaporated
+    assert sim.count > 300 and skipped > 100 * 240  # most resting drops were spared their test
