@@ -214,10 +214,13 @@ def mask_upkeep_table(n: int, frames: int) -> str:
     return markdown_table(["N", "km/h", "film function has cache_key", "ms per frame (min)"], rows)
 
 
-def sources_table(n: int, frames: int) -> str:
-    """CPU ms per frame of gathering the sources (what every backend pays before the solver sees a bump): the
-    raindrops at 8 and 50 mm/h over the road's standing water at full flood (the drop count is capped at
-    ``max_drops_per_frame``), and 16 wheels' wakes with their film depths asked. Min over frames of the
+def sources_table(n: int, frames: int, ctx=None) -> str:
+    """CPU ms per frame of gathering the sources: the raindrops at 8 and 50 mm/h over the road's standing water
+    at full flood (the candidates are capped so that about ``max_drops_per_frame`` land on water), and 16
+    wheels' wakes with their film depths asked. The NumPy backends make the drops with the twin of the shader's
+    hash (``raindrops.py``) and gather them; the GPU backend (with a context) sends a few uniforms (the CPU
+    column) and draws them: the draw call's own thread time is a column apart (on llvmpipe it includes the
+    emulated vertex shading, which runs on the calling thread; ``ctx.finish`` excluded). Min over frames of the
     thread's CPU time."""
     from rain_core.effects.ripples.field import WheelBatch
     from rain_core.water_film import film_depth_mm
@@ -226,29 +229,45 @@ def sources_table(n: int, frames: int) -> str:
         return film_depth_mm(x_m, z_m, 1.0, 1.0)
 
     film.cache_key = ("bench film", 1.0, 1.0)
-    field = RippleField(n=n, extent_m=EXTENT_M, backend="numpy32")
-    field.update(1 / 30, center_xz=(1.75, 0.0), film_depth_fn=film)
+    fields = {"numpy32": RippleField(n=n, extent_m=EXTENT_M, backend="numpy32")}
+    if ctx is not None:
+        fields["gpu"] = make_field(ctx, n=n, extent_m=EXTENT_M, backend="gpu")
+    for field in fields.values():
+        field.update(1 / 30, center_xz=(1.75, 0.0), film_depth_fn=film)
     rng = np.random.default_rng(0)
     p0 = np.column_stack([rng.uniform(-6.0, 9.0, 16), rng.uniform(-10.0, 10.0, 16)])
     wheels = WheelBatch(p0, p0 + [0.0, 0.9], np.full(16, 27.0), np.full(16, 0.2))
 
-    def timed(fn) -> float:
-        best = math.inf
+    def timed(field, fn) -> tuple[float, float]:
+        best, best_draw = math.inf, math.inf
         for _ in range(frames + 1):
             field._batch = []  # gathered as in update, not deposited: the solver's share is measured above
             t0 = time.thread_time()
             fn()
-            best = min(best, time.thread_time() - t0)
+            t1 = time.thread_time()
+            if isinstance(field.solver, WaveSolverGPU):
+                field.solver._flush()  # the GPU's raindrops: uniforms and one draw
+            best, best_draw = min(best, t1 - t0), min(best_draw, time.thread_time() - t1)
             field._batch = None
-        return best * 1e3
+            if ctx is not None:
+                ctx.finish()
+        return best * 1e3, best_draw * 1e3
 
     rows = []
-    for rate in (8.0, 50.0):
-        drawn = []
-        ms = timed(lambda r=rate, out=drawn: out.append(field._raindrops(r, 1 / 30)))
-        rows.append((n, f"raindrops at {rate:g} mm/h ({min(drawn)}–{max(drawn)} drawn)", f"{ms:.3f}"))
-    rows.append((n, "16 wheels' wakes (film depths asked)", f"{timed(lambda: field._wakes(wheels.rows(film))):.3f}"))
-    return markdown_table(["N", "source", "ms per frame (min)"], rows)
+    for backend, field in fields.items():
+        upload = "0 (uniforms only)" if backend == "gpu" else "-"
+        for rate in (8.0, 50.0):
+            drawn = []
+            ms, draw_ms = timed(field, lambda f=field, r=rate, out=drawn: out.append(f._raindrops(r, 1 / 30)))
+            rows.append((n, backend, f"raindrops at {rate:g} mm/h ({min(drawn)}–{max(drawn)} on water)",
+                         f"{ms:.3f}", f"{draw_ms:.3f}" if backend == "gpu" else "-", upload))
+    field = fields["numpy32"]
+    rows.append((n, "any", "16 wheels' wakes (film depths asked)",
+                 f"{timed(field, lambda: field._wakes(wheels.rows(film)))[0]:.3f}", "-", "-"))
+    for field in fields.values():
+        field.release()
+    return markdown_table(["N", "backend", "source", "CPU ms per frame (min)", "draw call ms (thread)",
+                           "raindrop bytes uploaded"], rows)
 
 
 def _plot(path, series: dict[str, list[tuple[int, float, float]]], ref_slope_points) -> bool:
@@ -376,7 +395,7 @@ def main(argv: list[str] | None = None) -> int:
     print(sleep_tab)
     upkeep_tab = mask_upkeep_table(512, 10 if args.quick else 30)
     print(upkeep_tab)
-    sources_tab = sources_table(512, 10 if args.quick else 30)
+    sources_tab = sources_table(512, 10 if args.quick else 30, ctx)
     print(sources_tab)
 
     plot_path = None
@@ -398,7 +417,7 @@ def main(argv: list[str] | None = None) -> int:
         "## Backend choice at start-up (choose_backend)", choice_tab,
         "## Sleep and retiming, per frame of RippleField.update (+ normals when there is a context)", sleep_tab,
         "## Water-mask upkeep: following the road's film depth, per frame of RippleField.update", upkeep_tab,
-        "## Sources: gathering a frame's raindrops and wakes (CPU, every backend)", sources_tab,
+        "## Sources: a frame's raindrops (twin on NumPy, uniforms on the GPU) and wakes (CPU ms)", sources_tab,
         f"Plot: {plot_path.name if plot_path else 'none'}",
     ])
     path = write_output(args.out, "ripples", md)

@@ -2,7 +2,9 @@
 wakes and raindrops disturb, its normals for the road's water, and a tiled rain-ring normal map for far puddles.
 
 GL-free (NumPy only): ``constants``, ``solver`` (the scheme and the float64 reference ``WaveSolver``),
-``solver_f32`` (``WaveSolverF32``), ``field`` (``RippleField``, ``WheelSweep``, ``WheelBatch``, and
+``solver_f32`` (``WaveSolverF32``), ``raindrops`` (a frame's raindrops as a hash of the seed, the frame and
+the drop's index: the NumPy twin of ``shaders/ripples/raindrops.glsl``, where the GPU solver makes them from a
+few uniforms), ``field`` (``RippleField``, ``WheelSweep``, ``WheelBatch``, and
 ``window_centre_xz`` / ``window_offset_m``: where the window sits ahead of the car). GL side: ``gpu``
 (``WaveSolverGPU``), ``backend`` (``make_solver``, ``choose_backend``, ``make_field``), ``textures``
 (``RippleTextures``: the field's height and slope textures), ``rain_tiles`` (``RainRippleTexture``), ``effect``

@@ -10,11 +10,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
-from rain_core import checks, physics
+from rain_core import checks
 from rain_core.effects.ripples.constants import (
     BACKENDS,
     CAPILLARY_SPEED_M_S,
@@ -27,21 +26,24 @@ from rain_core.effects.ripples.constants import (
     WAKE_REF_SPEED_M_S,
     WINDOW_EDGE_FADE,
 )
+from rain_core.effects.ripples.raindrops import (
+    DropLaw,
+    RainBatch,
+    drop_law,
+    drops_at_quantiles,
+    rain_key,
+    raindrops,
+)
 from rain_core.effects.ripples.solver import WaveSolver, shift_in_place
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
 
 # The solvers that need no OpenGL context, by backend name.
 CPU_SOLVERS = {"reference": WaveSolver, "numpy32": WaveSolverF32}
-# Nodes of the drop momentum table over [D_MIN_MM, D_MAX_MM] (see RippleField._flux_weighted_drops).
-DROP_MOMENTUM_NODES = 4097
-
-
-@lru_cache(maxsize=1)
-def _momentum_table() -> tuple[np.ndarray, np.ndarray]:
-    """Momentum m·v (kg·m/s) of a drop at DROP_MOMENTUM_NODES equal diameter steps, and its steps."""
-    d = np.linspace(physics.D_MIN_MM, physics.D_MAX_MM, DROP_MOMENTUM_NODES)
-    p = physics.RHO_WATER * math.pi / 6.0 * (d * 1e-3) ** 3 * np.asarray(physics.terminal_velocity(d), np.float64)
-    return p, np.diff(p)
+# Raindrop candidates per frame are at most this many times max_drops_per_frame (a window with little water
+# takes more candidates, so about max_drops_per_frame of them land on water, down to this water fraction).
+RAIN_CANDIDATE_FACTOR = 4
+# The water fraction that sizes the candidates is counted on every RAIN_FRACTION_STRIDE-th row and column.
+RAIN_FRACTION_STRIDE = 4
 
 
 @dataclass(frozen=True)
@@ -205,7 +207,9 @@ class RippleField:
         self.wake_gain = checks.number("wake_gain", wake_gain, 0.0, 1e6)
         self.mask_refresh_s = checks.number("mask_refresh_s", mask_refresh_s, 0.0, 1e6, "s")
         self.reuse_tolerance = checks.number("reuse_tolerance", reuse_tolerance, 0.0, 0.5)
+        self.seed = int(seed)
         self.rng = np.random.default_rng(seed)
+        self._rain_frame = 0  # frames that rained so far: with the seed, the key of a frame's raindrops
         self.backend_timings: dict[str, float] = dict(backend_timings or {})
         if solver is None:
             backend = "numpy32" if backend == "auto" else backend
@@ -221,8 +225,8 @@ class RippleField:
         half = (self.n - 1) // 2
         self._anchor = (-half, -half)  # world lattice index of cell (0, 0); the window starts centred on 0
         self._centred = False
-        self._water_cells: np.ndarray | None = None  # flat indices of water cells (None: all interior)
-        self._water_cells_stale = False  # the mask or the window moved since _water_cells was built
+        self._water_fraction = 1.0  # of the interior cells, sampled (sizes the raindrop candidates)
+        self._water_fraction_stale = False  # the mask or the window moved since _water_fraction was counted
         self._film_fn: FilmDepthFn | None = None
         self._film_key = None  # the film function's ``cache_key`` (None: unknown, keep re-asking)
         self._rows_to_renew = 0  # rows still to re-ask since the function last changed
@@ -235,7 +239,7 @@ class RippleField:
         self._unknown_cols = np.zeros(self.n, bool)
         self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
         self._batch: list | None = None  # the frame's bumps while ``update`` gathers them
-        self._cdf_table = None  # (rate, grid, cdf, flux) of the arriving drops (see _drop_table)
+        self._law: DropLaw | None = None  # the arriving drops' law at the last rain rate (see _drop_law)
         self.version = 0
 
     # -- geometry --
@@ -281,7 +285,7 @@ class RippleField:
                 shift_in_place(self._unknown_cols[None, :], dx, 0, True)
                 if fill:
                     self._fill_unknown_depths()
-            self._water_cells_stale = True
+            self._water_fraction_stale = True
             self.version += 1
         return dx, dz
 
@@ -297,7 +301,7 @@ class RippleField:
 
     def _set_mask(self, mask):
         self.solver.set_water_mask(mask)
-        self._water_cells_stale = True
+        self._water_fraction_stale = True
         self.version += 1
 
     def refresh_water_mask(self, film_depth_fn: FilmDepthFn):
@@ -366,7 +370,7 @@ class RippleField:
                     blocks.append((lo, 0, water) if axis == 0 else (0, lo, water))
         if blocks:
             self.solver.set_water_mask_blocks(blocks)
-            self._water_cells_stale = True
+            self._water_fraction_stale = True
             self.version += 1
 
     def _refresh_depth_band(self, dt: float) -> int:
@@ -383,17 +387,27 @@ class RippleField:
         self._fill_unknown_depths(rows)
         return rows.size
 
-    def _update_water_cells(self):
-        """Rebuild the flat indices of the water cells (lazily: once per frame that rains, after the mask or
-        the window moved, not once per change)."""
-        self._water_cells_stale = False
+    def _count_water(self, stride: int = 1) -> tuple[int, int]:
+        """(water cells, cells) among the interior cells on every ``stride``-th row and column (the fixed edges
+        take no drops)."""
         mask = self.solver.water_mask
+        inner = slice(1, self.n - 1, stride)
+        cells = len(range(1, self.n - 1, stride)) ** 2
         if mask is None:
-            self._water_cells = None
-            return
-        water = np.asarray(mask) > 0.5
-        water[0, :] = water[-1, :] = water[:, 0] = water[:, -1] = False  # the fixed edges take no drops
-        self._water_cells = np.flatnonzero(water.ravel())
+            return cells, cells
+        return int(np.count_nonzero(mask[inner, inner])), cells  # the mask holds exactly 0 or 1
+
+    def _rain_water_fraction(self) -> float:
+        """The window's water fraction, counted on a lattice of every RAIN_FRACTION_STRIDE-th cell once per frame
+        that rains after the mask or the window moved (it only sizes the raindrop candidates); 0 only when no
+        interior cell at all holds water."""
+        if self._water_fraction_stale:
+            self._water_fraction_stale = False
+            water, cells = self._count_water(RAIN_FRACTION_STRIDE)
+            if water == 0:
+                water, cells = self._count_water()
+            self._water_fraction = water / cells if cells else 0.0
+        return self._water_fraction
 
     # -- sources --
     #
@@ -489,41 +503,53 @@ class RippleField:
 
     def add_raindrops(self, rate_mm_h: float, dt_s: float) -> int:
         """Drops that hit the water cells of the window in dt_s seconds at a rain rate in mm/h: a Poisson count
-        from the drop flux (rain_core.physics), diameters from Marshall–Palmer weighted by fall speed (the
-        faster drops of a size class arrive more often), each pressing a dent ∝ its momentum m·v
-        (RAIN_DENT_M_PER_KG_M_S × rain_gain). More than ``max_drops_per_frame`` drops are represented by that
-        many drops each carrying a proportional share (the momentum flux is kept). Returns the drops laid."""
+        from the drop flux (rain_core.physics) over the interior cells, each landing uniformly and pressing the
+        water only where its cell holds water (so the drops on water are a Poisson count of the water's area),
+        diameters from Marshall–Palmer weighted by fall speed (the faster drops of a size class arrive more
+        often), each pressing a dent ∝ its momentum m·v (RAIN_DENT_M_PER_KG_M_S × rain_gain). More drops than
+        about ``max_drops_per_frame`` on water are represented by fewer, each carrying a proportional share (the
+        momentum flux is kept). The drops are a hash of the seed, the frame and their index
+        (``raindrops.py``): the GPU solver makes them itself from a few uniforms, the NumPy solvers with the
+        twin. Returns the drops laid on water (on the GPU, their expected number)."""
         rate = checks.number("rate_mm_h", rate_mm_h, 0.0, 500.0, "mm/h")
         dt = checks.number("dt_s", dt_s, 0.0, math.inf, "s")
         return self._raindrops(rate, dt)
 
-    def _raindrops(self, rate: float, dt: float) -> int:
+    def rain_batch(self, rate: float, dt: float) -> RainBatch | None:
+        """The next frame's raindrops (advances the rng and the frame counter), None when none fall: the count
+        of candidates over the interior, capped so that about ``max_drops_per_frame`` of them land on water
+        (at most RAIN_CANDIDATE_FACTOR × that), with the dent per unit momentum scaled by the drops each
+        represents."""
         if rate == 0.0 or dt == 0.0 or self.rain_gain == 0.0:
+            return None
+        law = self._drop_law(rate)
+        expected = law.flux * (self.n - 2) ** 2 * self.cell_m ** 2 * dt
+        total = int(self.rng.poisson(min(expected, 1e15)))
+        if total == 0:
+            return None
+        self._rain_frame += 1
+        count = total
+        if total > self.max_drops_per_frame:
+            fraction = self._rain_water_fraction()
+            if fraction == 0.0:
+                return None
+            count = min(total, math.ceil(self.max_drops_per_frame / max(fraction, 1.0 / RAIN_CANDIDATE_FACTOR)))
+        weight = total / count
+        return RainBatch(rain_key(self.seed, self._rain_frame), count,
+                         -self.rain_gain * RAIN_DENT_M_PER_KG_M_S * weight, CRATER_RADIUS_PER_D * 1e-3, law)
+
+    def _raindrops(self, rate: float, dt: float) -> int:
+        batch = self.rain_batch(rate, dt)
+        if batch is None:
             return 0
-        if self._water_cells_stale:
-            self._update_water_cells()
-        interior = (self.n - 2) ** 2
-        cells = interior if self._water_cells is None else self._water_cells.size
-        if cells == 0:
-            return 0
-        expected = self._drop_table(rate)[3] * cells * self.cell_m ** 2 * dt
-        count = int(self.rng.poisson(min(expected, 1e15)))
-        if count == 0:
-            return 0
-        drawn = min(count, self.max_drops_per_frame)
-        weight = count / drawn
-        # One draw of uniforms per frame: the quantile of each drop's size, its cell and where in the cell.
-        u = self.rng.random((4, drawn))
-        diam, momentum = self._flux_weighted_drops(rate, u[0])
-        if self._water_cells is None:
-            iz, ix = np.divmod(np.minimum((u[1] * interior).astype(np.int64), interior - 1), self.n - 2)
-            iz, ix = iz + 1, ix + 1
-        else:
-            iz, ix = np.divmod(self._water_cells[np.minimum((u[1] * cells).astype(np.int64), cells - 1)], self.n)
-        u[2:] -= 0.5  # anywhere within the cell
-        self._emit((ix + u[2]) * self.cell_m, (iz + u[3]) * self.cell_m,
-                   CRATER_RADIUS_PER_D * 1e-3 * diam, (-self.rain_gain * RAIN_DENT_M_PER_KG_M_S * weight) * momentum)
-        return drawn
+        queue = getattr(self.solver, "queue_raindrops", None)
+        if queue is not None:  # the GPU makes them: a few uniforms, no sampling, no upload
+            queue(batch)
+            return round(batch.count * self._rain_water_fraction())
+        _, xs, zs, radii, dents = raindrops(batch, self.n, self.cell_m, self.solver.water_mask)
+        if xs.size:
+            self._emit(xs, zs, radii, dents)
+        return int(xs.size)
 
     def add_droplet_impacts(self, impacts, radius_m: float = 0.02) -> int:
         """Droplets landing in the water (e.g. wheel spray): (x m, z m world, downward momentum kg·m/s) each,
@@ -553,32 +579,23 @@ class RippleField:
 
     def _flux_weighted_drops(self, rate: float, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(diameter mm, momentum m·v kg·m/s) of drops arriving on a surface at quantiles ``u`` ∈ [0, 1) of their
-        law: the law of ``physics.sample_drop_diameters`` (the airborne N(D), ``physics.drop_diameter_cdf``)
-        weighted by the fall speed v(D), since faster drops of a size class arrive more often; inverse-CDF
-        sampling on a 512-point table built for this rate. The momentum comes from a table on DROP_MOMENTUM_NODES
-        equal diameter steps (exact at its nodes, linear between: under 1e-3 relative even where v ∝ D²), an
-        index and a gather per drop instead of the fall-speed law's search and cubic."""
-        _, grid, cdf, _, p_d, dp_d = self._drop_table(rate)
-        diam = np.interp(u, cdf, grid)
-        t = (diam - physics.D_MIN_MM) * ((len(p_d) - 1) / (physics.D_MAX_MM - physics.D_MIN_MM))
-        i = np.minimum(t.astype(np.intp), len(p_d) - 2)
-        t -= i
-        return diam, p_d[i] + t * dp_d[i]
+        law (``raindrops.drops_at_quantiles``: the airborne N(D) of ``physics.drop_diameter_cdf`` weighted by
+        the fall speed v(D), inverse-CDF sampling on a 512-interval table built for this rate, the momentum
+        from a table)."""
+        return drops_at_quantiles(self._drop_law(rate), u)
 
     def _drop_table(self, rate: float):
         """(rate, diameter grid mm, flux-weighted CDF, drop flux per m² per s, momentum kg·m/s on
-        DROP_MOMENTUM_NODES equal diameter steps over [D_MIN_MM, D_MAX_MM], its steps), kept while the rate
-        stays the same (the drop-size law costs more than a frame's sampling)."""
-        if self._cdf_table is None or self._cdf_table[0] != rate:
-            grid = np.linspace(physics.D_MIN_MM, physics.D_MAX_MM, 513)
-            mass = np.diff(np.asarray(physics.drop_diameter_cdf(grid, rate), dtype=np.float64))
-            mid = 0.5 * (grid[1:] + grid[:-1])
-            weights = mass * np.asarray(physics.terminal_velocity(mid), dtype=np.float64)
-            cdf = np.concatenate([[0.0], np.cumsum(weights)])
-            cdf /= cdf[-1]
-            self._cdf_table = (rate, grid, cdf, float(physics.flux_horizontal_per_m2_s(rate)),
-                               *_momentum_table())
-        return self._cdf_table
+        DROP_MOMENTUM_NODES equal diameter steps, its steps): ``_drop_law`` as a tuple."""
+        law = self._drop_law(rate)
+        return law.rate_mm_h, law.grid, law.cdf, law.flux, law.p_d, law.dp_d
+
+    def _drop_law(self, rate: float) -> DropLaw:
+        """The arriving drops' law (``raindrops.drop_law``), kept while the rate stays the same (the drop-size
+        law costs more than a frame's drops; the GPU uploads its CDF only when it is a new one)."""
+        if self._law is None or self._law.rate_mm_h != rate:
+            self._law = drop_law(rate)
+        return self._law
 
     # -- time --
 

@@ -5,6 +5,9 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from rain_core import physics
+from rain_core.effects.ripples.constants import MIN_FOOTPRINT_CELLS
+from rain_core.effects.ripples.raindrops import DROP_CDF_NODES, DROP_MOMENTUM_NODES, RainBatch, momentum_table
 from rain_core.effects.ripples.solver import WaveSolver, shift_in_place
 from rain_core.gfx import units
 from rain_core.gfx.shaders import ShaderLibrary
@@ -23,7 +26,9 @@ class WaveSolverGPU(WaveSolver):
     """The same solver in fragment shaders (OpenGL 3.3): an RG32F texture (current, previous) ping-ponged
     through ``shaders/ripples/step.frag``. Sources are queued as bumps (centre, radius, peak) and, before the
     next pass, drawn all at once: one buffer write and one instanced draw of ``shaders/ripples/impulse.*`` with
-    additive blending — the CPU never evaluates a footprint. ``height`` reads the texture back (float32).
+    additive blending — the CPU never evaluates a footprint. Raindrops (``queue_raindrops``) cost no upload:
+    the impulse vertex shader makes them from a hash (``shaders/ripples/raindrops.glsl``), the CPU sends their
+    count and two uniforms. ``height`` reads the texture back (float32).
 
     ``WaveSolverGPU(ctx, n, cell_m, speed_m_s, damping_per_s=0.0, shaders=None, **kw)``. Passes bind their
     inputs to the scratch texture units (``units.SCRATCH``) and leave blending disabled and the scissor reset.
@@ -59,13 +64,23 @@ class WaveSolverGPU(WaveSolver):
             "shift": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_SHIFT": 1}),
             "mask_shift": prog("common/fullscreen.vert", "ripples/step.frag", defines={"RIPPLES_MASK_SHIFT": 1}),
             "impulse": prog("ripples/impulse.vert", "ripples/impulse.frag"),
+            "rain": prog("ripples/impulse.vert", "ripples/impulse.frag", defines={"RIPPLES_RAIN": 1}),
         }
         self._vaos = {name: fullscreen_triangle(ctx, p) for name, p in self._progs.items() if name != "impulse"}
-        state_unit, mask_unit, _ = units.SCRATCH
+        state_unit, mask_unit, law_unit = units.SCRATCH
         self._written: dict[int, dict] = {}  # program (GL name) → per-pass uniforms this solver wrote there last
         self._constants = {"u_state": state_unit, "u_mask": mask_unit, "u_n": n,
-                           "u_s2": self.speed_m_s ** 2, "u_inv_h2": 1.0 / self.cell_m ** 2}
+                           "u_s2": self.speed_m_s ** 2, "u_inv_h2": 1.0 / self.cell_m ** 2,
+                           "u_drop_law": law_unit,
+                           "u_drop_range": (physics.D_MIN_MM, physics.D_MAX_MM, MIN_FOOTPRINT_CELLS)}
+        # The raindrops' law (R32F): row 0 the CDF of the current rate (written when the rate changes), row 1
+        # the momentum table (written once).
+        self.drop_law = ctx.texture((DROP_MOMENTUM_NODES, 2), 1, dtype="f4")
+        self.drop_law.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.drop_law.write(np.concatenate([np.zeros(DROP_MOMENTUM_NODES), momentum_table()[0]]).astype(np.float32))
+        self._law = None  # the DropLaw whose CDF is in drop_law
         self._queued: list[np.ndarray] = []  # (K, 4) float32 bumps (x, z, radius in cells; peak m) not drawn yet
+        self._rain: list[RainBatch] = []  # raindrop batches not drawn yet
         self._bump_capacity = 0
         self._bump_buffer = None
         self._bump_vao = None
@@ -133,25 +148,76 @@ class WaveSolverGPU(WaveSolver):
         self._sourced = True
         self._asleep = False
 
-    def _flush(self):
-        """Add the queued bumps to both stored levels: one buffer write, one instanced additive draw."""
-        if not self._queued:
-            return
-        bumps = self._queued[0] if len(self._queued) == 1 else np.concatenate(self._queued)
-        self._queued = []
-        if len(bumps) > self._bump_capacity:
-            self._grow_bumps(len(bumps))
-        self._bump_buffer.write(bumps)
-        fbo = self.state.src.fbo
-        self._own(self._progs["impulse"])
+    def queue_raindrops(self, batch: RainBatch) -> None:
+        """Queue a frame's raindrops (``raindrops.RainBatch``, trusted): drawn with the queued bumps, made by the
+        impulse vertex shader from the batch's key — one draw of a point per drop, two uniforms, no upload (the
+        law's CDF only when the rain rate changed)."""
+        if batch.count > 0:
+            self._rain.append(batch)
+            self._sourced = True
+            self._asleep = False
+
+    def _prepare_rain(self, batch: RainBatch):
+        """Bind and set what the raindrop program needs for ``batch``; returns the program."""
+        prog = self._progs["rain"]
+        self._own(prog)
+        if batch.law is not self._law:
+            cdf = np.asarray(batch.law.cdf, np.float32)
+            self.drop_law.write(cdf, viewport=(0, 0, DROP_CDF_NODES, 1))
+            self._law = batch.law
+        self._set(prog, {"u_rain_key": batch.key, "u_rain_peak": batch.peak_per_momentum,
+                         "u_crater_cells": batch.crater_m_per_mm / self.cell_m})
+        self.drop_law.use(units.SCRATCH[2])
+        return prog
+
+    def raindrop_bumps(self, batch: RainBatch) -> np.ndarray:
+        """(count, 4) float32: the bumps the shader makes for ``batch`` (x, z, radius in cells, peak m; peak 0 for
+        drops over dry cells), read back by transform feedback — for tests against the NumPy twin."""
+        if "rain_feedback" not in self._progs:
+            self._progs["rain_feedback"] = self.shaders.program("ripples/impulse.vert", defines={"RIPPLES_RAIN": 1},
+                                                                varyings=("v_bump",))
+            self._vaos["rain_feedback"] = self.ctx.vertex_array(self._progs["rain_feedback"], [])
+        self._flush()
+        rain = self._progs["rain"]
+        self._progs["rain"] = self._progs["rain_feedback"]  # the same uniforms and textures as a draw
+        try:
+            self._prepare_rain(batch)
+        finally:
+            self._progs["rain"] = rain
         self.mask_texture.use(units.SCRATCH[1])
-        fbo.use()
-        self.ctx.enable(moderngl.BLEND)
+        out = self.ctx.buffer(reserve=max(1, batch.count) * 16)
+        try:
+            self._vaos["rain_feedback"].transform(out, moderngl.POINTS, vertices=batch.count)
+            return np.frombuffer(out.read(), np.float32).reshape(-1, 4)[:batch.count].copy()
+        finally:
+            out.release()
+
+    def _flush(self):
+        """Add the queued bumps to both stored levels: one buffer write and one instanced additive draw, and one
+        instanced draw per queued raindrop batch (no upload)."""
+        if not self._queued and not self._rain:
+            return
+        bumps = None
+        if self._queued:
+            bumps = self._queued[0] if len(self._queued) == 1 else np.concatenate(self._queued)
+            self._queued = []
+            if len(bumps) > self._bump_capacity:
+                self._grow_bumps(len(bumps))
+            self._bump_buffer.write(bumps)
+        rain, self._rain = self._rain, []
+        self.mask_texture.use(units.SCRATCH[1])
+        self.state.src.fbo.use()
+        self.ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE if rain else moderngl.BLEND)
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         try:
-            self._bump_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=len(bumps))
+            if bumps is not None:
+                self._own(self._progs["impulse"])
+                self._bump_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=len(bumps))
+            for batch in rain:
+                self._prepare_rain(batch)
+                self._vaos["rain"].render(moderngl.POINTS, vertices=batch.count)
         finally:
-            self.ctx.disable(moderngl.BLEND)
+            self.ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
 
     def _get_state(self):
         self._flush()
@@ -160,6 +226,7 @@ class WaveSolverGPU(WaveSolver):
 
     def _set_state(self, z, zp):
         self._queued = []
+        self._rain = []
         data = np.stack([np.asarray(z, np.float32), np.asarray(zp, np.float32)], axis=-1)
         self.state.src.color.write(np.ascontiguousarray(data).tobytes())
 
@@ -249,6 +316,7 @@ class WaveSolverGPU(WaveSolver):
         self.state.release()
         self.mask.release()
         self.reduce_target.release()
+        self.drop_law.release()
         for obj in (self._bump_vao, self._bump_buffer, *self._vaos.values()):
             obj.release()
         if self._owns_shaders:

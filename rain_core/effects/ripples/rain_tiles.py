@@ -11,7 +11,7 @@ import numpy as np
 from rain_core import checks, physics
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import float_target, fullscreen_triangle
-from rain_core.gfx.uniforms import set_uniforms
+from rain_core.gfx.uniforms import owned_uniforms
 
 RAIN_TILE_CYCLE_S = 0.6  # s, life of one ring
 RAIN_TILE_VISIBLE_D_MM = 1.0  # mm: drops from this diameter up make a ring visible from a car
@@ -46,10 +46,12 @@ class RainRippleTexture:
         tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         self._prog = shaders.program("common/fullscreen.vert", "ripples/rain_tile.frag")
         self._vao = fullscreen_triangle(ctx, self._prog)
-        # Set before each draw: the library's cached program may be shared with another tile.
+        # Written before each draw through the program's one owned-uniforms cache (the library's cached program
+        # may be shared with another tile): a value equal to the last one written there is skipped.
         self._constants = {"u_size": (float(self.size), float(self.size)), "u_cycle_s": RAIN_TILE_CYCLE_S,
                            "u_layers": self.layers, "u_seed": self.seed}
         self._uniforms_for: tuple[float, dict] | None = None  # (rate, its uniforms): the rate rarely changes
+        self._drawn = (0.0, 0.0, ())  # what the map holds now (time, strength, densities): flat after the clear
 
     @property
     def texture(self):
@@ -87,12 +89,22 @@ class RainRippleTexture:
             self._uniforms_for = (rate, {"u_strength": strength,
                                          "u_density": tuple(density) + (0.0,) * (8 - self.layers)})
         uniforms = self._uniforms_for[1]
+        # The map is a function of (time, strength, densities): the same again (a paused frame, a flat map) is
+        # neither redrawn nor re-mipmapped.
+        drawn = (t, uniforms["u_strength"], uniforms["u_density"])
+        if uniforms["u_strength"] == 0.0:
+            drawn = (0.0, 0.0, ())  # flat at any time
+        if drawn == self._drawn:
+            return
+        self._drawn = drawn
         fbo = self.target.fbo
         if uniforms["u_strength"] == 0.0:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
         else:
-            set_uniforms(self._prog, self._constants)
-            set_uniforms(self._prog, uniforms, u_time=t)
+            owned = owned_uniforms(self._prog)
+            owned.update(self._constants)
+            owned.update(uniforms)
+            owned.set("u_time", t)
             fbo.use()
             self._vao.render(vertices=3)
         self.texture.build_mipmaps()

@@ -71,16 +71,19 @@ def test_raindrops_poisson_seeded_and_only_on_water():
 
 
 def test_raindrop_budget_keeps_momentum_flux():
+    """A capped frame's drops carry the momentum of all of them: the total dent agrees with the uncapped one.
+    The capped sum is a mean of budget × frames momenta of a heavy-tailed law (the big drops dominate: ~20 %
+    spread with 64 × 20), so the test takes 256 × 60 (~6 %) and allows 20 %."""
     def total_dent(budget):
         field = RippleField(n=64, extent_m=6.3, backend="reference", seed=11,
                             max_drops_per_frame=budget)
         field.recenter(0.0, 0.0)
-        for _ in range(20):
+        for _ in range(60):
             field.add_raindrops(20.0, 1 / 30)
         return field.height.sum()
 
-    full, capped = total_dent(10**6), total_dent(64)
-    assert capped == pytest.approx(full, rel=0.25)
+    full, capped = total_dent(10**6), total_dent(256)
+    assert capped == pytest.approx(full, rel=0.2)
 
 
 def test_field_update_with_film_depth_fn():

@@ -60,3 +60,40 @@ def test_rain_ripple_texture(gl_ctx, shaders):
         assert np.all(d_heavy > d_light) and s_heavy > s_light > 0
     finally:
         tile.release()
+
+
+def test_rain_tile_is_redrawn_only_when_it_changes(gl_ctx, shaders):
+    """The same (time, rate) again — a paused frame — costs no draw and no mipmaps, and the map stays the one drawn
+    for it; another time or rate draws, and a flat map (no rain) is cleared once."""
+    tile = RainRippleTexture(gl_ctx, size=32, shaders=shaders, seed=2)
+
+    class Counting:
+        def __init__(self, vao):
+            self.vao, self.draws = vao, 0
+
+        def render(self, *args, **kwargs):
+            self.draws += 1
+            return self.vao.render(*args, **kwargs)
+
+        def release(self):
+            self.vao.release()
+
+    tile._vao = counting = Counting(tile._vao)
+    try:
+        def slopes():
+            return np.frombuffer(tile.texture.read(), np.float16).copy()
+
+        tile.render(2.0, 20.0)
+        first = slopes()
+        tile.render(2.0, 20.0)
+        assert counting.draws == 1
+        np.testing.assert_array_equal(slopes(), first)
+        tile.render(2.1, 20.0)
+        tile.render(2.1, 5.0)
+        assert counting.draws == 3
+        tile.render(2.0, 20.0)
+        np.testing.assert_array_equal(slopes(), first)
+        tile.render(2.2, 0.0)
+        assert np.all(slopes() == 0.0) and counting.draws == 4
+    finally:
+        tile.release()
