@@ -24,8 +24,8 @@ float ws_noise1(float x, uint seed) {
 
 // Residue a wiper rubber leaves along its length: streaks (concentric arcs) of mm and cm scale, mean ≈ 1.
 float wiper_streaks(float r_m, uint seed) {
-    float fine = ws_noise1(r_m / 0.0012, seed);
-    float coarse = ws_noise1(r_m / 0.007, seed + 17u);
+    float fine = ws_noise1(r_m / 0.003, seed);
+    float coarse = ws_noise1(r_m / 0.012, seed + 17u);
     return 0.2 + 1.6 * fine * fine * 1.5 * (0.5 + coarse) ;
 }
 

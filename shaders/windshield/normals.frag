@@ -1,6 +1,7 @@
 #version 330 core
 // The water texture the glass shader reads: total thickness (mm), film (µm, rescaled to the CPU truth) and the
-// slope of the water surface along s and t (dimensionless), by central differences in metres.
+// slope of the film's surface along s and t (dimensionless), by central differences in metres. The drops are
+// not in the slope: they are lenses of their own (windshield/drop.frag), analytic and round at any resolution.
 #include "windshield/glass_common.glsl"
 uniform sampler2D u_drops;    // unit 12: drop and bead heights (mm)
 uniform sampler2D u_film;     // unit 13: film (µm), mipmapped
@@ -20,7 +21,7 @@ vec2 rescale(vec2 uv) {
 }
 
 float water_mm(vec2 uv, vec2 k) {
-    return textureLod(u_drops, uv, 0.0).r + 1e-3 * (k.x * textureLod(u_film, uv, 0.0).r + k.y);
+    return 1e-3 * (k.x * textureLod(u_film, uv, 0.0).r + k.y);
 }
 
 void main() {

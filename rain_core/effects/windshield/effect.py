@@ -20,6 +20,7 @@ from rain_core.effects.windshield.constants import (
     EVAP_AIR_M_S,
     FILM_CELLS,
     FILM_EVAP_KG_M2_S,
+    HEIGHT_PER_RADIUS,
     RESIDUE_M,
     SPHERE_PER_RADIUS,
 )
@@ -39,17 +40,24 @@ FILM_BEAD_RATE_PER_S = 0.15  # a thin film left alone pulls into micro-droplets 
 CABIN_DEPTH_M = 1.3  # the frame nearer than this (view depth) is the cabin: refracted rays see past it
 PUPIL_RADIUS_M = 0.002  # the driver's eye, focused on the road, sees each point of the glass through its pupil
 EYE_APERTURE_BLUR = 0.0037  # blur through water as a fraction of the frame height (a ~4 mm pupil at ~1 m)
-_UNIT_A, _UNIT_B, _UNIT_C = units.WINDSHIELD[:3]  # each pass binds its (up to) three textures to these
+FILM_EXTRA_LOD = 2.5  # the misted film shows the street this many mip levels blurrier than a drop does
+BEAD_LIFE_S = 15.0  # the densest bead trail a sliding drop leaves evaporates over this time (s)
+DROP_LENS = 0.5  # the lens's slopes × the contact angle's: seen at the raked glass's grazing angle the full cap
+# is mostly totally reflecting (a black blot); drops on a real, used windshield sit flatter than on clean glass
+DROP_RIM = 0.45  # darkening of a drop towards its outline, on top of the Fresnel reflection of the cabin
+DROP_HIGHLIGHT = 6.0  # the sky focused by the cap: its highlight is brighter than the sky, × the zenith radiance
+_UNIT_A, _UNIT_B, _UNIT_C, _UNIT_D = units.WINDSHIELD  # each pass binds its (up to) four textures to these
 
 
 class WindshieldEffect(Effect):
     """The windshield effect: runs ``WindshieldSim``, draws the glass.
 
-    Stages: ``prepare`` (the water textures: film relaxation and deposits, drop and bead splats, the water
-    thickness/slope texture) and ``overlay`` (copy the frame without the glass, then draw the glass mesh over
-    it with refraction, haze, glints and the blades). Active only with the camera inside the car and the
-    effect enabled, and then only if there is water on the glass, rain reaching it, or the wipers are running:
-    a dry, clean glass costs nothing.
+    Stages: ``prepare`` (the water textures: film relaxation and deposits with the beads of drops' trails, drop
+    and bead splats, the water thickness/slope texture) and ``overlay`` (copy the frame without the glass, then
+    draw the glass mesh over it with the film's refraction, beads, haze, glints and the blades, then each drop
+    as an analytic lens from the same instance rows the drop texture was splatted with). Active only with the
+    camera inside the car and the effect enabled, and then only if there is water on the glass, rain reaching
+    it, or the wipers are running: a dry, clean glass costs nothing.
 
     ``WindshieldEffect(ctx, settings=None, *, seed=0, shaders=None, spec=CAR_SPEC)``. ``status()`` gives numbers
     for a panel (drops, water on the glass in g, wiper cycles, rain-sensor reading).
@@ -72,9 +80,24 @@ class WindshieldEffect(Effect):
         self.normals_prog = self.shaders.program("common/fullscreen.vert", "windshield/normals.frag")
         self.splat_prog = self.shaders.program("windshield/splat.vert", "windshield/splat.frag")
         self.glass_prog = self.shaders.program("windshield/glass.vert", "windshield/glass.frag")
-        for prog in (self.film_prog, self.normals_prog, self.splat_prog, self.glass_prog):
+        self.drop_prog = self.shaders.program("windshield/drop.vert", "windshield/drop.frag")
+        for prog in (self.film_prog, self.normals_prog, self.splat_prog, self.glass_prog, self.drop_prog):
             set_uniform(prog, "u_glass", (self.glass.width_bottom, self.glass.width_top, self.glass.height))
         self.splat_prog["u_cap_rn"].value = SPHERE_PER_RADIUS
+        g = self.glass
+        set_uniforms(
+            self.drop_prog,
+            u_cap_rn=SPHERE_PER_RADIUS,
+            u_height_per_radius=HEIGHT_PER_RADIUS,
+            u_glass_origin=tuple(g.bottom_center),
+            u_glass_right=tuple(g.right),
+            u_glass_up=tuple(g.up),
+            u_glass_normal=tuple(g.normal),
+            u_glass_sag=g.sag,
+            u_rim=DROP_RIM,
+            u_lens=DROP_LENS,
+            u_highlight=DROP_HIGHLIGHT,
+        )
         self._film_vao = fullscreen_triangle(ctx, self.film_prog)
         self._normals_vao = fullscreen_triangle(ctx, self.normals_prog)
         pos, nrm, uv, tris = windshield_surface(spec, 48, 24)
@@ -93,6 +116,9 @@ class WindshieldEffect(Effect):
         self._splat_vaos = [
             ctx.vertex_array(self.splat_prog, [(buf, "4f 4f/i", "in_seg", "in_info")]) for buf in self._splat_bufs
         ]
+        # The drop pass reads the drops' rows where the drop texture's splats left them: nothing more is uploaded.
+        self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], "4f 4f/i", "in_seg", "in_info")])
+        self._drop_rows = 0  # rows in the drop buffer this frame
         self.upload_bytes = 0  # bytes written to the GPU by the last frame's water pass
         self.splat_draws = 0  # instanced splat draws in the last frame
         self.resolution = 0
@@ -122,7 +148,7 @@ class WindshieldEffect(Effect):
         self._release_textures()
         n = int(resolution)
         size = (n, n)
-        self._film = [float_target(self.ctx, size, 1, "f2") for _ in range(2)]
+        self._film = [float_target(self.ctx, size, 2, "f2") for _ in range(2)]  # film µm, bead-trail density
         for target in self._film:
             target.color.build_mipmaps()
             target.color.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
@@ -315,6 +341,7 @@ class WindshieldEffect(Effect):
             u_blade=np.array(blades, np.float32).tobytes(),
             u_sweep=np.array(sweeps, np.float32).tobytes(),
             u_seed=self.seed % 100000,
+            u_bead_dry=dt / BEAD_LIFE_S,
         )
         dst.fbo.use()
         ctx.disable(moderngl.BLEND)
@@ -325,7 +352,9 @@ class WindshieldEffect(Effect):
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()
         self._drops.fbo.clear(0.0, 0.0, 0.0, 0.0)
-        self._draw_splats(1, drop_splats(self.sim, self._texel_m()), moderngl.MAX)
+        rows = drop_splats(self.sim, self._texel_m())
+        self._drop_rows = len(rows)
+        self._draw_splats(1, rows, moderngl.MAX)
         # 4. the water texture: thickness, film, slopes.
         self._drops.color.use(_UNIT_A)
         dst.color.use(_UNIT_B)
@@ -359,13 +388,31 @@ class WindshieldEffect(Effect):
         lighting = frame.lighting
         cabin = 0.02 * 0.5 * (np.asarray(lighting.sky_zenith) + np.asarray(lighting.sky_horizon)) * lighting.exposure
         blades = [(*b.pivot, b.r_inner_m, b.r_outer_m) for b in self.sim.blades]
+        drop_lod = math.log2(max(1.0, EYE_APERTURE_BLUR * rc.size[1])) + 0.5
+        shared = dict(
+            u_model=mat4_bytes(model),
+            u_axis_s=tuple(rot @ self.glass.right),
+            u_axis_t=tuple(rot @ self.glass.up),
+            u_refraction=float(settings.windshield.refraction) if settings is not None else 1.0,
+            u_drop_lod=drop_lod,
+            u_cabin=tuple(float(c) for c in cabin),
+            u_aperture_m=PUPIL_RADIUS_M,
+            u_focus_m=min(float(getattr(frame.camera, "focus_m", math.inf)), 1e9),
+            u_near_far=(frame.camera.near_m, frame.camera.far_m),
+            u_cabin_depth=CABIN_DEPTH_M,
+            u_frame=_UNIT_B,
+            u_depth=_UNIT_C,
+        )
         set_uniforms(
             prog,
             u_model=mat4_bytes(model),
             u_axis_s=tuple(rot @ self.glass.right),
             u_axis_t=tuple(rot @ self.glass.up),
             u_refraction=float(settings.windshield.refraction) if settings is not None else 1.0,
-            u_drop_lod=math.log2(max(1.0, EYE_APERTURE_BLUR * rc.size[1])) + 0.5,
+            u_drop_lod=drop_lod,
+            u_film_lod=drop_lod + FILM_EXTRA_LOD,
+            u_texel_m=self._texel_m() if self.resolution else 0.0,
+            u_beads=_UNIT_D,
             u_blade=np.array(blades, np.float32).tobytes(),
             u_blade_angle=np.array(self.sim.blade_angles(), np.float32).tobytes(),
             u_cabin=tuple(float(c) for c in cabin),
@@ -380,15 +427,32 @@ class WindshieldEffect(Effect):
         self._water.color.use(_UNIT_A)
         copy.color.use(_UNIT_B)
         copy.depth.use(_UNIT_C)
+        self._film[self._film_index].color.use(_UNIT_D)
         rc.hdr.fbo.use()
         ctx.enable(moderngl.DEPTH_TEST)
         rc.hdr.fbo.depth_mask = False
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         self._glass_vao.render(moderngl.TRIANGLES)
+        if self._drop_rows:
+            self._draw_drops(rc, frame, shared)
         ctx.disable(moderngl.BLEND)
         ctx.blend_func = moderngl.DEFAULT_BLENDING
         rc.hdr.fbo.depth_mask = True
+
+    def _draw_drops(self, rc, frame, shared: dict) -> None:
+        """The drops as lenses over the glass (premultiplied, blending and depth test as the glass pass set)."""
+        prog = self.drop_prog
+        rc.set_frame_uniforms(prog)
+        lighting = frame.lighting
+        sky = np.asarray(lighting.sky_zenith, np.float64) * lighting.exposure
+        set_uniforms(
+            prog,
+            **shared,
+            u_pixel_rad=math.radians(frame.camera.fov_y_deg) / rc.size[1],
+            u_sky_light=tuple(float(c) for c in sky),
+        )
+        self._drop_vao.render(moderngl.TRIANGLES, vertices=6, instances=self._drop_rows)
 
     def release(self) -> None:
         """Free the textures, buffers and vertex arrays, and the programs when the shader library is our own."""
@@ -399,6 +463,7 @@ class WindshieldEffect(Effect):
             self._mesh_ibo,
             *self._splat_bufs,
             self._glass_vao,
+            self._drop_vao,
             *self._splat_vaos,
             self._film_vao,
             self._normals_vao,

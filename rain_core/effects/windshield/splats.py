@@ -62,7 +62,8 @@ def drop_splats(sim, texel_m: float) -> np.ndarray:
 
 
 def film_splats(sim, texel_m: float) -> np.ndarray:
-    """Instances (n, 8) float32 added to the film texture (µm): wet trail lines and splash speckle."""
+    """Instances (n, 8) float32 added to the film texture (µm): wet trail lines (which also stamp the beads a
+    sliding drop leaves behind) and splash speckle."""
     trails = sim.frame_trails()
     impacts = sim.frame_impacts()
     if len(impacts):
@@ -70,8 +71,13 @@ def film_splats(sim, texel_m: float) -> np.ndarray:
     k = len(trails)
     out = np.zeros((k + len(impacts), 8), np.float32)  # written in place: the rows the GPU reads
     if k:
-        out[:k, 0:5] = trails
-        out[:k, 5] = TRAIL_FILM_M * 1e6 * 4 / math.pi
+        # A line narrower than a texel is drawn wider and thinner (the same water), so that it, and the beads its
+        # drop leaves along it (the film target's second channel), reach the texels it crosses.
+        out[:k, 0:4] = trails[:, 0:4]
+        a = trails[:, 4]
+        a_vis = np.maximum(a, 0.6 * texel_m)
+        out[:k, 4] = a_vis
+        out[:k, 5] = TRAIL_FILM_M * 1e6 * 4 / math.pi * a / a_vis
         out[:k, 6] = 1.0
     if len(impacts):
         rows = out[k:]
