@@ -34,3 +34,10 @@ float spray_phase_wide(float mu) {
 float spray_phase(float mu, float glint) {
     return 0.5 * spray_hg(mu, SPRAY_G_DIFFRACTION) + spray_phase_wide(mu) + 0.5 * glint * spray_reflection(mu);
 }
+
+// What a point light (sun, lamp) of illuminance E adds to the radiance of drops per unit of their opacity
+// (1/sr; × E gives cd/m²): refraction's wide lobe and the Fresnel reflection, the diffracted half left out
+// (see spray_phase_wide). The GLSL twin of rain_core.effects.spray.optics.light_lobe.
+float spray_light_lobe(float mu) {
+    return spray_phase_wide(mu) + 0.5 * spray_reflection(mu);
+}

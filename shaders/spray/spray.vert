@@ -1,13 +1,13 @@
 #version 330 core
 // Spray parcels (rain_core/effects/spray): one camera-facing quad per parcel (instanced, 4-vertex strip), flown by
 // the closed form from what was stored at spawn, so nothing is uploaded per frame. A droplet parcel is
-// stretched along its screen motion over the exposure time (a streak); mist puffs are round and grow.
-// Lighting is evaluated per vertex (parcels are small): single scattering of sun and lights with the drops'
-// phase function, the reflection lobe kept apart for the fragment's sparkle.
+// stretched along its screen motion over the exposure time (its drops' streaks); mist puffs are round and grow.
+// The light is evaluated once per parcel (spray/shading.glsl: the environment seen through the drops, the sun's
+// and lamps' scattering lobe), through the atmosphere, and handed to the fragment flat.
 #include "common/frame.glsl"
-#include "common/lighting.glsl"
+#include "common/atmosphere.glsl"
 #include "spray/flight.glsl"
-#include "spray/optics.glsl"
+#include "spray/shading.glsl"
 
 in vec4 in_p0;    // xyz m (z relative to its period), w period index
 in vec4 in_v0;    // xyz m/s launch velocity, w tau s
@@ -26,16 +26,8 @@ uniform float u_pixel_angle;    // rad per pixel (vertical)
 out vec2 v_coord;            // m from the parcel centre: along the streak, across it
 out float v_view_depth;      // m, along the camera's forward axis
 flat out vec4 v_shape;       // half streak length m, sigma along the streak / across it m, centre optical depth
-flat out float v_fade;
-flat out vec4 v_misc;        // mist (0/1), random, distance to the eye m, glint weight
-flat out vec3 v_axis_a;      // world axis of v_coord.x
-flat out vec3 v_axis_b;      // world axis of v_coord.y
-flat out vec3 v_view;        // unit, parcel → eye
-flat out vec3 v_sun_ss;      // cd/m² per unit (1 − T): sun, single scattering (smooth lobes)
-flat out vec3 v_lights_ss;   // the lamps and vehicle lights, same
-flat out vec3 v_lights_diffuse;  // the lights' share if the parcel were a dense white body
-flat out vec3 v_glint;       // reflection lobe of sun and lights (mean; the fragment concentrates it)
-flat out vec3 v_amb_iso;     // sky and ground averaged over all directions
+flat out vec4 v_misc;        // mist (0/1), random, fade (life and age), sheet share (young splash: 1)
+flat out vec3 v_radiance;    // cd/m² per unit opacity, through the atmosphere, × exposure
 flat out float v_pixel_m;    // m, the size of a pixel at the parcel
 
 const float EDGE_SIGMAS_DROP = 3.0;
@@ -81,35 +73,13 @@ void main() {
     float tau_c = in_life.w / spread;
     float fade = fades ? clamp((life - age) / (0.25 * life), 0.0, 1.0) : 1.0;
     if (mist) fade *= clamp(age / 0.15, 0.0, 1.0);
+    // Side and bow waves and the tread's splash leave the tyre as sheets of water that break into drops after
+    // a few centimetres (about SPRAY_SHEET_S per mm of drop size).
+    float sheet = (!mist && in_misc.y >= SPRAY_SPLASH_MIN_MM)
+        ? 1.0 - clamp(age / (SPRAY_SHEET_S * in_misc.y), 0.0, 1.0) : 0.0;
     v_shape = vec4(half_len, sigma, sigma_b, tau_c);
-    v_fade = fade;
-    v_misc = vec4(mist ? 1.0 : 0.0, in_misc.z, dist, 0.0);
-    v_axis_a = axis_a;
-    v_axis_b = axis_b;
-    v_view = view;
+    v_misc = vec4(mist ? 1.0 : 0.0, in_misc.z, fade, sheet);
     v_pixel_m = dist * u_pixel_angle;
-
-    // Single scattering. mu = cos(scattering angle) between the light's travel and parcel → eye.
-    float mu_sun = dot(-u_sun_dir, view);
-    v_sun_ss = u_sun_illum * spray_phase_wide(mu_sun);
-    vec3 glint = u_sun_illum * 0.5 * spray_reflection(mu_sun);
-    vec3 lights = vec3(0.0);
-    vec3 lights_diffuse = vec3(0.0);
-    for (int i = 0; i < u_light_count; ++i) {
-        vec3 d = u_light_pos[i].xyz - pos;
-        float dist2 = dot(d, d);
-        float range = abs(u_light_pos[i].w);
-        if (dist2 > range * range) continue;
-        vec3 L = d * inversesqrt(dist2);
-        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
-        vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);  // lux
-        float mu = dot(-L, view);
-        lights += E * spray_phase_wide(mu);
-        glint += E * 0.5 * spray_reflection(mu);
-        lights_diffuse += E * (0.9 / SPRAY_PI) * 0.5 * (1.0 + dot(L, view));
-    }
-    v_lights_ss = lights;
-    v_lights_diffuse = lights_diffuse;
-    v_glint = glint * (mist ? 1.0 : in_misc.w);
-    v_amb_iso = 0.5 * (sky_ambient(vec3(0.0, 1.0, 0.0)) + sky_ambient(vec3(0.0, -1.0, 0.0)));
+    vec3 radiance = apply_atmosphere_dir(spray_radiance(pos, view), dist, -view);
+    v_radiance = radiance * u_exposure;
 }

@@ -4,44 +4,17 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rain_core import layout, water_film
+from rain_core import water_film
 from rain_core.effects.spray import wheels
 from rain_core.effects.spray.water import KMH
 from rain_core.effects.spray.wheels import road_film_depth_fn
-from rain_core.vehicles import TRUCK_SPEC, Vehicle
 from rain_core.weather import WeatherState
 
 
-def _puddle(depth_mm):
-    return lambda x, z: np.full(np.broadcast(np.asarray(x), np.asarray(z)).shape, float(depth_mm))
-
-
-def _truck_scene(gl_ctx, enabled=True, strength=1.0, hour=12.0, film=None):
-    from rain_core.effects.spray import SprayEffect
-    from rain_core.scene import Scene
-    from rain_core.settings import Settings
-    from rain_core.vehicles import Autopilot
-
-    s = Settings()
-    s.rain.rate_mm_h, s.rain.wetness, s.rain.cracks, s.rain.puddles = 8.0, 1.0, 0.0, 0.0
-    s.traffic.count, s.time_of_day.hour = 1, hour
-    s.spray.enabled, s.spray.strength, s.spray.budget = enabled, strength, 3000
-    effect = SprayEffect(gl_ctx, s, seed=1)
-    effect.emitter.film_depth_fn = film
-    scene = Scene(gl_ctx, (96, 54), s, seed=1, effects=[effect])
-    v = 100 * KMH
-    scene.ego.position[:] = [layout.LANE_CENTRES_X[0], 0.0, 600.0]
-    scene.ego.speed_m_s = v
-    truck = Vehicle(TRUCK_SPEC, (layout.LANE_CENTRES_X[0], 0.0, 580.0), 0.0, v, (0.75, 0.75, 0.72))
-    scene.traffic.vehicles, scene.traffic.lanes, scene.traffic.desired_speeds_m_s = [truck], [0], [v]
-    scene.autopilot = Autopilot(lane_index=0, target_speed_m_s=v, seed=1, wander_m=0.0)
-    return scene, effect
-
-
-def test_effect_draws_spray_behind_a_truck(gl_ctx):
+def test_effect_draws_spray_behind_a_truck(truck_scene):
     images, stats = [], []
     for enabled in (True, False):
-        scene, effect = _truck_scene(gl_ctx, enabled=enabled, film=_puddle(0.0))
+        scene, effect = truck_scene(enabled=enabled, puddle_mm=0.0)
         for _ in range(12):
             scene.step(1 / 30)
             scene.render()
@@ -58,15 +31,15 @@ def test_effect_draws_spray_behind_a_truck(gl_ctx):
     assert (diff > 1e-3).mean() > 0.01  # the spray shows
 
 
-def test_effect_is_skipped_on_a_dry_road_and_reports_hydroplaning(gl_ctx):
-    scene, effect = _truck_scene(gl_ctx, film=_puddle(0.0))
+def test_effect_is_skipped_on_a_dry_road_and_reports_hydroplaning(truck_scene):
+    scene, effect = truck_scene(puddle_mm=0.0)
     scene.settings.rain.wetness = 0.0
     scene.settings.rain.rate_mm_h = 0.0
     scene.step(1 / 30)
     scene.render()
     assert not {s.name: s.ran for s in scene.renderer.stats}["spray"]
     scene.release()
-    scene, effect = _truck_scene(gl_ctx, film=_puddle(8.0))
+    scene, effect = truck_scene(puddle_mm=8.0)
     scene.ego.speed_m_s = 110 * KMH
     scene.step(1 / 30)
     scene.render()
@@ -88,10 +61,10 @@ def test_road_film_depth_is_the_roads_film():
     assert fn(np.full_like(zz, 5.25), zz).max() > 3.0  # standing water where the wheels run
 
 
-def test_active_is_pure_and_observe_follows_the_frame(gl_ctx):
+def test_active_is_pure_and_observe_follows_the_frame(truck_scene):
     from rain_core.gfx.frame import SharedResources
 
-    scene, effect = _truck_scene(gl_ctx, film=_puddle(8.0))
+    scene, effect = truck_scene(puddle_mm=8.0)
     scene.step(1 / 30)
     frame = scene.frame()
     assert not effect.active(frame) and effect.wheels == []  # nothing observed yet: active changed nothing
