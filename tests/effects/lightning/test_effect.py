@@ -76,13 +76,15 @@ def test_labels_carry_the_flash(gl_ctx):
     s = Settings()
     s.rain.rate_mm_h = 20.0
     s.lightning.flashes_per_min = 10.0
+    s.quality.particle_budget = 2000  # the labels are under test, not the streaks: keep the 100 frames cheap
     start = _near_flash().start_s
     with Session(size=(64, 40), seed=SEED, camera="chase", settings=s, ctx=gl_ctx) as sim:
         steps = int(start * 30) + 1
         values = []
-        for _ in range(steps + 3):
+        for i in range(steps + 3):
             sim.step(1 / 30)
-            lab = sim.capture().labels
-            values.append((lab["lightning_lux"], lab["lightning_sky_cd_m2"]))
+            if i == 0 or i >= steps - 3:  # labels before anything happened, then around the flash only
+                lab = sim.capture().labels
+                values.append((lab["lightning_lux"], lab["lightning_sky_cd_m2"]))
     assert values[0] == (0.0, 0.0)
     assert max(v[1] for v in values) > 0.1 and max(v[0] for v in values) > 0.0
