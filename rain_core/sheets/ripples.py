@@ -56,8 +56,8 @@ def render(ctx, size=(320, 180), frames: int = 6, every_s: float = 0.5):
         fields.append(height_picture(field.height, size))
         t = (i + 1) * every_s
         labels.append(f"t={t:.1f} s, {ego.speed_m_s * 3.6:.0f} km/h, 1 mm/h")
+    extent = ripples.field.extent_m  # read before release: the field goes with the scene
     scene.release()
-    extent = ripples.field.extent_m
     return views + fields, labels + [f"height field {extent:.0f} m, car at centre, t={(i + 1) * every_s:.1f} s"
                                      for i in range(frames)]
 
