@@ -17,6 +17,7 @@ uniform float u_width_floor_px;
 uniform float u_width_max_px;
 uniform float u_alpha_max;
 uniform float u_alpha_spread;       // constants.SPREAD_ALPHA
+uniform float u_stretch_max;        // constants.STRETCH_MAX
 
 out vec2 v_local;   // px from the quad centre: (across, along)
 out vec2 v_half;    // px: half extents of the coverage profile + 0.5
@@ -88,11 +89,12 @@ void main() {
     float w_px = max(d_px * width_f, u_width_floor_px);
     float alpha = area_px / (w_px * len_h);
     if (alpha > u_alpha_spread) {
-        // Compensation: spread like the drops it stands for — wider and as much longer — up to u_width_max_px,
-        // then brighter up to u_alpha_max.
-        float wide = 0.5 * (-len + sqrt(len * len + 4.0 * area_px / u_alpha_spread));
-        w_px = min(max(wide, w_px), u_width_max_px);
-        len_h = len + max(h_px, w_px);
+        // Compensation: spread like the drops it stands for — first longer along the motion (up to
+        // u_stretch_max × the footprint: a line of rain, not a fleck), then wider up to u_width_max_px, then
+        // brighter up to u_alpha_max (twin: rain_core.effects.rainfall.streaks).
+        float need = area_px / u_alpha_spread;
+        len_h = clamp(need / w_px, len_h, u_stretch_max * len_h);
+        w_px = min(max(need / len_h, w_px), u_width_max_px);
         alpha = min(area_px / (w_px * len_h), u_alpha_max);
     }
     // Quad corner (triangle strip): across ±1, along ±1 (−1 at the head).

@@ -39,8 +39,9 @@ that the drawn count follows the physical count, as before (``drawn_share``: lig
 until the budget is full at heavy rain (``BUDGET_FULL_AT_MM_H``, ~77 % of the instances drawn), and never so
 that a drawn drop stands for less than one real drop. The effect's rate follows the set rate with a
 ``RATE_RAMP_S`` time constant (and the air empties with the same constant when the rain stops). Each drawn drop
-carries its weight's light: first wider (from ``SPREAD_ALPHA`` up to ``WIDTH_MAX_PX``), then brighter (opacity up
-to ``ALPHA_MAX``); ``python -m rain_core.bench rainfall`` measures the light lost beyond and the density error.
+carries its weight's light: first longer along its motion (from ``SPREAD_ALPHA``, up to ``STRETCH_MAX`` × its
+footprint), then wider (up to ``WIDTH_MAX_PX``), then brighter (opacity up to ``ALPHA_MAX``);
+``python -m rain_core.bench rainfall`` measures the light lost beyond and the density error.
 
 Occlusion in the vertex shader
 ------------------------------
@@ -61,16 +62,17 @@ Opacity is the drop's coverage (``optics.streak_coverage``): a pixel on the path
 on average over the exposure, A the projected area (× the weight), so α = A / (w·(ℓ + h)) with ℓ the streak's
 length and h the drop's own chord along its motion (area / true width) — for a sub-pixel drop the footprint is
 its path, not a pixel-long stub. A drawn instance stands for many real drops spread around it: its light is
-spread wider first (above ``SPREAD_ALPHA``, about the opacity of one real streak at 1/60 s), up to
-``WIDTH_MAX_PX``, and only then brightened up to ``ALPHA_MAX`` — a faint band of drops rather than a bright
-flake. Colour (``shaders/rainfall/drop.glsl``, ``env.frag``, ``optics``): a drop is a tiny fish-eye
-(Garg & Nayar 2004, 2007) — refraction through it (its ~165° field of view, mostly what lies just behind it),
-specular reflection and one internal reflection, each with its Fresnel weight, summed over the environment the
-camera sees (the sky through the rain layer, as the sky pass draws it, and the lit ground) — plus the sun, street
-lamps and headlights scattered by the drop (two-term Henyey–Greenstein, the atmosphere effect's), so drops in a
-headlight beam glow. By day a drop is several times brighter than the façades it covers and a little darker than
-the sky; seen horizontally it is ~0.7 × the atmosphere's far-rain airlight (0.4–0.5 × before issue 14).
-Streaks blend over the HDR frame with the scene's depth test, without depth writes.
+spread first (above ``SPREAD_ALPHA``, about the opacity of one real streak at 1/60 s): longer along its motion
+up to ``STRETCH_MAX`` × its footprint, then wider up to ``WIDTH_MAX_PX``, and only then brightened up to
+``ALPHA_MAX`` — a faint line of rain rather than a bright flake. Colour (``shaders/rainfall/drop.glsl``,
+``env.frag``, ``optics``): a drop is a tiny fish-eye (Garg & Nayar 2004, 2007) — refraction through it (its ~165°
+field of view, mostly what lies just behind it), specular reflection and one internal reflection, each with its
+Fresnel weight, summed over the environment the camera sees (the sky through the rain layer, as the sky pass draws
+it, and the lit ground) — plus the sun, street lamps and headlights scattered by the drop (two-term
+Henyey–Greenstein, the atmosphere effect's), so drops in a headlight beam glow. By day a drop is several times
+brighter than the façades it covers and a little darker than the sky; seen horizontally it is ~0.7 × the
+atmosphere's far-rain airlight (0.4–0.5 × before issue 14). Streaks blend over the HDR frame with the scene's depth
+test, without depth writes.
 
 Splashes
 --------

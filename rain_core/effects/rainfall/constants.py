@@ -48,11 +48,13 @@ SPLASH_PERIOD_S = 0.3125  # s, each splash slot has one impact per period (≥ t
 # --- streak drawing --- (keep the NumPy twin, ``streaks.streak_geometry``, in step with shaders/rainfall/streak.vert).
 WIDTH_FLOOR_PX = 1.0  # px, narrowest streak; thinner drops get less opacity instead
 # A drawn instance stands for many real drops (its weight), spread through the volume around it. Their light is
-# spread first: a streak above SPREAD_ALPHA gets wider and as much longer (up to WIDTH_MAX_PX), and only then
-# brighter (up to ALPHA_MAX); beyond both, light is lost. SPREAD_ALPHA is about the opacity of one real streak at 1/60 s
-# (π/4·D/(v·T + D) ≈ 0.02–0.05 for 2–4 mm drops), so a compensated streak reads as a faint band of drops, not a
-# bright flake.
+# spread first: a streak above SPREAD_ALPHA gets longer along its motion (up to STRETCH_MAX × its footprint: the
+# drops it stands for seen as a line of rain), then wider (up to WIDTH_MAX_PX), and only then brighter (up to
+# ALPHA_MAX); beyond all three, light is lost. SPREAD_ALPHA is about the opacity of one real streak at 1/60 s
+# (π/4·D/(v·T + D) ≈ 0.02–0.05 for 2–4 mm drops), so a compensated streak reads as a faint line of rain, not a
+# bright flake (widening first made far streaks square flecks, like snow).
 SPREAD_ALPHA = 0.05
+STRETCH_MAX = 3.0
 ALPHA_MAX = 0.7
 WIDTH_MAX_PX = 4.0
 

@@ -23,6 +23,7 @@ from rain_core.effects.rainfall.constants import (
     SPLASH_LAYER,
     SPLASH_PERIOD_S,
     SPREAD_ALPHA,
+    STRETCH_MAX,
     WIDTH_FLOOR_PX,
     WIDTH_MAX_PX,
 )
@@ -44,8 +45,8 @@ PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
 # rate is). Others (lights, wetness, …) may also be written by rc.set_frame_uniforms, so they are always written.
 _OWN_UNIFORMS = ("u_box_", "u_veh_", "u_occ_", "u_splash_", "u_shape_", "u_thin", "u_layer_", "u_seed_key",
                  "u_drop_table", "u_road_", "u_time_", "u_epoch", "u_wind", "u_turb_eps", "u_period_world",
-                 "u_ground_y", "u_width_", "u_alpha_max", "u_alpha_spread", "u_crown_per_d", "u_cam_vel",
-                 "u_exposure_s", "u_near", "u_rain_env", "u_brightness", "u_focal_px")
+                 "u_ground_y", "u_width_", "u_alpha_max", "u_alpha_spread", "u_stretch_max", "u_crown_per_d",
+                 "u_cam_vel", "u_exposure_s", "u_near", "u_rain_env", "u_brightness", "u_focal_px")
 # Per program (programs may be shared by effects through a ShaderLibrary): (the effect that wrote last, its
 # last written values).
 _WRITTEN: dict[int, tuple[int, dict]] = {}
@@ -361,7 +362,7 @@ class RainfallEffect(Effect):
                     "u_near": float(rc.frame.camera.near_m),
                     "u_shape_area": self._shape_area, "u_shape_width": self._shape_width,
                     "u_width_floor_px": WIDTH_FLOOR_PX, "u_width_max_px": WIDTH_MAX_PX, "u_alpha_max": ALPHA_MAX,
-                    "u_alpha_spread": SPREAD_ALPHA,
+                    "u_alpha_spread": SPREAD_ALPHA, "u_stretch_max": STRETCH_MAX,
                 })
                 self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
             if s.rainfall.splashes and upd.splashes and upd.splash_accept > 0.0:
@@ -439,7 +440,7 @@ class RainfallEffect(Effect):
             "u_cam_vel": tuple(self.camera_velocity_m_s), "u_exposure_s": float(s.camera.exposure_s),
             "u_near": float(rc.frame.camera.near_m), "u_shape_area": self._shape_area,
             "u_shape_width": self._shape_width, "u_width_floor_px": WIDTH_FLOOR_PX, "u_width_max_px": WIDTH_MAX_PX,
-            "u_alpha_max": ALPHA_MAX, "u_alpha_spread": SPREAD_ALPHA,
+            "u_alpha_max": ALPHA_MAX, "u_alpha_spread": SPREAD_ALPHA, "u_stretch_max": STRETCH_MAX,
         })
         self._env_tex.use(units.RAINFALL_ENV)  # colour only, but never another pass's texture on that unit
         self._bind_static()

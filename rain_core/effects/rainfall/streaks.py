@@ -7,7 +7,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rain_core.effects.rainfall.constants import ALPHA_MAX, PERIOD_M, SPREAD_ALPHA, WIDTH_FLOOR_PX, WIDTH_MAX_PX
+from rain_core.effects.rainfall.constants import (
+    ALPHA_MAX,
+    PERIOD_M,
+    SPREAD_ALPHA,
+    STRETCH_MAX,
+    WIDTH_FLOOR_PX,
+    WIDTH_MAX_PX,
+)
 from rain_core.effects.rainfall.optics import streak_coverage
 from rain_core.effects.rainfall.shape import drop_shape_factors
 from rain_core.effects.rainfall.sim import RainfallSim
@@ -70,12 +77,15 @@ def streak_geometry(sim: RainfallSim, index, time_s: float | None, cam: StreakCa
     w = np.maximum(d_px * width_f, WIDTH_FLOOR_PX)
     with np.errstate(divide="ignore", invalid="ignore"):
         alpha = streak_coverage(light, length, h, w)
-        # Compensation (constants.SPREAD_ALPHA): wider and as much longer up to WIDTH_MAX_PX, then brighter.
+        # Compensation (constants.SPREAD_ALPHA): longer along the motion up to STRETCH_MAX × the footprint, then
+        # wider up to WIDTH_MAX_PX, then brighter.
         over = alpha > SPREAD_ALPHA
-        wide = 0.5 * (-length + np.sqrt(length**2 + 4.0 * light / SPREAD_ALPHA))
-        w = np.where(over, np.minimum(np.maximum(wide, w), WIDTH_MAX_PX), w)
-        h = np.where(over, np.maximum(h, w), h)
-        alpha = np.where(over, np.minimum(streak_coverage(light, length, h, w), ALPHA_MAX), alpha)
+        need = light / SPREAD_ALPHA
+        footprint = length + h
+        stretched = np.clip(need / w, footprint, STRETCH_MAX * footprint)
+        w = np.where(over, np.minimum(np.maximum(need / stretched, w), WIDTH_MAX_PX), w)
+        footprint = np.where(over, stretched, footprint)
+        alpha = np.where(over, np.minimum(light / (w * footprint), ALPHA_MAX), alpha)
     return {"visible": visible, "head": head, "tail": b_w, "head_px": sa, "tail_px": sb, "width_px": w,
-            "alpha": alpha, "light_px2": light, "drawn_px2": alpha * w * (length + h), "d_mm": d_mm,
-            "length_px": length + h}
+            "alpha": alpha, "light_px2": light, "drawn_px2": alpha * w * footprint, "d_mm": d_mm,
+            "length_px": footprint}

@@ -42,6 +42,34 @@ def test_tilt_equals_atan_of_car_speed_over_fall_speed(rain):
         assert np.max(np.abs(lean - want)) < 1.0
 
 
+def test_dense_streaks_spread_along_their_motion_before_widening(rain):
+    """A drawn streak standing for many drops spreads their light first along its motion (a line of rain), then
+    wider, then brighter — never a square fleck while it may still stretch — and keeps the light it carries."""
+    from rain_core.camera import Camera
+    from rain_core.effects.rainfall.constants import ALPHA_MAX, SPREAD_ALPHA, STRETCH_MAX, WIDTH_FLOOR_PX
+
+    v_car = 15.0
+    sim = RainfallSim(800, seed=2)  # a small budget: each drawn drop stands for many
+    t = rain.drive(sim, 1.0, speed=v_car, rate=30.0)
+    eye = np.array([1.75, 1.2, 600.0 - v_car * t])
+    cam = Camera(position=eye, forward=np.array([0.0, 0.0, -1.0]))
+    view_proj = cam.projection_matrix(16 / 9) @ cam.view_matrix()
+    g = streak_geometry(sim, None, t, StreakCamera(view_proj, eye, 0.0, np.array([0.0, 0.0, -v_car]), 1.0 / 60.0,
+                                                   (1280, 720)))
+    vis = g["visible"]
+    path = np.linalg.norm(g["tail_px"] - g["head_px"], axis=1)
+    spread = vis & (g["light_px2"] > SPREAD_ALPHA * WIDTH_FLOOR_PX * (path + 1.0)) & (path > 2.0)
+    assert spread.sum() > 50
+    w, length = g["width_px"][spread], g["length_px"][spread]
+    widened = w > WIDTH_FLOOR_PX + 1e-9
+    # Wider only once as long as it may be: STRETCH_MAX × its unspread footprint (at least its path).
+    assert np.all(length[widened] >= STRETCH_MAX * path[spread][widened] - 1e-6)
+    assert np.all(length >= path[spread])
+    # The light is kept wherever the opacity did not reach its ceiling.
+    free = g["alpha"][spread] < ALPHA_MAX - 1e-9
+    assert np.allclose(g["drawn_px2"][spread][free], g["light_px2"][spread][free], rtol=1e-9)
+
+
 def test_shader_draws_the_twins_streaks(gl_ctx, shaders, rain):
     """Every pixel the streak pass lights lies on a streak of the NumPy twin, and the light it adds (with the
     radiance switched to a constant) matches the twin's light budget."""
@@ -66,6 +94,11 @@ def test_shader_draws_the_twins_streaks(gl_ctx, shaders, rain):
     px = np.stack([xs + 0.5 - w / 2, h / 2 - (ys + 0.5)], axis=1)
     vis = g["visible"]
     a, b, width = g["head_px"][vis], g["tail_px"][vis], g["width_px"][vis]
+    # The drawn footprint: the path, longer by the drop's chord or the compensation's stretch, about its centre.
+    unit = (b - a) / np.maximum(np.linalg.norm(b - a, axis=1), 1e-9)[:, None]
+    unit[np.linalg.norm(b - a, axis=1) <= 1e-4] = (0.0, 1.0)
+    grow = 0.5 * np.maximum(g["length_px"][vis] - np.linalg.norm(b - a, axis=1), 0.0)[:, None] * unit
+    a, b = a - grow, b + grow
     ab = b - a
     t = np.clip(((px[:, None] - a[None]) * ab[None]).sum(2) / np.maximum((ab**2).sum(1), 1e-9)[None], 0, 1)
     dist = np.linalg.norm(px[:, None] - (a[None] + t[..., None] * ab[None]), axis=2) - 0.5 * width[None]
