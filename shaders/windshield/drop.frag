@@ -80,7 +80,8 @@ void main() {
         vec3 Nw = normalize(N - u_refraction * (slope.x * Ts + slope.y * Tt));
         float h = max(dot(Nw, normalize(N + 0.35 * Tt)), 0.0);
         col += u_sky_light * (u_highlight / spread) * pow(h, 300.0 / spread);
-        if (transmit > 0.0 && k == 0) glint = glints(v_pos, out_dir) * u_exposure * transmit * 0.2;
+        // The lamps' glint, like the highlight, spread over the blur disc when defocused (its light kept).
+        if (transmit > 0.0 && k == 0) glint = glints(v_pos, out_dir) * u_exposure * transmit * 0.2 / spread;
         sum += col * wk;
         weight += wk;
     }
