@@ -1,7 +1,7 @@
-"""Contact sheet of lightning: one flash frame by frame (30 frames/s) at night from above the roofs, facing the
-bolt, then the same flash from the street by night and at dusk. ``python -m rain_core.sheets lightning`` writes
-docs/sheets/lightning.png. The return strokes (40–80 ms apart) land in separate frames and the continuing current
-glows between them: the flicker of a real flash.
+"""Contact sheet of lightning: one flash frame by frame (30 frames/s) at night from above the roofs, facing the bolt,
+then the same flash from the street by night and at dusk, at the hour's fixed exposure. ``python -m rain_core.sheets
+lightning`` writes docs/sheets/lightning.png. The return strokes (40–80 ms apart) land in separate frames and the
+continuing current glows between them: the flicker of a real flash.
 """
 
 from __future__ import annotations
@@ -34,6 +34,9 @@ def render_sequence(ctx, hour: float, eye_height_m: float, times, size=SIZE) -> 
     s.rain.rate_mm_h = 20.0
     s.time_of_day.hour = hour
     s.lightning.flashes_per_min = 10.0
+    # A fixed exposure (the hour's meter), as a photographer shoots lightning: an eye adapted to the dark street
+    # is blinded by the flash and the frames would be white.
+    s.camera.auto_exposure = False
     scene = Scene(ctx, size, s, seed=SEED, gpu_timing=False)
     flash = near_flash()
     bearing = np.array([np.cos(flash.bearing_rad), 0.0, np.sin(flash.bearing_rad)])
