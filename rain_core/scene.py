@@ -21,7 +21,7 @@ from rain_core.lighting import lighting_for_hour, with_sky_light
 from rain_core.settings import Settings
 from rain_core.vehicles import Autopilot, EgoCar, Traffic
 from rain_core.weather import Weather
-from rain_core.world import build_world
+from rain_core.world import shared_world
 
 
 class Scene:
@@ -38,7 +38,7 @@ class Scene:
         self.settings = settings if settings is not None else Settings()
         self.settings.validate()
         self.seed = int(seed)
-        self.world = build_world(seed=self.seed)
+        self.world = shared_world(seed=self.seed)  # read-only, shared by the scenes of this seed
         self.ego = EgoCar(position=np.array([layout.LANE_CENTRES_X[0], 0.0, layout.PERIOD_M * 0.5]),
                           speed_m_s=16.0)
         self.autopilot = Autopilot(lane_index=0, target_speed_m_s=22.0, seed=self.seed)

@@ -128,12 +128,11 @@ def shelter_map_for(world) -> np.ndarray:
     return shelter_map(world)
 
 
-@lru_cache(maxsize=1)
 def default_world():
-    """The default street, ``build_world(seed=1)`` (what the film functions use when given no world)."""
-    from rain_core.world import build_world
+    """The default street, ``shared_world(seed=1)`` (what the film functions use when given no world)."""
+    from rain_core.world import shared_world
 
-    return build_world(seed=1)
+    return shared_world(seed=1)
 
 
 # --- standing water and film (NumPy twin of shaders/road/film.glsl) ----------------------------------------

@@ -320,3 +320,20 @@ def test_kerbside_keeps_the_other_streams(world):
         first = parts[0]["position"]
         hits = np.nonzero(np.all(v == first[0], axis=1))[0]
         assert any(np.array_equal(v[h:h + len(first)], first) for h in hits)
+
+
+def test_scenes_share_one_read_only_street_per_seed():
+    from rain_core.world import shared_world
+
+    a, b = shared_world(seed=1), shared_world(seed=1)
+    assert a is b and shared_world(seed=2) is not a
+    with pytest.raises(ValueError):  # read-only: no scene can change another's street
+        a.vertices["position"][0] = 0.0
+    with pytest.raises(ValueError):
+        a.occluder_map.grid[0, 0] = 1.0
+    with pytest.raises(ValueError):
+        a.lamps[0].position[1] = 0.0
+    assert isinstance(a.lamps, tuple)
+    private = build_world(seed=1)  # still a fresh, writable one
+    assert private is not a and private.vertices.flags.writeable
+    assert private.vertices.tobytes() == a.vertices.tobytes()

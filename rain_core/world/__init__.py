@@ -4,7 +4,8 @@ a railway underpass and a fuel station, cars parked half on the sidewalks, road 
 
 Frame and units: +Y up, metres, the road along Z (see ``rain_core.layout``). The world repeats along Z with period
 ``PERIOD_M``; :func:`build_world` makes ONE tile covering z in [0, PERIOD_M) and the renderer draws it at
-z offsets k·PERIOD_M. Objects never overlap their copies in the neighbouring tiles.
+z offsets k·PERIOD_M. Objects never overlap their copies in the neighbouring tiles. A Scene takes its street from
+:func:`shared_world`: the same read-only tile for every scene of a seed in the process.
 
 Emissive surfaces (``MAT_EMISSIVE``) store emitted radiance in W/sr/m² at 683 lm/W, i.e. luminance in cd/m²
 divided by :data:`LUMINOUS_EFFICACY_LM_PER_W`. On that scale a white Lambertian surface in 100 klx sunlight is
@@ -20,8 +21,9 @@ from rain_core.world.build import World, build_world
 from rain_core.world.heightmap import HEIGHTMAP_EXTENT_M, HEIGHTMAP_TEXEL_M, make_road_heightmap, sample_heightmap
 from rain_core.world.occluders import OCCLUDER_CELL_M, OCCLUDER_COARSE_CELL_M, OCCLUDER_HALF_X_M, OccluderMap
 from rain_core.world.primitives import _rects_up
+from rain_core.world.shared import shared_world
 from rain_core.world.street import GROUND_HALF_X_M, LUMINOUS_EFFICACY_LM_PER_W, StreetLamp
 
 __all__ = ["GROUND_HALF_X_M", "HEIGHTMAP_EXTENT_M", "HEIGHTMAP_TEXEL_M", "LUMINOUS_EFFICACY_LM_PER_W",
            "OCCLUDER_CELL_M", "OCCLUDER_COARSE_CELL_M", "OCCLUDER_HALF_X_M", "OccluderMap", "StreetLamp", "World",
-           "_rects_up", "build_world", "make_road_heightmap", "sample_heightmap"]
+           "_rects_up", "build_world", "make_road_heightmap", "sample_heightmap", "shared_world"]
