@@ -255,34 +255,28 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
             self._rows = buf.view(_ROW).ravel()
 
     def _append(self, pos: np.ndarray, vel: np.ndarray, mass: np.ndarray, radius: np.ndarray | None = None) -> None:
-        k = len(mass)
-        if k == 0:
-            return
-        n = self._n
-        self._reserve(n + k)
-        rows = self._buf[n : n + k]
-        rows[:, _S : _T + 1] = pos
-        rows[:, _VS : _VT + 1] = vel
-        rows[:, _M] = mass
-        rows[:, _TRAIL] = 0.0
-        rows[:, _A] = drop_radius(mass) if radius is None else radius
-        rows[:, _KEY] = _DIRTY  # the position's columns are written before they are read (_flush_placed)
-        rows[:, _RB] = np.inf
-        self._dirty = True
-        self._fresh_buf[n : n + k] = True
-        self._n = n + k
+        rows = self._new_rows(mass, radius)
+        if rows is not None:
+            rows[:, _S : _T + 1] = pos
+            rows[:, _VS : _VT + 1] = vel
 
     def _append_at_rest(self, s: np.ndarray, t: np.ndarray, mass: np.ndarray, radius: np.ndarray | None = None) -> None:
         """``_append`` of drops at rest at (s, t) m, given as columns."""
+        rows = self._new_rows(mass, radius)
+        if rows is not None:
+            rows[:, _S] = s
+            rows[:, _T] = t
+            rows[:, _VS : _VT + 1] = 0.0
+
+    def _new_rows(self, mass: np.ndarray, radius: np.ndarray | None) -> np.ndarray | None:
+        """Rows for len(mass) new drops (mass, radius, a fresh trail, unplaced), their position and velocity
+        left to the caller; None when there are none."""
         k = len(mass)
         if k == 0:
-            return
+            return None
         n = self._n
         self._reserve(n + k)
         rows = self._buf[n : n + k]
-        rows[:, _S] = s
-        rows[:, _T] = t
-        rows[:, _VS : _VT + 1] = 0.0
         rows[:, _M] = mass
         rows[:, _TRAIL] = 0.0
         rows[:, _A] = drop_radius(mass) if radius is None else radius
@@ -291,6 +285,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, WindshieldSimReference)
         self._dirty = True
         self._fresh_buf[n : n + k] = True
         self._n = n + k
+        return rows
 
     def _bead_drops(self, u: np.ndarray, v: np.ndarray, m: np.ndarray) -> None:
         """film.FilmBeading._bead_drops: GlassGeometry.from_uv on columns (the same operations)."""
