@@ -389,6 +389,7 @@ class WindshieldEffect(Effect):
         cabin = 0.02 * 0.5 * (np.asarray(lighting.sky_zenith) + np.asarray(lighting.sky_horizon)) * lighting.exposure
         blades = [(*b.pivot, b.r_inner_m, b.r_outer_m) for b in self.sim.blades]
         drop_lod = math.log2(max(1.0, EYE_APERTURE_BLUR * rc.size[1])) + 0.5
+        # What the glass pass and the drop pass both read.
         shared = dict(
             u_model=mat4_bytes(model),
             u_axis_s=tuple(rot @ self.glass.right),
@@ -405,24 +406,13 @@ class WindshieldEffect(Effect):
         )
         set_uniforms(
             prog,
-            u_model=mat4_bytes(model),
-            u_axis_s=tuple(rot @ self.glass.right),
-            u_axis_t=tuple(rot @ self.glass.up),
-            u_refraction=float(settings.windshield.refraction) if settings is not None else 1.0,
-            u_drop_lod=drop_lod,
+            **shared,
             u_film_lod=drop_lod + FILM_EXTRA_LOD,
             u_texel_m=self._texel_m() if self.resolution else 0.0,
             u_beads=_UNIT_D,
             u_blade=np.array(blades, np.float32).tobytes(),
             u_blade_angle=np.array(self.sim.blade_angles(), np.float32).tobytes(),
-            u_cabin=tuple(float(c) for c in cabin),
-            u_aperture_m=PUPIL_RADIUS_M,
-            u_focus_m=min(float(getattr(frame.camera, "focus_m", math.inf)), 1e9),
-            u_near_far=(frame.camera.near_m, frame.camera.far_m),
-            u_cabin_depth=CABIN_DEPTH_M,
             u_water=_UNIT_A,
-            u_frame=_UNIT_B,
-            u_depth=_UNIT_C,
         )
         self._water.color.use(_UNIT_A)
         copy.color.use(_UNIT_B)
