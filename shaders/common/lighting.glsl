@@ -49,6 +49,20 @@ float spot_factor(int i, vec3 L) {
     return f;
 }
 
+// Light i at p: false beyond its range; else L, the unit direction from p to it, and E, the illuminance (lux,
+// RGB) it gives there, on a surface facing it — spot cone and low-beam pattern included, smoothly windowed to 0
+// at the range. Every lit thing (surfaces, road water, drops, spray, glass glints) reads the lights through this.
+bool light_at(int i, vec3 p, out vec3 L, out vec3 E) {
+    vec3 d = u_light_pos[i].xyz - p;
+    float dist2 = dot(d, d);
+    float range = abs(u_light_pos[i].w);  // negative: a low-beam headlight (spot_factor shapes it)
+    if (dist2 > range * range) return false;
+    L = d * inversesqrt(max(dist2, 1e-8));
+    float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
+    E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);
+    return true;
+}
+
 // Luminance (cd/m²) leaving the surface towards V from the lights (no emission).
 vec3 shade_surface(Surface s, vec3 V) {
     vec3 N = s.normal;
@@ -57,14 +71,8 @@ vec3 shade_surface(Surface s, vec3 V) {
     vec3 color = brdf_direct(N, V, u_sun_dir, diffuse_color, f0, s.roughness) * u_sun_illum
                  * sun_visibility(s.position, N);
     for (int i = 0; i < u_light_count; ++i) {
-        vec3 d = u_light_pos[i].xyz - s.position;
-        float dist2 = dot(d, d);
-        float range = abs(u_light_pos[i].w);
-        if (dist2 > range * range) continue;
-        vec3 L = d * inversesqrt(dist2);
-        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);  // smooth cut at range
-        vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);  // lux
-        color += brdf_direct(N, V, L, diffuse_color, f0, s.roughness) * E;
+        vec3 L, E;
+        if (light_at(i, s.position, L, E)) color += brdf_direct(N, V, L, diffuse_color, f0, s.roughness) * E;
     }
     color *= u_direct_scale;
     float NoV = max(dot(N, V), 1e-4);

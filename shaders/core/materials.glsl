@@ -31,16 +31,11 @@ vec3 sign_retroreflection(Surface s, vec3 V) {
     if (g_material != MAT_PAINT || s.position.y < 0.5) return vec3(0.0);
     vec3 sum = vec3(0.0);
     for (int i = 0; i < u_light_count; ++i) {
-        vec3 d = u_light_pos[i].xyz - s.position;
-        float dist2 = dot(d, d);
-        float range = abs(u_light_pos[i].w);
-        if (dist2 > range * range) continue;
-        vec3 L = d * inversesqrt(dist2);
+        vec3 L, E;
+        if (!light_at(i, s.position, L, E)) continue;
         float alpha = degrees(acos(clamp(dot(L, V), -1.0, 1.0)));
         if (alpha > 8.0) continue;
         float ra = 300.0 * exp(-alpha / 0.45) + 15.0 * exp(-alpha / 2.0);
-        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
-        vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);
         if (u_light_pos[i].w < 0.0) {
             // A low beam sends ~1/10 of its peak above the horizon (ECE R112: ≤ 625 cd in zone III, more on the
             // kerb side to light signs); spot_factor shapes only the road below.

@@ -45,14 +45,8 @@ vec3 rain_drop_radiance(vec3 p, vec3 to_eye) {
     vec3 L = rain_environment(-to_eye);
     L += u_sun_illum * rain_phase(dot(-u_sun_dir, to_eye)) * RAIN_INV_4PI;
     for (int i = 0; i < u_light_count; ++i) {
-        vec3 d = u_light_pos[i].xyz - p;
-        float dist2 = dot(d, d);
-        float range = abs(u_light_pos[i].w);  // negative: a low-beam headlight (spot_factor shapes it)
-        if (dist2 > range * range) continue;
-        vec3 Ld = d * inversesqrt(max(dist2, 1e-8));
-        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
-        vec3 E = u_light_color[i].rgb * spot_factor(i, Ld) * window * window / max(dist2, 0.01);  // lux
-        L += E * rain_phase(dot(-Ld, to_eye)) * RAIN_INV_4PI;
+        vec3 Ld, E;
+        if (light_at(i, p, Ld, E)) L += E * rain_phase(dot(-Ld, to_eye)) * RAIN_INV_4PI;
     }
     return L;
 }

@@ -161,14 +161,8 @@ vec3 road_light_highlights(vec3 P, vec3 N, vec3 V, float roughness, float cover)
     vec3 color = road_water_spec(N, V, u_sun_dir, alpha) * u_sun_illum;
     int count = cover < 0.25 ? 0 : u_light_count;
     for (int i = 0; i < count; ++i) {
-        vec3 d = u_light_pos[i].xyz - P;
-        float dist2 = dot(d, d);
-        float range = u_light_pos[i].w;
-        if (dist2 > range * range) continue;
-        vec3 L = d * inversesqrt(dist2);
-        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
-        vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);
-        color += road_water_spec(N, V, L, alpha) * E;
+        vec3 L, E;
+        if (light_at(i, P, L, E)) color += road_water_spec(N, V, L, alpha) * E;
     }
     return color;
 }

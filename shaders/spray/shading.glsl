@@ -21,14 +21,8 @@ vec3 spray_environment(vec3 view) {
 vec3 spray_point_lights(vec3 pos, vec3 view) {
     vec3 light = u_sun_illum * spray_light_lobe(dot(-u_sun_dir, view));
     for (int i = 0; i < u_light_count; ++i) {
-        vec3 d = u_light_pos[i].xyz - pos;
-        float dist2 = dot(d, d);
-        float range = abs(u_light_pos[i].w);
-        if (dist2 > range * range) continue;
-        vec3 L = d * inversesqrt(dist2);
-        float window = clamp(1.0 - pow(dist2 / (range * range), 2.0), 0.0, 1.0);
-        vec3 E = u_light_color[i].rgb * spot_factor(i, L) * window * window / max(dist2, 0.01);  // lux
-        light += E * spray_light_lobe(dot(-L, view));
+        vec3 L, E;
+        if (light_at(i, pos, L, E)) light += E * spray_light_lobe(dot(-L, view));
     }
     return light;
 }

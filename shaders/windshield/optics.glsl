@@ -42,15 +42,10 @@ vec3 behind_glass(vec3 origin, vec3 dir, float lod) {
 vec3 glints(vec3 origin, vec3 dir) {
     vec3 sum = u_sun_illum * 0.3 * pow(max(dot(dir, u_sun_dir), 0.0), 3000.0) * 3001.0 / 6.2832;
     for (int i = 0; i < u_light_count; ++i) {
-        vec3 d = u_light_pos[i].xyz - origin;
-        float dist2 = dot(d, d);
-        float range = u_light_pos[i].w;
-        if (dist2 > range * range) continue;
-        vec3 L = d * inversesqrt(dist2);
+        vec3 L, E;
+        if (!light_at(i, origin, L, E)) continue;
         float c = dot(dir, L);
-        if (c < 0.99) continue;
-        vec3 lux = u_light_color[i].rgb * spot_factor(i, L) / max(dist2, 0.25);
-        sum += lux * pow(c, 600.0) * 601.0 / 6.2832;
+        if (c >= 0.99) sum += E * pow(c, 600.0) * 601.0 / 6.2832;
     }
     return sum;
 }
