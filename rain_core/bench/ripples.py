@@ -222,7 +222,7 @@ def sources_table(n: int, frames: int, ctx=None) -> str:
     column) and draws them: the draw call's own thread time is a column apart (on llvmpipe it includes the
     emulated vertex shading, which runs on the calling thread; ``ctx.finish`` excluded). Min over frames of the
     thread's CPU time."""
-    from rain_core.effects.ripples.field import WheelBatch
+    from rain_core.effects.ripples.wheels import WheelBatch
     from rain_core.water_film import film_depth_mm
 
     def film(x_m, z_m):

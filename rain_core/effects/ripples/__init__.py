@@ -4,8 +4,9 @@ wakes and raindrops disturb, its normals for the road's water, and a tiled rain-
 GL-free (NumPy only): ``constants``, ``solver`` (the scheme and the float64 reference ``WaveSolver``),
 ``solver_f32`` (``WaveSolverF32``), ``raindrops`` (a frame's raindrops as a hash of the seed, the frame and
 the drop's index: the NumPy twin of ``shaders/ripples/raindrops.glsl``, where the GPU solver makes them from a
-few uniforms), ``field`` (``RippleField``, ``WheelSweep``, ``WheelBatch``, and
-``window_centre_xz`` / ``window_offset_m``: where the window sits ahead of the car). GL side: ``gpu``
+few uniforms), ``wheels`` (``WheelSweep``, ``WheelBatch``: the wheels' contact paths), ``window``
+(``field_grid``, ``window_centre_xz`` / ``window_offset_m``: where the window sits ahead of the car), ``field``
+(``RippleField``). GL side: ``gpu``
 (``WaveSolverGPU``), ``backend`` (``make_solver``, ``choose_backend``, ``make_field``), ``textures``
 (``RippleTextures``: the field's height and slope textures), ``rain_tiles`` (``RainRippleTexture``), ``effect``
 (``RipplesEffect``). The GL names are imported on first use, so the simulation imports and runs without
@@ -29,18 +30,11 @@ from rain_core.effects.ripples.constants import (
     SLEEP_SLOPE,
     WAKE_REF_SPEED_M_S,
 )
-from rain_core.effects.ripples.field import (
-    CPU_SOLVERS,
-    FilmDepthFn,
-    RippleField,
-    WheelBatch,
-    WheelSweep,
-    field_grid,
-    window_centre_xz,
-    window_offset_m,
-)
+from rain_core.effects.ripples.field import CPU_SOLVERS, RippleField
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+from rain_core.effects.ripples.wheels import FilmDepthFn, WheelBatch, WheelSweep
+from rain_core.effects.ripples.window import field_grid, window_centre_xz, window_offset_m
 
 _GL_NAMES = {
     "RipplesEffect": "effect",

@@ -8,10 +8,11 @@ import time
 import numpy as np
 
 from rain_core.effects.ripples.constants import BACKENDS, CAPILLARY_SPEED_M_S, DEFAULT_DAMPING_PER_S
-from rain_core.effects.ripples.field import CPU_SOLVERS, RippleField, field_grid
+from rain_core.effects.ripples.field import CPU_SOLVERS, RippleField
 from rain_core.effects.ripples.gpu import WaveSolverGPU
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+from rain_core.effects.ripples.window import field_grid
 
 
 def _time_steps(solver: WaveSolver, steps: int, after=None) -> float:

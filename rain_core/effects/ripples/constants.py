@@ -33,7 +33,7 @@ CRATER_RADIUS_PER_D = 2.5
 # "gpu" the fragment-shader path (needs a context), "reference" the float64 NumPy reference.
 BACKENDS = ("auto", "numpy32", "gpu", "reference")
 
-# Where the window sits (``field.window_centre_xz``): the road shader fades the field's slopes over this fraction
+# Where the window sits (``window.window_centre_xz``): the road shader fades the field's slopes over this fraction
 # of the window at each edge (shaders/road/surface.glsl, road_ripple_slope), so the window's rear edge is put
 # this far (plus one re-centring hysteresis) behind what it must cover.
 WINDOW_EDGE_FADE = 0.05

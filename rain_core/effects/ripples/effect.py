@@ -6,9 +6,11 @@ from __future__ import annotations
 import numpy as np
 
 from rain_core.effects.ripples.backend import make_field
-from rain_core.effects.ripples.field import RippleField, WheelBatch, WheelSweep, window_centre_xz
+from rain_core.effects.ripples.field import RippleField
 from rain_core.effects.ripples.rain_tiles import RainRippleTexture
 from rain_core.effects.ripples.textures import RippleTextures
+from rain_core.effects.ripples.wheels import WheelBatch, WheelSweep
+from rain_core.effects.ripples.window import window_centre_xz
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import RainRings
 from rain_core.gfx.shaders import ShaderLibrary
@@ -89,7 +91,7 @@ class RipplesEffect(Effect):
     @staticmethod
     def window_centre(frame, field: RippleField) -> tuple[float, float] | None:
         """World (x, z) in m where the window is centred this frame (None: no ego car, keep the window): ahead
-        of the ego car along its heading, by ``field.window_offset_m`` for the frame's camera (driver's seat: the
+        of the ego car along its heading, by ``window.window_offset_m`` for the frame's camera (driver's seat: the
         window reaches ~21 m ahead, so the wakes of the cars ahead are simulated where the driver sees them;
         chase: from behind the camera over the car to ~16 m ahead)."""
         ego = frame.ego

@@ -8,8 +8,6 @@ NumPy only: the field runs, steps and sleeps without OpenGL. The GPU solver is b
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,12 +17,10 @@ from rain_core.effects.ripples.constants import (
     CAPILLARY_SPEED_M_S,
     CRATER_RADIUS_PER_D,
     DEFAULT_DAMPING_PER_S,
-    MAX_CELLS_PER_SIDE,
     MAX_IMPULSE_M,
     MIN_FOOTPRINT_CELLS,
     RAIN_DENT_M_PER_KG_M_S,
     WAKE_REF_SPEED_M_S,
-    WINDOW_EDGE_FADE,
 )
 from rain_core.effects.ripples.raindrops import (
     DropLaw,
@@ -36,6 +32,8 @@ from rain_core.effects.ripples.raindrops import (
 )
 from rain_core.effects.ripples.solver import WaveSolver, shift_in_place
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+from rain_core.effects.ripples.wheels import FilmDepthFn, WheelBatch
+from rain_core.effects.ripples.window import field_grid
 
 # The solvers that need no OpenGL context, by backend name.
 CPU_SOLVERS = {"reference": WaveSolver, "numpy32": WaveSolverF32}
@@ -46,82 +44,6 @@ RAIN_CANDIDATE_FACTOR = 4
 RAIN_FRACTION_STRIDE = 4
 
 
-@dataclass(frozen=True)
-class WheelSweep:
-    """One wheel's contact path over a frame: world (x, z) in m at the previous and the current frame, its
-    speed in m/s, tyre width in m, and the water film depth under it in mm (None: ask film_depth_fn)."""
-
-    p0_xz: tuple[float, float]
-    p1_xz: tuple[float, float]
-    speed_m_s: float
-    tire_width_m: float
-    film_depth_mm: float | None = None
-
-
-FilmDepthFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
-
-
-@dataclass(frozen=True)
-class WheelBatch:
-    """Many wheels' contact paths over a frame, as arrays: ``p0_xz`` and ``p1_xz`` (W, 2) world m, ``speed_m_s``
-    (W,) ≥ 0, ``tire_width_m`` (W,), ``film_depth_mm`` (W,) or None (ask the film-depth function, once for all
-    wheels, at the middle of each path). ``WheelBatch.of(wheels)`` also takes ``WheelSweep``s or 5-tuples."""
-
-    p0_xz: np.ndarray
-    p1_xz: np.ndarray
-    speed_m_s: np.ndarray
-    tire_width_m: np.ndarray
-    film_depth_mm: np.ndarray | None = None
-
-    def __len__(self) -> int:
-        return len(self.speed_m_s)
-
-    @property
-    def needs_depth(self) -> bool:
-        return len(self) > 0 and (self.film_depth_mm is None or bool(np.isnan(self.film_depth_mm).any()))
-
-    @classmethod
-    def of(cls, wheels) -> WheelBatch:
-        """A validated batch (ValueError naming the bad field): a WheelBatch, or an iterable of ``WheelSweep``
-        or (p0, p1, speed, film depth mm or None, tyre width) tuples."""
-        if isinstance(wheels, WheelBatch):
-            p0, p1, speed, width, depth = (wheels.p0_xz, wheels.p1_xz, wheels.speed_m_s, wheels.tire_width_m,
-                                           wheels.film_depth_mm)
-        else:
-            rows = [(w.p0_xz, w.p1_xz, w.speed_m_s, w.film_depth_mm, w.tire_width_m) if isinstance(w, WheelSweep)
-                    else tuple(w) for w in wheels]
-            if not rows:
-                return _NO_WHEELS
-            if any(len(r) != 5 for r in rows):
-                raise ValueError("each wheel must be a WheelSweep or (p0, p1, speed, film depth mm, tyre width)")
-            p0, p1, speed, depth, width = zip(*rows, strict=True)
-            depth = [math.nan if d is None else d for d in depth]
-        p0 = checks.finite_array("p0_xz", p0).reshape(-1, 2)
-        p1 = checks.finite_array("p1_xz", p1).reshape(-1, 2)
-        speed = checks.array("speed_m_s", speed, 0.0, 1e3, "m/s").reshape(-1)
-        width = checks.array("tire_width_m", width, 1e-3, 10.0, "m").reshape(-1)
-        if depth is not None:
-            depth = np.asarray(depth, dtype=np.float64).reshape(-1)
-            known = ~np.isnan(depth)
-            checks.array("film_depth_mm", depth[known], 0.0, 1e3, "mm")
-        if not (len(p0) == len(p1) == len(speed) == len(width)) or (depth is not None and len(depth) != len(speed)):
-            raise ValueError("the wheel arrays must have one entry per wheel")
-        return cls(p0, p1, speed, width, depth)
-
-    def rows(self, film_depth_fn: FilmDepthFn | None) -> np.ndarray:
-        """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call."""
-        depth = np.full(len(self), np.nan) if self.film_depth_mm is None else self.film_depth_mm.copy()
-        unknown = np.isnan(depth)
-        if unknown.any():
-            mid = 0.5 * (self.p0_xz[unknown] + self.p1_xz[unknown])
-            asked = np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64)
-            depth[unknown] = np.clip(np.nan_to_num(np.broadcast_to(asked, mid[:, 0].shape), nan=0.0), 0.0, 1e3)
-        return np.column_stack([self.p0_xz, self.p1_xz, self.speed_m_s, depth, self.tire_width_m])
-
-
-_NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
-
-
 def _runs(index: np.ndarray):
     """(start, stop) of each run of consecutive values in a sorted index array."""
     if index.size == 0:
@@ -130,55 +52,6 @@ def _runs(index: np.ndarray):
     starts = np.concatenate([[0], breaks])
     stops = np.concatenate([breaks, [index.size]])
     return [(int(index[a]), int(index[b - 1]) + 1) for a, b in zip(starts, stops, strict=True)]
-
-
-def field_grid(n: int, extent_m: float) -> tuple[int, float, float]:
-    """(n, extent in m, cell size in m) of a field of n cells per side (≥ 8) spanning extent_m; ValueError if
-    either is bad."""
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or not 8 <= n <= MAX_CELLS_PER_SIDE:
-        raise ValueError(f"n must be an int in [8, {MAX_CELLS_PER_SIDE}] (cells per side), got {checks.quote(n)}")
-    extent = checks.number("extent_m", extent_m, 1e-3, 1e5, "m")
-    return int(n), extent, extent / (int(n) - 1)
-
-
-def window_offset_m(extent_m: float, camera_along_m: float | None, car_half_length_m: float,
-                    margin_m: float = 0.0) -> float:
-    """How far ahead of the car's centre, in m along its heading, the window's centre goes: the window's rear
-    edge sits ``margin_m`` + WINDOW_EDGE_FADE × extent behind whichever lies further back of the car's rear
-    (``car_half_length_m`` behind its centre) and the camera (``camera_along_m``: the camera's position along
-    the heading, m from the car's centre; None: a camera that does not look ahead along the heading), and the
-    window reaches forward from there: the rest of the extent lies ahead, where a driver looks.
-
-    The effect passes its re-centring hysteresis as ``margin_m`` (4 cells: 0.2 m on the default 512-cell, 25 m
-    grid). The driver's eye (0.4 m behind the centre) puts the rear edge behind the car's: the window spans
-    −3.75 … +21.25 m, so the wakes of the cars 10–20 m ahead are simulated. The chase camera (7 m behind) puts
-    it behind the camera: −8.45 … +16.55 m, the car and the road the camera sees near it. Never negative: the
-    window stays centred on the car, as before, when the camera does not look ahead, is far behind (a fixed
-    camera), or the window is too short to reach past the car."""
-    if camera_along_m is None:
-        return 0.0
-    rear = min(float(camera_along_m), -float(car_half_length_m)) - float(margin_m) - WINDOW_EDGE_FADE * extent_m
-    return max(0.0, 0.5 * extent_m + rear)
-
-
-def window_centre_xz(position_xz, heading_xz, extent_m: float, camera_position=None, camera_forward=None,
-                     car_half_length_m: float = 2.3, margin_m: float = 0.0) -> tuple[float, float]:
-    """World (x, z) in m of the window's centre for a car at ``position_xz`` (m) heading along ``heading_xz``
-    (a horizontal direction, any length) seen from a camera at ``camera_position`` (3-vector, world m) looking
-    along ``camera_forward``: the car's position plus the heading × ``window_offset_m``. No camera, or one
-    looking backwards along the heading: centred on the car."""
-    x, z = float(position_xz[0]), float(position_xz[1])
-    hx, hz = float(heading_xz[0]), float(heading_xz[1])
-    norm = math.hypot(hx, hz)
-    if norm == 0.0 or not math.isfinite(norm):
-        return x, z
-    hx, hz = hx / norm, hz / norm
-    along = None
-    if camera_position is not None and camera_forward is not None:
-        if float(camera_forward[0]) * hx + float(camera_forward[2]) * hz > 0.0:  # the camera looks ahead
-            along = (float(camera_position[0]) - x) * hx + (float(camera_position[2]) - z) * hz
-    offset = window_offset_m(extent_m, along, car_half_length_m, margin_m)
-    return x + hx * offset, z + hz * offset
 
 
 class RippleField:

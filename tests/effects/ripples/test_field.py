@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from rain_core.effects.ripples.field import RippleField, WheelSweep
+from rain_core.effects.ripples.field import RippleField
+from rain_core.effects.ripples.wheels import WheelSweep
 
 
 def test_field_is_world_anchored():

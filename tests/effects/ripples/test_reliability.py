@@ -11,9 +11,11 @@ import numpy as np
 import pytest
 
 from rain_core.effects.ripples.constants import MAX_CELLS_PER_SIDE
-from rain_core.effects.ripples.field import RippleField, WheelBatch, field_grid
+from rain_core.effects.ripples.field import RippleField
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+from rain_core.effects.ripples.wheels import WheelBatch
+from rain_core.effects.ripples.window import field_grid
 
 H = 0.05
 S = 0.35

@@ -1,0 +1,91 @@
+"""What the wheels hand the ripple field each frame: their contact paths (``WheelSweep`` one by one, or
+``WheelBatch`` as arrays), validated at this boundary.
+
+NumPy only.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from rain_core import checks
+
+
+@dataclass(frozen=True)
+class WheelSweep:
+    """One wheel's contact path over a frame: world (x, z) in m at the previous and the current frame, its
+    speed in m/s, tyre width in m, and the water film depth under it in mm (None: ask film_depth_fn)."""
+
+    p0_xz: tuple[float, float]
+    p1_xz: tuple[float, float]
+    speed_m_s: float
+    tire_width_m: float
+    film_depth_mm: float | None = None
+
+
+FilmDepthFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class WheelBatch:
+    """Many wheels' contact paths over a frame, as arrays: ``p0_xz`` and ``p1_xz`` (W, 2) world m, ``speed_m_s``
+    (W,) ≥ 0, ``tire_width_m`` (W,), ``film_depth_mm`` (W,) or None (ask the film-depth function, once for all
+    wheels, at the middle of each path). ``WheelBatch.of(wheels)`` also takes ``WheelSweep``s or 5-tuples."""
+
+    p0_xz: np.ndarray
+    p1_xz: np.ndarray
+    speed_m_s: np.ndarray
+    tire_width_m: np.ndarray
+    film_depth_mm: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        return len(self.speed_m_s)
+
+    @property
+    def needs_depth(self) -> bool:
+        return len(self) > 0 and (self.film_depth_mm is None or bool(np.isnan(self.film_depth_mm).any()))
+
+    @classmethod
+    def of(cls, wheels) -> WheelBatch:
+        """A validated batch (ValueError naming the bad field): a WheelBatch, or an iterable of ``WheelSweep``
+        or (p0, p1, speed, film depth mm or None, tyre width) tuples."""
+        if isinstance(wheels, WheelBatch):
+            p0, p1, speed, width, depth = (wheels.p0_xz, wheels.p1_xz, wheels.speed_m_s, wheels.tire_width_m,
+                                           wheels.film_depth_mm)
+        else:
+            rows = [(w.p0_xz, w.p1_xz, w.speed_m_s, w.film_depth_mm, w.tire_width_m) if isinstance(w, WheelSweep)
+                    else tuple(w) for w in wheels]
+            if not rows:
+                return _NO_WHEELS
+            if any(len(r) != 5 for r in rows):
+                raise ValueError("each wheel must be a WheelSweep or (p0, p1, speed, film depth mm, tyre width)")
+            p0, p1, speed, depth, width = zip(*rows, strict=True)
+            depth = [math.nan if d is None else d for d in depth]
+        p0 = checks.finite_array("p0_xz", p0).reshape(-1, 2)
+        p1 = checks.finite_array("p1_xz", p1).reshape(-1, 2)
+        speed = checks.array("speed_m_s", speed, 0.0, 1e3, "m/s").reshape(-1)
+        width = checks.array("tire_width_m", width, 1e-3, 10.0, "m").reshape(-1)
+        if depth is not None:
+            depth = np.asarray(depth, dtype=np.float64).reshape(-1)
+            known = ~np.isnan(depth)
+            checks.array("film_depth_mm", depth[known], 0.0, 1e3, "mm")
+        if not (len(p0) == len(p1) == len(speed) == len(width)) or (depth is not None and len(depth) != len(speed)):
+            raise ValueError("the wheel arrays must have one entry per wheel")
+        return cls(p0, p1, speed, width, depth)
+
+    def rows(self, film_depth_fn: FilmDepthFn | None) -> np.ndarray:
+        """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call."""
+        depth = np.full(len(self), np.nan) if self.film_depth_mm is None else self.film_depth_mm.copy()
+        unknown = np.isnan(depth)
+        if unknown.any():
+            mid = 0.5 * (self.p0_xz[unknown] + self.p1_xz[unknown])
+            asked = np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64)
+            depth[unknown] = np.clip(np.nan_to_num(np.broadcast_to(asked, mid[:, 0].shape), nan=0.0), 0.0, 1e3)
+        return np.column_stack([self.p0_xz, self.p1_xz, self.speed_m_s, depth, self.tire_width_m])
+
+
+_NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
