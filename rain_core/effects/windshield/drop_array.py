@@ -1,0 +1,184 @@
+"""The fast path's drops as one array (``WindshieldSim``'s storage; see ``sim``'s docstring): position,
+velocity, mass, trail run, contact radius and the position's cached columns are the columns of one preallocated
+array (``drop_rows``). Appending writes rows, removing drops is one compaction of whole rows, sorting one
+gather; ``pos``, ``vel``, ``mass``, ``trail`` and ``fresh`` are views of it (assign ``pos`` or ``mass`` whole,
+through their setters, to keep the cell and the radius with them).
+
+A mixin: the class that uses it provides ``_placed`` (the position's columns) and the glass's ``_w0``, ``_dw``
+and ``_height``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rain_core.effects.windshield.constants import drop_radius
+from rain_core.effects.windshield.drop_rows import COLS as _COLS
+from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
+from rain_core.effects.windshield.drop_rows import KEY as _KEY
+from rain_core.effects.windshield.drop_rows import PLACED as _PLACED
+from rain_core.effects.windshield.drop_rows import RB as _RB
+from rain_core.effects.windshield.drop_rows import ROW as _ROW
+from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
+from rain_core.effects.windshield.drop_rows import VS as _VS
+from rain_core.effects.windshield.drop_rows import VT as _VT
+from rain_core.effects.windshield.drop_rows import A as _A
+from rain_core.effects.windshield.drop_rows import M as _M
+from rain_core.effects.windshield.drop_rows import S as _S
+from rain_core.effects.windshield.drop_rows import T as _T
+
+
+class DropArray:
+    """The drops of ``WindshieldSim`` as rows of one array (see the module docstring)."""
+
+    def _init_drops(self) -> None:
+        self._n = 0
+        self._buf = np.zeros((512, _COLS))
+        self._rows = self._buf.view(_ROW).ravel()  # one element a drop: whole-row gathers are ~7× faster
+        self._fresh_buf = np.zeros(512, bool)  # born, grown or merged since the last merge test
+        self._dirty = False  # some drop's position columns are still to be written (drop_rows.DIRTY)
+        self._rest_air = None  # the air (head, cross) the drops' RB and EV columns hold for
+        self._shed_all = False  # test every drop against the glass's edges in the next _shed_outside
+
+    @property
+    def pos(self) -> np.ndarray:
+        return self._buf[: self._n, _S : _T + 1]
+
+    @pos.setter
+    def pos(self, value) -> None:
+        d = self._buf[: self._n]
+        d[:, _S : _T + 1] = value
+        d[:, _PLACED] = self._placed(d[:, _S], d[:, _T])
+        d[:, _RB] = np.inf
+        self._shed_all = True
+
+    @property
+    def vel(self) -> np.ndarray:
+        return self._buf[: self._n, _VS : _VT + 1]
+
+    @vel.setter
+    def vel(self, value) -> None:
+        self._buf[: self._n, _VS : _VT + 1] = value
+        self._buf[: self._n, _RB] = np.inf
+
+    @property
+    def mass(self) -> np.ndarray:
+        return self._buf[: self._n, _M]
+
+    @mass.setter
+    def mass(self, value) -> None:
+        self._buf[: self._n, _M] = value
+        self._buf[: self._n, _A] = drop_radius(self._buf[: self._n, _M])
+        self._buf[: self._n, _RB] = np.inf
+
+    @property
+    def trail(self) -> np.ndarray:
+        return self._buf[: self._n, _TRAIL]
+
+    @trail.setter
+    def trail(self, value) -> None:
+        self._buf[: self._n, _TRAIL] = value
+
+    @property
+    def fresh(self) -> np.ndarray:
+        return self._fresh_buf[: self._n]
+
+    @fresh.setter
+    def fresh(self, value) -> None:
+        self._fresh_buf[: self._n] = value
+
+    @property
+    def count(self) -> int:
+        return self._n
+
+    def radius(self) -> np.ndarray:
+        """Contact radius (m) of each drop."""
+        return self._buf[: self._n, _A].copy()
+
+    def _reserve(self, n: int) -> None:
+        if n > len(self._buf):
+            cap = max(n, 2 * len(self._buf))
+            buf = np.zeros((cap, _COLS))
+            buf[: self._n] = self._buf[: self._n]
+            fresh = np.zeros(cap, bool)
+            fresh[: self._n] = self._fresh_buf[: self._n]
+            self._buf, self._fresh_buf = buf, fresh
+            self._rows = buf.view(_ROW).ravel()
+
+    def _append(self, pos: np.ndarray, vel: np.ndarray, mass: np.ndarray, radius: np.ndarray | None = None) -> None:
+        rows = self._new_rows(mass, radius)
+        if rows is not None:
+            rows[:, _S : _T + 1] = pos
+            rows[:, _VS : _VT + 1] = vel
+
+    def _append_at_rest(self, s: np.ndarray, t: np.ndarray, mass: np.ndarray, radius: np.ndarray | None = None) -> None:
+        """``_append`` of drops at rest at (s, t) m, given as columns."""
+        rows = self._new_rows(mass, radius)
+        if rows is not None:
+            rows[:, _S] = s
+            rows[:, _T] = t
+            rows[:, _VS : _VT + 1] = 0.0
+
+    def _new_rows(self, mass: np.ndarray, radius: np.ndarray | None) -> np.ndarray | None:
+        """Rows for len(mass) new drops (mass, radius, a fresh trail, unplaced), their position and velocity
+        left to the caller; None when there are none."""
+        k = len(mass)
+        if k == 0:
+            return None
+        n = self._n
+        self._reserve(n + k)
+        rows = self._buf[n : n + k]
+        rows[:, _M] = mass
+        rows[:, _TRAIL] = 0.0
+        rows[:, _A] = drop_radius(mass) if radius is None else radius
+        rows[:, _KEY] = _DIRTY  # the position's columns are written before they are read (_flush_placed)
+        rows[:, _RB] = np.inf
+        self._dirty = True
+        self._fresh_buf[n : n + k] = True
+        self._n = n + k
+        return rows
+
+    def _bead_drops(self, u: np.ndarray, v: np.ndarray, m: np.ndarray) -> None:
+        """film.FilmBeading._bead_drops: GlassGeometry.from_uv on columns (the same operations)."""
+        t = v * self._height
+        self._append_at_rest((u - 0.5) * (self._w0 + self._dw * t), t, m)
+
+    def _keep(self, keep: np.ndarray) -> None:
+        n = self._n
+        first = int(keep.argmin())  # the rows before the first one removed stay where they are
+        if keep[first]:
+            return
+        tail = keep[first:]
+        rows = self._rows[first:n][tail]
+        fresh = self._fresh_buf[first:n][tail]
+        k = first + len(rows)
+        self._rows[first:k] = rows
+        self._fresh_buf[first:k] = fresh
+        self._n = k
+
+    def _flush_placed(self) -> None:
+        """Write the position's columns (``_placed``) of the drops placed since they were last written (their KEY
+        is drop_rows.DIRTY): the same values, computed once a step for all of them."""
+        self._dirty = False
+        d = self._buf[: self._n]
+        idx = np.flatnonzero(d[:, _KEY] == _DIRTY)
+        if len(idx):
+            d[idx, _PLACED] = self._placed(d[idx, _S], d[idx, _T])
+
+    def _sort_drops(self) -> None:
+        """Keep the drops in merge-grid cell order (grid.grid_keys), as the reference does."""
+        if self._dirty:
+            self._flush_placed()
+        n = self._n
+        if n < 2:
+            return
+        keys = self._buf[:n, _KEY]
+        if not (keys[1:] < keys[:-1]).any():
+            return
+        order = np.argsort(keys, kind="stable")
+        # Only the span of rows that change places is rewritten.
+        moved = np.flatnonzero(order != np.arange(n))
+        lo, hi = int(moved[0]), int(moved[-1]) + 1
+        order = order[lo:hi]
+        self._rows[lo:hi] = self._rows.take(order)
+        self._fresh_buf[lo:hi] = self._fresh_buf.take(order)
