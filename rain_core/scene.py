@@ -19,7 +19,8 @@ from rain_core.gfx.frame import Frame
 from rain_core.gfx.renderer import Renderer
 from rain_core.lighting import lighting_for_hour, with_sky_light
 from rain_core.settings import Settings
-from rain_core.vehicles import Autopilot, EgoCar, Traffic
+from rain_core.traffic import Autopilot, Traffic
+from rain_core.vehicles import EgoCar
 from rain_core.weather import Weather
 from rain_core.world import shared_world
 

@@ -54,7 +54,8 @@ def _heavy_rain_world(seed: int = 1):
     """What the spray sees of a heavy-rain street with traffic, stepped without a renderer: (settings, step)
     with step(dt) → the next frame (a SimpleNamespace with the Frame fields the spray reads)."""
     from rain_core.settings import Settings
-    from rain_core.vehicles import Autopilot, EgoCar, Traffic
+    from rain_core.traffic import Autopilot, Traffic
+    from rain_core.vehicles import EgoCar
     from rain_core.weather import Weather
     from rain_core.world import build_world
 

@@ -20,7 +20,8 @@ from rain_core import layout
 from rain_core.camera import look_at
 from rain_core.effects.spray import KMH, SprayEffect
 from rain_core.sheets import DEFAULT_OUT, save_sheet
-from rain_core.vehicles import TRUCK_SPEC, Autopilot, Vehicle
+from rain_core.traffic import Autopilot
+from rain_core.vehicles import TRUCK_SPEC, Vehicle
 from rain_core.water_film import film_depth_mm
 
 FRAME_SIZE = (320, 180)

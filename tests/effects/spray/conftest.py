@@ -15,7 +15,7 @@ def truck_scene(gl_ctx):
     from rain_core.effects.spray import SprayEffect
     from rain_core.scene import Scene
     from rain_core.settings import Settings
-    from rain_core.vehicles import Autopilot
+    from rain_core.traffic import Autopilot
 
     def make(enabled=True, strength=1.0, hour=12.0, puddle_mm=None):
         s = Settings()
