@@ -68,27 +68,34 @@ class DoorMirrors:
             return []
         model = ego.model_matrix().copy()
         model[2, 3] -= rc.shift_z
+        faces = self._local_faces(ego.spec)
+        # Every glass's corners projected at once: in the default view both lie beside the frame, and this one
+        # product decides it (a per-glass loop of small NumPy calls cost more than the rest of the frame's plan).
+        corners = faces @ model[:3, :3].T + model[:3, 3]  # (glasses, 4, 3)
         view_proj = rc.projection @ rc.view
+        clip = corners @ view_proj[:, :3].T + view_proj[:, 3]  # (glasses, 4, 4)
+        w = clip[..., 3]
+        in_front = np.all(w > 1e-6, axis=1)  # a corner behind the eye drops the glass
+        ndc = clip[..., :2] / np.where(w > 1e-6, w, 1.0)[..., None]
+        overlaps = np.all(ndc.max(axis=1) > -1.0, axis=1) & np.all(ndc.min(axis=1) < 1.0, axis=1)
+        candidates = np.flatnonzero(in_front & overlaps)
+        if candidates.size == 0:
+            return []
         width, height = rc.size
         eye = np.asarray(rc.camera_position, dtype=np.float64)
         views = []
-        for face in self._local_faces(ego.spec):
-            corners = face @ model[:3, :3].T + model[:3, 3]
-            centre = corners.mean(axis=0)
+        for index in candidates:
+            centre = corners[index].mean(axis=0)
             if float(model[:3, 2] @ (eye - centre)) <= 0.0:  # seen from in front of the car: the glass's back
                 continue
-            normal = _adjusted_normal(model, centre, eye)
-            clip = np.c_[corners, np.ones(4)] @ view_proj.T
-            if np.any(clip[:, 3] <= 1e-6):  # a corner behind the eye
-                continue
-            ndc = clip[:, :2] / clip[:, 3:4]
-            x0, y0 = np.clip((ndc.min(axis=0) * 0.5 + 0.5) * (width, height), 0, (width, height))
-            x1, y1 = np.clip((ndc.max(axis=0) * 0.5 + 0.5) * (width, height), 0, (width, height))
+            x0, y0 = np.clip((ndc[index].min(axis=0) * 0.5 + 0.5) * (width, height), 0, (width, height))
+            x1, y1 = np.clip((ndc[index].max(axis=0) * 0.5 + 0.5) * (width, height), 0, (width, height))
             # The glass's area on screen (a convex quad: the shoelace formula), not its box, decides.
-            px = (ndc * 0.5 + 0.5) * (width, height)
+            px = (ndc[index] * 0.5 + 0.5) * (width, height)
             area = 0.5 * abs(float(np.dot(px[:, 0], np.roll(px[:, 1], -1)) - np.dot(px[:, 1], np.roll(px[:, 0], -1))))
             if area < MIN_PIXELS or x1 - x0 < 1.0 or y1 - y0 < 1.0:
                 continue
+            normal = _adjusted_normal(model, centre, eye)
             plane = (*normal, -float(normal @ centre) - CLIP_OFFSET_M)
             box = (int(x0), int(y0), int(np.ceil(x1)) - int(x0), int(np.ceil(y1)) - int(y0))
             views.append(MirrorView(reflection_about(centre, normal), tuple(float(v) for v in plane), box))
