@@ -28,6 +28,7 @@ GLANCE_TURN = 0.5  # share of the angle to the new velocity the heading turns by
 KERB_UP_LOSS = 0.12  # share of the speed a wheel climbing the kerb costs (a 15 cm step)
 KERB_DOWN_LOSS = 0.04
 REACH_M = 8.0  # circles further than this along z from the car are not tested
+CACHE_SLACK_M = 4.0  # m a car may move before its window of nearby circles is made again
 
 
 @dataclass(frozen=True)
@@ -78,6 +79,7 @@ class StreetCollider:
         order = np.argsort(solids.circles[:, 1])
         self._circles = solids.circles[order]
         self._z = self._circles[:, 1]
+        self._window: tuple[float, np.ndarray] | None = None  # (z m it was made at, circles) of _nearby_circles
 
     def wall_x(self, x: float, z: float) -> float:
         """|x| (m) of the wall on the side of x at z (m, any world z)."""
@@ -92,15 +94,24 @@ class StreetCollider:
         return min(max(x, -limit), limit)
 
     def _nearby_circles(self, z: float) -> np.ndarray:
+        """The circles within REACH_M + CACHE_SLACK_M along z of ``z`` (m), in its period. A car's sub-steps ask
+        about nearly the same z: the last window is kept while z stays within CACHE_SLACK_M of where it was
+        made (a circle further than REACH_M cannot touch a car, so the wider set gives the same contacts)."""
+        cached = self._window
+        if cached is not None and abs(z - cached[0]) <= CACHE_SLACK_M:
+            return cached[1]
         zz = z % layout.PERIOD_M
+        reach = REACH_M + CACHE_SLACK_M
         out = []
         for shift in (-layout.PERIOD_M, 0.0, layout.PERIOD_M):
-            a, b = np.searchsorted(self._z, [zz - REACH_M - shift, zz + REACH_M - shift])
+            a, b = np.searchsorted(self._z, [zz - reach - shift, zz + reach - shift])
             if b > a:
                 c = self._circles[a:b].copy()
                 c[:, 1] += shift + (z - zz)
                 out.append(c)
-        return np.concatenate(out) if out else np.zeros((0, 3))
+        circles = np.concatenate(out) if out else np.zeros((0, 3))
+        self._window = (z, circles)
+        return circles
 
     def resolve(self, car) -> bool:
         """Push ``car`` (rain_core.vehicles.Vehicle) out of whatever it overlaps and take the speed the contact

@@ -303,16 +303,19 @@ class EgoCar(Vehicle):
             return
         n = max(1, math.ceil(dt_s / EGO_SUBSTEP_S - 1e-9))
         h = dt_s / n
+        contacts = self.previous_wheel_contacts
         for _ in range(n):
             if self.collider is None:
                 self._substep(h, throttle, brake, steer, bool(reverse))
                 continue
-            before = self.wheel_contacts()
+            before = contacts
             self._substep(h, throttle, brake, steer, bool(reverse))
-            up, down = kerb_crossings(before, self.wheel_contacts())
+            contacts = self.wheel_contacts()
+            up, down = kerb_crossings(before, contacts)
             if up or down:
                 self.speed_m_s = kerb_speed(self.speed_m_s, up, down)
-            self.collider.resolve(self)
+            if self.collider.resolve(self):  # pushed out of something: the wheels moved with the body
+                contacts = self.wheel_contacts()
 
     def _substep(self, h: float, throttle: float, brake: float, steer: float, reverse: bool) -> None:
         spec = self.spec
