@@ -1,8 +1,9 @@
 """Sampling raindrop arrivals on the glass without a search (the fast path, ``sim.WindshieldSim``): the
 flux-weighted size law of one rain rate and glass motion as a bucket table over its cumulative distribution, so a
 sample is a gather instead of ``np.interp``'s binary search; only the far tail searches. The bucket table is built
-only when a sample is large enough to repay it (the law changes nearly every frame while the car accelerates,
-and a frame's few hundred samples search the 512-point CDF faster than the table is built)."""
+only when it repays itself: for a large sample, or when the same law is sampled again (a steady speed). The law
+changes nearly every frame while the car accelerates, and one frame's sample of ~2,000 searches the 512-point CDF
+about as fast as the table is built and then used."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import numpy as np
 
 from rain_core.effects.windshield.reference import _D_GRID_MM
 
-_CDF_BUCKETS = 4096
+_CDF_BUCKETS = 2048  # (4096 samples no faster and take ~30 % longer to build)
 _TABLE_FROM = 4096  # samples at least this large use the bucket table; smaller ones search (the same intervals)
 
 
@@ -27,11 +28,15 @@ class ArrivalTable:
         self.c_slope = np.diff(closing) / np.diff(_D_GRID_MM)
         self.closing = closing
         self.first = None
+        self._searched = False  # a sample searched already: the next one builds the table
 
     def _build_buckets(self) -> None:
         cdf = self.cdf
         edges = np.arange(_CDF_BUCKETS + 1) * (self.total / _CDF_BUCKETS)
-        j = np.searchsorted(cdf, edges, "right") - 1
+        # np.searchsorted(cdf, edges, "right") - 1, counted from the other side: the CDF's few hundred points are
+        # searched among the edges (cdf ≤ edge k ⟺ the first edge ≥ that point is at most k).
+        at = np.searchsorted(edges, cdf, "left")
+        j = np.cumsum(np.bincount(at, minlength=_CDF_BUCKETS + 2)[: _CDF_BUCKETS + 1]) - 1
         self.first = np.minimum(np.maximum(j[:-1] - 1, 0), len(cdf) - 2)  # one interval of slack for rounding
         self.span = j[1:] - self.first  # intervals a bucket may need to step over
         self.steps = int(min(self.span.max(), 3))
@@ -41,10 +46,11 @@ class ArrivalTable:
         """Diameters (mm) at the CDF quantiles ``u`` ∈ [0, 1) (as np.interp on the CDF gives them), and their
         closing speeds (m/s)."""
         x = u * self.total
-        if len(u) < _TABLE_FROM:
-            j = np.searchsorted(self.cdf, x, "right") - 1  # the interval the bucket walk below finds
-            return self._interpolate(j, x)
         if self.first is None:
+            if len(u) < _TABLE_FROM and not self._searched:
+                self._searched = True
+                j = np.searchsorted(self.cdf, x, "right") - 1  # the interval the bucket walk below finds
+                return self._interpolate(j, x)
             self._build_buckets()
         k = np.minimum((u * _CDF_BUCKETS).astype(np.int64), _CDF_BUCKETS - 1)
         j = self.first[k]

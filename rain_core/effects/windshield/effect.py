@@ -31,7 +31,7 @@ from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import float_target, fullscreen_triangle
-from rain_core.gfx.uniforms import mat4_bytes, set_uniform, set_uniforms
+from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform, set_uniforms
 from rain_core.physics import RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
@@ -329,8 +329,8 @@ class WindshieldEffect(Effect):
         for blade, sweep in zip(self.sim.blades, self.sim.frame_sweeps(), strict=True):
             blades.append((*blade.pivot, blade.r_inner_m, blade.r_outer_m))
             sweeps.append((sweep[0], sweep[1], 1.0, residue_um) if sweep else (0.0, 0.0, 0.0, 0.0))
-        set_uniforms(
-            self.film_prog,
+        # Our programs' own uniforms go through owned_uniforms: a value that did not change is not written again.
+        owned_uniforms(self.film_prog).update(dict(
             u_film=_UNIT_A,
             u_coarse=_UNIT_B,
             u_coarse_lod=lod,
@@ -342,7 +342,7 @@ class WindshieldEffect(Effect):
             u_sweep=np.array(sweeps, np.float32).tobytes(),
             u_seed=self.seed % 100000,
             u_bead_dry=dt / BEAD_LIFE_S,
-        )
+        ))
         dst.fbo.use()
         ctx.disable(moderngl.BLEND)
         self._film_vao.render(moderngl.TRIANGLES, vertices=3)
@@ -359,14 +359,13 @@ class WindshieldEffect(Effect):
         self._drops.color.use(_UNIT_A)
         dst.color.use(_UNIT_B)
         self._coarse[cur].use(_UNIT_C)
-        set_uniforms(
-            self.normals_prog,
+        owned_uniforms(self.normals_prog).update(dict(
             u_drops=_UNIT_A,
             u_film=_UNIT_B,
             u_coarse=_UNIT_C,
             u_coarse_lod=lod,
             u_texel=(1.0 / n, 1.0 / n),
-        )
+        ))
         self._water.fbo.use()
         self._normals_vao.render(moderngl.TRIANGLES, vertices=3)
         self._film_index = 1 - self._film_index
@@ -404,16 +403,16 @@ class WindshieldEffect(Effect):
             u_frame=_UNIT_B,
             u_depth=_UNIT_C,
         )
-        set_uniforms(
-            prog,
-            **shared,
+        owned = owned_uniforms(prog)
+        owned.update(shared)
+        owned.update(dict(
             u_film_lod=drop_lod + FILM_EXTRA_LOD,
             u_texel_m=self._texel_m() if self.resolution else 0.0,
             u_beads=_UNIT_D,
             u_blade=np.array(blades, np.float32).tobytes(),
             u_blade_angle=np.array(self.sim.blade_angles(), np.float32).tobytes(),
             u_water=_UNIT_A,
-        )
+        ))
         self._water.color.use(_UNIT_A)
         copy.color.use(_UNIT_B)
         copy.depth.use(_UNIT_C)
@@ -436,12 +435,10 @@ class WindshieldEffect(Effect):
         rc.set_frame_uniforms(prog)
         lighting = frame.lighting
         sky = np.asarray(lighting.sky_zenith, np.float64) * lighting.exposure
-        set_uniforms(
-            prog,
-            **shared,
-            u_pixel_rad=math.radians(frame.camera.fov_y_deg) / rc.size[1],
-            u_sky_light=tuple(float(c) for c in sky),
-        )
+        owned = owned_uniforms(prog)
+        owned.update(shared)
+        owned.set("u_pixel_rad", math.radians(frame.camera.fov_y_deg) / rc.size[1])
+        owned.set("u_sky_light", tuple(float(c) for c in sky))
         self._drop_vao.render(moderngl.TRIANGLES, vertices=6, instances=self._drop_rows)
 
     def release(self) -> None:

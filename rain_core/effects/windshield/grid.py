@@ -129,6 +129,9 @@ FAR_CELL_M = 6.4e-2  # PairFinder's grid for the few drops that reach further (f
 # near table over their boxes instead (and each other directly): the far grid would have every drop look there.
 FAR_DIRECT_MAX = 64
 FAR_DIRECT_CELLS = 8192
+# Every pair (a, b), a < b < FAR_DIRECT_MAX, ordered by b: the pairs of the first f drops are its first f(f-1)/2
+# (np.triu_indices costs ~50 µs a call, and f changes from step to step).
+_PAIR_B, _PAIR_A = np.tril_indices(FAR_DIRECT_MAX, -1)
 
 
 def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, members: np.ndarray):
@@ -180,7 +183,6 @@ class PairFinder:
         p1 = self._p1
         self._around = np.array([di * p1 + dj for di in (-1, 0, 1) for dj in (-1, 0, 1)], np.int16)
         self._f0, self._f1 = _grid_shape(FAR_CELL_M)
-        self._triu: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def _far_in_near_table(self, far_ids, s, t, reach, active, members, budget):
         """Pairs of the few far-reaching drops ``far_ids`` (at most FAR_DIRECT_MAX, their boxes at most
@@ -221,7 +223,8 @@ class PairFinder:
             out_i.append(i[keep])
             out_j.append(j[keep])
         if f > 1:
-            a, b = self._triu.get(f) or self._triu.setdefault(f, np.triu_indices(f, 1))  # (slow to make)
+            k = f * (f - 1) // 2
+            a, b = _PAIR_A[:k], _PAIR_B[:k]
             ds, dt, rr = fs[a] - fs[b], ft[a] - ft[b], reach[far_ids[a]] + reach[far_ids[b]]
             i, j = far_ids[a], far_ids[b]
             keep = (active[i] | active[j]) & (ds * ds + dt * dt <= rr * rr)
@@ -272,8 +275,14 @@ class PairFinder:
                         deferred = np.zeros(n, bool)
                         deferred[f_deferred] = True
                     all_far_done = True
-            q = np.flatnonzero(active & near) if not all_near else np.flatnonzero(active)
-            qk = keys[q] if all_near else keys[np.searchsorted(near_ids, q)]
+            if all_near:
+                q = np.flatnonzero(active)
+                qk = keys[q]
+            else:
+                q = np.flatnonzero(active & near)
+                at = np.empty(n, keys.dtype)  # the near drops' keys by drop index (a search of near_ids costs more)
+                at[near_ids] = keys
+                qk = at[q]
             looked = (qk[:, None] + self._around).ravel()
             c = self._count.take(looked)
             hit = np.flatnonzero(c)

@@ -369,11 +369,12 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         n = self._n
         if n == 0 or len(cells) == 0:
             return placed
-        if self._dirty:
-            self._flush_placed()
         d = self._buf[:n]
         # The drops in those cells (a table marks the cells), grouped by cell in index order.
         drop_cells = d[:, _CELL].astype(np.int16)
+        if self._dirty:  # only the cell of the drops placed this step is needed: the rest of _placed waits
+            dirty = np.flatnonzero(d[:, _KEY] == _DIRTY)
+            drop_cells[dirty] = self._cells(d[dirty, _S], d[dirty, _T])
         cells = cells.astype(np.int16)
         mark = self._cell_mark
         mark[cells] = True
@@ -381,9 +382,10 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         mark[cells] = False
         dc = drop_cells[idx]
         order = np.argsort(dc, kind="stable")  # 16-bit keys: a radix sort
-        dc = dc[order]
-        first = np.searchsorted(dc, cells, "left")
-        c = np.searchsorted(dc, cells, "right") - first
+        # Where each cell's run starts in the sorted cells, and its length (two binary searches, as a count).
+        per_cell = np.bincount(dc, minlength=FILM_CELLS * FILM_CELLS)
+        c = per_cell[cells]
+        first = (np.cumsum(per_cell) - per_cell)[cells]
         placed = c > 0
         if placed.any():
             pick = idx[order[first[placed] + self.rng.integers(0, c[placed])]]

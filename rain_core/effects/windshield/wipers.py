@@ -53,7 +53,8 @@ class Blade:
 
     def angle(self, progress) -> np.ndarray | float:
         """Blade angle (rad) at stroke position ``progress`` in [0, 1] (0 park, 1 top), crank-like easing."""
-        p = np.clip(progress, 0.0, 1.0)
+        # A Python float is clipped in Python (np.clip costs ~8 µs a call); the rest is the same operations.
+        p = min(max(progress, 0.0), 1.0) if type(progress) is float else np.clip(progress, 0.0, 1.0)
         return self.park_rad + (self.top_rad - self.park_rad) * 0.5 * (1.0 - np.cos(math.pi * p))
 
     def segment(self, angle: float) -> tuple[np.ndarray, np.ndarray]:

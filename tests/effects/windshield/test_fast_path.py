@@ -185,9 +185,12 @@ def test_arrival_sampling_by_search_and_by_buckets_agree_with_interp():
         _, closing, cdf = sim.arrival_rate_per_s(GlassInputs.for_speed(speed, 8.0))
         table = arrivals.ArrivalTable(closing, cdf)
         d_big, c_big = table.sample(u)  # the bucket table
-        small = [table.sample(part) for part in np.array_split(u, 16)]  # binary searches
-        assert np.array_equal(d_big, np.concatenate([d for d, _ in small]))
-        assert np.array_equal(c_big, np.concatenate([c for _, c in small]))
+        # A small sample searches the first time a law is sampled, and uses the bucket table once it is built.
+        small = [arrivals.ArrivalTable(closing, cdf).sample(part) for part in np.array_split(u, 16)]
+        again = [table.sample(part) for part in np.array_split(u, 16)]
+        for parts in (small, again):
+            assert np.array_equal(d_big, np.concatenate([d for d, _ in parts]))
+            assert np.array_equal(c_big, np.concatenate([c for _, c in parts]))
         assert np.allclose(d_big, np.interp(u * cdf[-1], cdf, _D_GRID_MM), rtol=1e-12, atol=1e-12)
 
 
