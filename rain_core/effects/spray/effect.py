@@ -16,7 +16,7 @@ from rain_core.effects.spray.wheels import WheelWater
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.targets import ColorView
-from rain_core.gfx.uniforms import set_uniforms
+from rain_core.gfx.uniforms import owned_uniforms
 
 
 class SprayEffect(Effect):
@@ -138,6 +138,24 @@ class SprayEffect(Effect):
         # The pass reads the scene's depth, so it writes through a framebuffer without that depth attached.
         return self._color_fbo.fbo(rc.hdr.color)
 
+    @staticmethod
+    def _set_uniforms(prog, rc, now: float) -> None:
+        """The pass's own uniforms, through the program's OwnedUniforms: only those that changed since the last
+        write are written (the clock, camera velocity and forward change every frame; the rest rarely)."""
+        frame = rc.frame
+        camera = frame.camera
+        vel = frame.ego.velocity() if frame.ego is not None else (0.0, 0.0, 0.0)
+        fwd = camera.basis()[2]
+        owned_uniforms(prog).update({
+            "u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
+            "u_camera_vel": (float(vel[0]), float(vel[1]), float(vel[2])),
+            "u_exposure_s": float(getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)),
+            "u_cam_forward": (float(fwd[0]), float(fwd[1]), float(fwd[2])), "u_depth": units.SPRAY_DEPTH,
+            "u_viewport": (float(rc.size[0]), float(rc.size[1])),
+            "u_near": float(camera.near_m), "u_far": float(camera.far_m),
+            "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
+        })
+
     def render(self, stage: str, rc) -> None:
         if stage != "transparent":
             return
@@ -148,18 +166,7 @@ class SprayEffect(Effect):
         ctx = self.ctx
         prog = self._prog(rc)
         rc.set_frame_uniforms(prog)
-        camera = frame.camera
-        fwd = camera.basis()[2]
-        cam_vel = np.asarray(frame.ego.velocity(), dtype=np.float64) if frame.ego is not None else np.zeros(3)
-        exposure_s = float(getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02))
-        set_uniforms(prog, {
-            "u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
-            "u_camera_vel": tuple(float(x) for x in cam_vel), "u_exposure_s": exposure_s,
-            "u_cam_forward": tuple(float(x) for x in fwd), "u_depth": units.SPRAY_DEPTH,
-            "u_viewport": (float(rc.size[0]), float(rc.size[1])),
-            "u_near": float(camera.near_m), "u_far": float(camera.far_m),
-            "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
-        })
+        self._set_uniforms(prog, rc, now)
         self._depth_sampler.use(units.SPRAY_DEPTH)
         rc.hdr.depth.use(units.SPRAY_DEPTH)
         self._hdr_color_fbo(rc).use()
@@ -202,17 +209,7 @@ class SprayEffect(Effect):
             return
         prog = self._program
         rc.set_frame_uniforms(prog)
-        camera = frame.camera
-        cam_vel = np.asarray(frame.ego.velocity(), dtype=np.float64) if frame.ego is not None else np.zeros(3)
-        set_uniforms(prog, {
-            "u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
-            "u_camera_vel": tuple(float(x) for x in cam_vel),
-            "u_exposure_s": float(getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)),
-            "u_cam_forward": tuple(float(x) for x in camera.basis()[2]), "u_depth": units.SPRAY_DEPTH,
-            "u_viewport": (float(rc.size[0]), float(rc.size[1])),
-            "u_near": float(camera.near_m), "u_far": float(camera.far_m),
-            "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
-        })
+        self._set_uniforms(prog, rc, now)
         self._depth_sampler.use(units.SPRAY_DEPTH)
         target.depth.use(units.SPRAY_DEPTH)
         target.color_fbo.use()

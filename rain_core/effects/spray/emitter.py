@@ -36,6 +36,7 @@ from rain_core.effects.spray.parcels import (
     ParcelRing,
     parcel_state,
 )
+from rain_core.effects.spray.spawn import SpawnBuffers, quantile_90, spawn_parcels_fast
 from rain_core.effects.spray.water import BUCKETS, MIST_D_MM, SPLASH_MIN_MM, STANDING_WATER_MM
 from rain_core.effects.spray.wheels import (
     MAX_FILM_DEPTH_MM,
@@ -87,16 +88,6 @@ def _frame_wind(frame) -> np.ndarray:
     return w
 
 
-def _quantile_90(x: np.ndarray) -> float:
-    """np.quantile(x, 0.9) (linear interpolation) from a partial sort."""
-    n = len(x)
-    pos = 0.9 * (n - 1)
-    lo = int(pos)
-    hi = min(lo + 1, n - 1)
-    part = np.partition(x, (lo, hi))
-    return float(part[lo] + (pos - lo) * (part[hi] - part[lo]))
-
-
 class SprayEmitter:
     """Turns the wheels' water into parcels in two rings (droplets, mist) — all the CPU side of the effect.
 
@@ -126,6 +117,9 @@ class SprayEmitter:
         self.stats = SpawnStats()
         self._depth_key: tuple | None = None
         self._depth_fn = None
+        self._book_key: tuple | None = None  # see _book
+        self._book_arrays: tuple = ()
+        self._spawn_buffers = SpawnBuffers()
         self.set_budget(budget)
 
     @property
@@ -286,13 +280,13 @@ class SprayEmitter:
     # --- spawning -----------------------------------------------------------------------------------------
     def _spawn(self, frame, wheels: list[WheelWater], elapsed: float, now: float, wind: np.ndarray) -> None:
         rng = self.rng
-        budgets = [w.budget for w in wheels]
-        rates = np.stack([b.buckets for b in budgets]) * self.strength  # (V, 4, 6) kg/s
-        self.stats.available_kg += float(sum(b.available.sum() for b in budgets)) * elapsed
-        self.stats.thrown_kg += float(rates.sum()) * elapsed
-        zero = np.zeros((4, len(BUCKETS)))
-        acc = np.stack([self._acc.get(id(w.vehicle), zero) for w in wheels])
-        acc = acc + rates * elapsed
+        geo = self.geometry
+        st = self.stats
+        rates = geo.buckets.reshape(len(wheels), 4, len(BUCKETS)) * self.strength  # (V, 4, 6) kg/s
+        st.available_kg += float(geo.available.sum()) * elapsed
+        st.thrown_kg += float(rates.sum()) * elapsed
+        acc, wheel_thrown_kg, wheel_emitted_kg = self._book(wheels)
+        acc += rates * elapsed
         counts = np.zeros(acc.shape, dtype=np.int64)
         for ring, buckets in ((0, slice(0, 5)), (1, slice(5, 6))):
             mass = acc[..., buckets]
@@ -304,18 +298,12 @@ class SprayEmitter:
             # At most one ring's worth per step, whatever the interval (bounds the work; never hit at 30 Hz).
             expected = min(rate * elapsed, float(capacity)) * (mass / total)
             whole = np.floor(expected)
-            counts[..., buckets] = (whole + (rng.random(expected.shape) < expected - whole)).astype(np.int64)
+            counts[..., buckets] = whole + (rng.random(expected.shape) < expected - whole)
         emitted = counts > 0
         parcel_mass = np.where(emitted, acc / np.maximum(counts, 1), 0.0)
-        wheel_emitted = np.where(emitted, acc, 0.0).sum(axis=-1)  # (V, 4) kg
-        wheel_thrown = rates.sum(axis=-1) * elapsed
-        acc = np.where(emitted, 0.0, acc)
-        st = self.stats
-        for i, (w, a) in enumerate(zip(wheels, acc, strict=True)):
-            key = id(w.vehicle)
-            self._acc[key] = a
-            st.wheel_thrown_kg[key] = st.wheel_thrown_kg.get(key, 0.0) + wheel_thrown[i]
-            st.wheel_emitted_kg[key] = st.wheel_emitted_kg.get(key, 0.0) + wheel_emitted[i]
+        wheel_emitted_kg += np.where(emitted, acc, 0.0).sum(axis=-1)  # (V, 4) kg
+        wheel_thrown_kg += rates.sum(axis=-1) * elapsed
+        acc[emitted] = 0.0
         if not emitted.any():
             return
         # One row per parcel: which vehicle, wheel and bucket, and its mass (repeat over the counts: no loop).
@@ -323,12 +311,40 @@ class SprayEmitter:
         bi, vi, wi = np.nonzero(counts.transpose(2, 0, 1))
         reps = counts[vi, wi, bi]
         mass_per = parcel_mass[vi, wi, bi]
-        n_drop = int(reps[bi < 5].sum())
-        vi, wi, bi = np.repeat(vi, reps), np.repeat(wi, reps), np.repeat(bi, reps)
+        st.emitted_kg += float(mass_per @ reps)
         mass = np.repeat(mass_per, reps)
-        self.stats.emitted_kg += float(mass_per @ reps)
-        age_now = elapsed * rng.random(len(vi))  # how long before now each parcel left the tyre
-        self._spawn_parcels(frame, self.geometry, n_drop, vi, wi, bi, mass, now - age_now, age_now, now, wind)
+        age_now = elapsed * rng.random(len(mass))  # how long before now each parcel left the tyre
+        if self.reference:
+            n_drop = int(reps[bi < 5].sum())
+            vi, wi, bi = np.repeat(vi, reps), np.repeat(wi, reps), np.repeat(bi, reps)
+            self._spawn_parcels(frame, geo, n_drop, vi, wi, bi, mass, now - age_now, age_now, now, wind)
+        else:
+            bounds = np.zeros(7, dtype=np.int64)
+            np.cumsum(counts.sum(axis=(0, 1)), out=bounds[1:])  # bucket k is rows bounds[k]:bounds[k + 1]
+            spawn_parcels_fast(self, frame, geo, int(bounds[5]), np.repeat(vi * 4 + wi, reps), bounds, mass,
+                               now - age_now, age_now, now, wind, body_hit_time_fast)
+
+    def _book(self, wheels: list[WheelWater]):
+        """The per-wheel accounts of this frame's vehicles, (V, 4, 6) kg not yet emitted and (V, 4) kg thrown and
+        emitted in total, as arrays updated in place: ``_acc`` and the stats' per-vehicle dicts hold views of
+        their rows. Rebuilt from those dicts only when the vehicles (or the stats object) change."""
+        keys = tuple(id(w.vehicle) for w in wheels)
+        st = self.stats
+        if (self._book_key is None or self._book_key[0] != keys or self._book_key[1] is not st
+                or self._book_key[2] is not st.wheel_thrown_kg or self._book_key[3] is not st.wheel_emitted_kg
+                or self._book_key[4] is not self._acc):
+            zero = np.zeros((4, len(BUCKETS)))
+            acc = np.array([self._acc.get(k, zero) for k in keys], dtype=np.float64).reshape(-1, 4, len(BUCKETS))
+            thrown = np.zeros((len(keys), 4))
+            emitted = np.zeros((len(keys), 4))
+            for i, k in enumerate(keys):
+                thrown[i] += st.wheel_thrown_kg.get(k, 0.0)
+                emitted[i] += st.wheel_emitted_kg.get(k, 0.0)
+            for i, k in enumerate(keys):
+                self._acc[k], st.wheel_thrown_kg[k], st.wheel_emitted_kg[k] = acc[i], thrown[i], emitted[i]
+            self._book_arrays = (acc, thrown, emitted)
+            self._book_key = (keys, st, st.wheel_thrown_kg, st.wheel_emitted_kg, self._acc)
+        return self._book_arrays
 
     def _spawn_parcels(self, frame, geo, nd: int, vi, wi, bi, mass, birth, age_now, now, wind) -> None:
         """Launch, fly and file the frame's parcels: rows [:nd] droplets (ring 0), [nd:] mist puffs (ring 1),
@@ -380,7 +396,7 @@ class SprayEmitter:
         for ring, sl in ((0, slice(0, nd)), (1, slice(nd, n))):
             if sl.stop > sl.start:
                 part = life[sl]
-                q90 = float(np.quantile(part, 0.9)) if ref else _quantile_90(part)
+                q90 = float(np.quantile(part, 0.9)) if ref else quantile_90(part)
                 self._life_q90[ring] = 0.9 * self._life_q90[ring] + 0.1 * max(q90, 0.05)
                 horizon[sl] = max(self._life_q90[ring], 0.05)
         # The ring is refilled every q90 seconds (that is how the emission rate was set): a parcel living longer

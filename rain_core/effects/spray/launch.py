@@ -107,102 +107,144 @@ def launch_droplets_reference(rng, geo: WheelGeometry, w, bucket, age_now):
 
 _GROWTH = np.array([_DROPLET_SPREAD[k] for k in range(5)])
 _SIGMA0 = np.array([_DROPLET_SIGMA0_M[k] for k in range(5)])
+# Per bucket: the lognormal's median, log-σ, min and max (columns), for all buckets' drop sizes in one pass.
+_SIZES = np.array([_DROPLET_SIZES[k] for k in range(5)], dtype=np.float64)
+# The uniform draws of each bucket after its size's normal draw, in the reference's order: (low, high) each.
+# ``rng.uniform(lo, hi, m)`` is lo + (hi − lo)·``rng.random(m)`` bit for bit, and consecutive draws of m are
+# one draw of (k, m): one generator call per bucket instead of up to eight. None: a plain ``rng.random``.
+_UNIFORMS = {
+    0: ((0.8, 1.25), (1.0, 1.3), (0.8, 1.8), (0.4, 1.0), SPRAY_AIR_SHARE, (0.0, 0.05), (0.0, 0.08),
+        (0.0, SPRAY_UPDRAUGHT)),
+    1: ((0.8, 1.25), (1.0, 1.3), (0.2, 1.0), (0.4, 1.0), SPRAY_AIR_SHARE, (0.0, 0.05), (0.0, 0.08),
+        (0.0, SPRAY_UPDRAUGHT)),
+    2: ((0.8, 1.25), None, (0.6, 1.0)),
+    3: ((0.8, 1.25), (0.2, 0.5), (0.3, 0.7), None),
+    4: ((0.8, 1.25), (0.8, 1.15), (-0.1, 0.5), None),
+}
+_UNIFORM_LO = {k: np.array([[0.0 if r is None else r[0]] for r in rows]) for k, rows in _UNIFORMS.items()}
+_UNIFORM_SPAN = {k: np.array([[1.0 if r is None else r[1] - r[0]] for r in rows]) for k, rows in _UNIFORMS.items()}
+
+
+def _rows(a: np.ndarray, idx) -> np.ndarray:
+    """a[idx] for a 2-D a: np.take, several times faster than fancy indexing on these small arrays."""
+    return np.take(a, idx, axis=0)
+
+
+def _uniform_rows(rng, k: int, m: int) -> np.ndarray:
+    """Bucket k's uniform draws (rows in ``_UNIFORMS[k]`` order, (rows, m)): the same numbers as the reference's
+    one-by-one ``rng.uniform``/``rng.random`` calls (lo + (hi − lo)·u; 1·u + 0 is u)."""
+    return _UNIFORM_LO[k] + _UNIFORM_SPAN[k] * rng.random((len(_UNIFORMS[k]), m))
 
 
 def launch_droplets(rng, geo: WheelGeometry, w, bucket, age_now):
     """:func:`launch_droplets_reference` with the parcels sorted by bucket (a stable sort keeps each bucket's
-    order, so the same random numbers go to the same parcels): every bucket is a contiguous slice, the per-wheel
-    quantities are gathered once for all parcels, and the results are put back in the callers' order."""
+    order, so the same random numbers go to the same parcels), through :func:`launch_droplets_sorted`; the
+    results are put back in the callers' order."""
     n = len(w)
-    across = rng.random(n) - 0.5  # where on the tread width (× b below)
     order = np.argsort(bucket, kind="stable")
     bounds = np.searchsorted(bucket[order], np.arange(6))
-    ws = w[order]
-    vel = geo.wheel_velocity[ws]
-    c = geo.contacts[ws] - vel * age_now[order][:, None]  # where the contact patch was at birth
-    f, o = geo.travel[ws], geo.outward[ws]
-    r, b, v = geo.radius[ws][:, None], geo.width[ws][:, None], geo.speed[ws][:, None]
-    across = across[order][:, None] * b
-    p0 = np.empty((n, 3))
-    v0 = np.empty((n, 3))
-    d_mm = np.empty(n)
-    sigma0 = np.empty(n)
-    air = np.zeros((n, 3))
-    updraught = np.zeros(n)
+    out = launch_droplets_sorted(rng, geo, w[order], bounds, age_now[order], order=order)
+    back_to = np.empty(n, dtype=np.int64)
+    back_to[order] = np.arange(n)
+    return tuple(a[back_to] for a in out)
+
+
+def launch_droplets_sorted(rng, geo: WheelGeometry, w, bounds, age_now, out=None, order=None):
+    """The droplet launches of parcels already sorted by bucket (bucket k is rows bounds[k]:bounds[k + 1]), as
+    the emitter makes them: every bucket is a contiguous slice, the per-wheel quantities are gathered once for
+    all parcels, each bucket's uniform draws are one generator call. Writes (p0, v0, d_mm, sigma0, growth, air,
+    updraught) into ``out`` (arrays of at least len(w) rows) if given; returns them. ``order``: the sort that
+    made these rows (only for the ``across`` draw, which the reference makes in the callers' order)."""
+    n = len(w)
+    if out is None:
+        out = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3)),
+               np.empty(n))
+    p0, v0, d_mm, sigma0, growth, air, updraught = (a[:n] for a in out)
+    across = rng.random(n) - 0.5  # where on the tread width (× b below)
+    if order is not None:
+        across = across[order]
+    vel = _rows(geo.wheel_velocity, w)
+    c = _rows(geo.contacts, w) - vel * age_now[:, None]  # where the contact patch was at birth
+    f, o = _rows(geo.travel, w), _rows(geo.outward, w)
+    r, b, v = geo.radius[w][:, None], geo.width[w][:, None], geo.speed[w][:, None]
+    across = across[:, None] * b
+    sizes = np.repeat(_SIZES, np.diff(bounds[:6]), axis=0)  # (n, 4) each parcel's bucket's size law
+    unif = np.empty(n)  # the sigma0 draw of each parcel
+    air[:] = 0.0
+    updraught[:] = 0.0
     for k in range(5):
         lo_i, hi_i = int(bounds[k]), int(bounds[k + 1])
         m = hi_i - lo_i
         if m == 0:
             continue
         sl = slice(lo_i, hi_i)
-        d_mm[sl] = _lognormal(rng, *_DROPLET_SIZES[k], m)
-        sigma0[sl] = _SIGMA0[k] * rng.uniform(0.8, 1.25, m)
+        d_mm[sl] = rng.standard_normal(m)  # the size's normal draw (made a size for all buckets below)
+        u = _uniform_rows(rng, k, m)
+        unif[sl] = u[0]
         cs, fs, os_, vs, rs, vels = c[sl], f[sl], o[sl], v[sl], r[sl], vel[sl]
         if k < 2:  # spray (see the reference for the physics of each bucket)
-            lo, hi = (0.8, 1.8) if k == 0 else (0.2, 1.0)
-            back = rs * rng.uniform(1.0, 1.3, (m, 1))
-            up = rs * rng.uniform(lo, hi, (m, 1))
-            out = b[sl] * rng.uniform(0.4, 1.0, (m, 1))
-            p0[sl] = cs - fs * back + os_ * out
+            back, up, out_ = rs * u[1, :, None], rs * u[2, :, None], b[sl] * u[3, :, None]
+            p0[sl] = cs - fs * back + os_ * out_
             p0[sl, 1] += up[:, 0]
-            share = rng.uniform(*SPRAY_AIR_SHARE, (m, 1))
-            lift = rng.uniform(0.0, 0.05, (m, 1))
-            side = rng.uniform(0.0, 0.08, (m, 1))
+            share = u[4, :, None]
             air[sl] = vels * share
-            v0[sl] = air[sl] + vs * (os_ * side)
-            v0[sl, 1] += (vs * lift)[:, 0]
-            updraught[sl] = rng.uniform(0.0, SPRAY_UPDRAUGHT, m)
+            v0[sl] = air[sl] + vs * (os_ * u[6, :, None])
+            v0[sl, 1] += (vs * u[5, :, None])[:, 0]
+            updraught[sl] = u[7]
         elif k == 2:  # tread pickup
-            alpha = np.radians(5.0 + 45.0 * rng.random(m) ** 1.6)[:, None]
-            speed = vs * rng.uniform(0.6, 1.0, (m, 1))
-            lateral = vs * rng.normal(0.1, 0.12, (m, 1))
+            alpha = np.radians(5.0 + 45.0 * u[1] ** 1.6)[:, None]
+            speed = vs * u[2, :, None]
+            lateral = vs * (0.1 + 0.12 * rng.standard_normal(m))[:, None]  # rng.normal(0.1, 0.12), bit for bit
             ca, sa = np.cos(alpha), np.sin(alpha)
             p0[sl] = cs - fs * (rs * sa) + os_ * across[sl]
             p0[sl, 1] += (rs * (1.0 - ca))[:, 0]
             v0[sl] = vels - fs * (speed * ca) + os_ * lateral
             v0[sl, 1] += (speed * sa)[:, 0]
-        elif k == 3:  # side waves
-            p0[sl] = cs + fs * (0.3 * rs) + os_ * (b[sl] / 2.0)
-            p0[sl, 1] += 0.005
-            fwd = rng.uniform(0.2, 0.5, (m, 1))
-            aside = rng.uniform(0.3, 0.7, (m, 1))
-            lift = 0.04 + 0.3 * rng.random((m, 1)) ** 2
-            v0[sl] = vs * (fs * fwd + os_ * aside)
-            v0[sl, 1] += (vs * lift)[:, 0]
-        else:  # bow waves
-            p0[sl] = cs + fs * (0.9 * rs) + os_ * across[sl]
-            p0[sl, 1] += 0.01
-            fwd = rng.uniform(0.8, 1.15, (m, 1))
-            aside = rng.uniform(-0.1, 0.5, (m, 1))
-            lift = 0.08 + 0.35 * rng.random((m, 1)) ** 2
-            v0[sl] = vs * (fs * fwd + os_ * aside)
-            v0[sl, 1] += (vs * lift)[:, 0]
-    back_to = np.empty(n, dtype=np.int64)
-    back_to[order] = np.arange(n)
-    growth = _GROWTH[bucket]
-    return p0[back_to], v0[back_to], d_mm[back_to], sigma0[back_to], growth, air[back_to], updraught[back_to]
+        else:  # side waves (3), bow waves (4)
+            side = k == 3
+            p0[sl] = cs + fs * ((0.3 if side else 0.9) * rs) + os_ * (b[sl] / 2.0 if side else across[sl])
+            p0[sl, 1] += 0.005 if side else 0.01
+            lift = (0.04 + 0.3 * u[3] ** 2) if side else (0.08 + 0.35 * u[3] ** 2)
+            v0[sl] = vs * (fs * u[1, :, None] + os_ * u[2, :, None])
+            v0[sl, 1] += (vs * lift[:, None])[:, 0]
+    # _lognormal and the parcel sizes of every bucket at once (the same operations, parcel by parcel).
+    np.minimum(np.maximum(sizes[:, 0] * np.exp(sizes[:, 1] * d_mm), sizes[:, 2]), sizes[:, 3], out=d_mm)
+    np.multiply(np.repeat(_SIGMA0, np.diff(bounds[:6])), unif, out=sigma0)
+    growth[:] = np.repeat(_GROWTH, np.diff(bounds[:6]))
+    return p0, v0, d_mm, sigma0, growth, air, updraught
 
 
-def launch_mist(rng, geo: WheelGeometry, w, bucket, age_now):
+# The mist's uniform draws, in the reference's order: behind, up, aside, lift, wake share, sideways speed, size.
+_MIST_UNIFORMS = ((0.0, 0.8), (0.4, 1.4), (-0.2, 0.2), WAKE_LIFT, WAKE_SHARE, (0.0, 0.06), (0.8, 1.3))
+_MIST_LO = np.array([[lo] for lo, _ in _MIST_UNIFORMS])
+_MIST_SPAN = np.array([[hi - lo] for lo, hi in _MIST_UNIFORMS])  # hi − lo as rng.uniform computes it
+
+
+def launch_mist(rng, geo: WheelGeometry, w, bucket, age_now, out=None):
     """Mist puffs: released behind the wheel into the wake, which carries them forward at a share of the
-    vehicle's speed; spread rate 2K (m²/s) from the wake's eddy diffusivity."""
+    vehicle's speed; spread rate 2K (m²/s) from the wake's eddy diffusivity. ``out``: as for
+    :func:`launch_droplets_sorted`."""
     n = len(w)
     vi = w // 4
-    c = geo.contacts[w] - geo.wheel_velocity[w] * age_now[:, None]
-    f, o = geo.travel[w], geo.outward[w]
+    c = _rows(geo.contacts, w) - _rows(geo.wheel_velocity, w) * age_now[:, None]
+    f, o = _rows(geo.travel, w), _rows(geo.outward, w)
     r, v = geo.radius[w][:, None], geo.speed[w][:, None]
-    vel = geo.wheel_velocity[w]
+    vel = _rows(geo.wheel_velocity, w)
+    # Its seven uniform draws (_MIST_UNIFORMS) in one call, as _uniform_rows: (7, n, 1).
+    u = (_MIST_LO + _MIST_SPAN * rng.random((7, n)))[..., None]
     # The fine spray of every wheel is drawn into the wake: puffs start just behind the body, in line with the
     # wheel (the air beside the body streams along it; behind it, it recirculates).
-    axle_to_tail = geo.half_length[vi] - np.einsum("nc,nc->n", c - geo.position[vi], -geo.forward[vi])
-    behind = np.maximum(axle_to_tail, 0.0)[:, None] + rng.uniform(0.0, 0.8, (n, 1))
-    p0 = (c - f * behind + _UP * (r * rng.uniform(0.4, 1.4, (n, 1)))
-          + o * rng.uniform(-0.2, 0.2, (n, 1)))
+    axle_to_tail = geo.half_length[vi] - np.einsum("nc,nc->n", c - _rows(geo.position, vi), -_rows(geo.forward, vi))
+    behind = np.maximum(axle_to_tail, 0.0)[:, None] + u[0]
+    p0 = c - f * behind + _UP * (r * u[1]) + o * u[2]
     # The wake's recirculation lifts the mist to about the vehicle's height: upward speed ∝ v·height.
-    lift = v * rng.uniform(*WAKE_LIFT, (n, 1)) * (geo.height[vi] / WAKE_LIFT_HEIGHT_M)[:, None]
-    v0 = vel * rng.uniform(*WAKE_SHARE, (n, 1)) + _UP * lift + o * (v * rng.uniform(0.0, 0.06, (n, 1)))
-    d_mm = np.full(n, MIST_D_MM)
-    sigma0 = MIST_SIGMA0_M * rng.uniform(0.8, 1.3, n)
+    lift = v * u[3] * (geo.height[vi] / WAKE_LIFT_HEIGHT_M)[:, None]
+    v0 = vel * u[4] + _UP * lift + o * (v * u[5])
+    sigma0 = MIST_SIGMA0_M * u[6, :, 0]
     diffusivity = MIST_DIFFUSIVITY * np.linalg.norm(geo.velocity[vi], axis=1) * geo.height[vi]
-    return p0, v0, d_mm, sigma0, 2.0 * diffusivity, np.zeros((n, 3)), np.zeros(n)
-
+    if out is None:
+        return p0, v0, np.full(n, MIST_D_MM), sigma0, 2.0 * diffusivity, np.zeros((n, 3)), np.zeros(n)
+    dst = [a[:n] for a in out]
+    dst[0][:], dst[1][:], dst[2][:], dst[3][:], dst[4][:], dst[5][:], dst[6][:] = (
+        p0, v0, MIST_D_MM, sigma0, 2.0 * diffusivity, 0.0, 0.0)
+    return tuple(dst)

@@ -30,6 +30,13 @@ PARTICLE_DTYPE = np.dtype([
     ("kind", "<f4"), ("d_mm", "<f4"), ("rand", "<f4"), ("glint", "<f4"),  # glint: mist puffs hold σ_max (m)
 ])
 PARTICLE_FORMAT = "4f 4f 4f 4f 4f/i"
+PARTICLE_FLOATS = PARTICLE_DTYPE.itemsize // 4  # every field is float32: a record is this many floats
+
+
+def as_floats(records: np.ndarray) -> np.ndarray:
+    """Contiguous records as an (n, PARTICLE_FLOATS) float32 view: NumPy copies and gathers plain rows ~10×
+    faster than structured ones (it moves those field by field)."""
+    return records.view(np.float32).reshape(len(records), PARTICLE_FLOATS)
 PARTICLE_ATTRIBUTES = ("in_p0", "in_v0", "in_u", "in_life", "in_misc")
 
 
@@ -50,6 +57,7 @@ class ParcelRing:
     def __post_init__(self):
         self.data = np.zeros(self.capacity, PARTICLE_DTYPE)
         self.data["life"] = -1.0  # never drawn
+        self._floats = as_floats(self.data)
         self.death = np.full(self.capacity, -np.inf)
         self.birth = np.full(self.capacity, np.inf)
         self._scratch = np.zeros(0, PARTICLE_DTYPE)
@@ -74,9 +82,11 @@ class ParcelRing:
         self._last_death = max(self._last_death, float(death.max()))
         ranges = []
         start, done = self.head, 0
+        plain = records.dtype == PARTICLE_DTYPE and records.flags.c_contiguous
+        src, dst = (as_floats(records), self._floats) if plain else (records, self.data)
         while done < n:
             count = min(n - done, self.capacity - start)
-            self.data[start:start + count] = records[done:done + count]
+            dst[start:start + count] = src[done:done + count]
             self.birth[start:start + count] = birth[done:done + count]
             self.death[start:start + count] = death[done:done + count]
             ranges.append((start, count))

@@ -101,6 +101,8 @@ class WheelGeometry:
     width: np.ndarray  # (W,) m
     wheel_velocity: np.ndarray  # (W, 3) m/s, the body centre's velocity per wheel
     extra_depth_mm: np.ndarray  # film depth (mm) at the extra points looked up with the wheels (gather_wheels)
+    buckets: np.ndarray  # (W, 6) kg/s, the water budget's buckets of every wheel
+    available: np.ndarray  # (W,) kg/s, M_w of every wheel
 
     def __init__(self, wheels: list[WheelWater] | None = None):
         if wheels is None:
@@ -128,6 +130,8 @@ class WheelGeometry:
         self.radius = np.repeat([v.spec.wheel_radius_m for v in vehicles], 4)
         self.width = np.concatenate([w.width_m for w in wheels])
         self.wheel_velocity = np.repeat(self.velocity, 4, axis=0)
+        self.buckets = np.concatenate([w.budget.buckets for w in wheels]).reshape(-1, 6)
+        self.available = np.concatenate([w.budget.available for w in wheels])
 
 
 class _Fleet:
@@ -252,6 +256,7 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None) -> tuple[list[W
     depth = np.clip(np.nan_to_num(depth, nan=0.0, posinf=MAX_FILM_DEPTH_MM), 0.0, MAX_FILM_DEPTH_MM)
     budget = allocate_water_unchecked(signed, geo.width, depth * 1e-3)
     risk = hydroplaning_risk_unchecked(signed, depth * 1e-3, fleet.pressure)
+    geo.buckets, geo.available = budget.buckets, budget.available
     wheels = []
     for i, v in enumerate(vehicles):
         k = slice(4 * i, 4 * i + 4)

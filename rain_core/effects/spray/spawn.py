@@ -1,0 +1,186 @@
+"""The emitter's per-frame fast path: launch, fly and file one frame's parcels, droplets and mist together.
+
+The same numbers as the float64 reference path of ``SprayEmitter._spawn_parcels`` (tests/effects/spray/
+test_fast_path.py), in fewer NumPy calls: the parcels arrive sorted by bucket, every launch writes into one set of
+reused arrays, nothing is checked again (the emitter made every input itself; the frame was checked at its
+boundary), and the records of both rings are assembled in one pass."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rain_core import layout, physics
+from rain_core.effects.spray.flight import drag_time_constant_unchecked, ground_time
+from rain_core.effects.spray.launch import MIST_LIFE_S, MIST_SIGMA_MAX, WAKE_TAU_S, launch_droplets_sorted, launch_mist
+from rain_core.effects.spray.optics import extinction_area_m2
+from rain_core.effects.spray.parcels import (
+    FATE_AIR,
+    FATE_BODY,
+    FATE_ROAD,
+    KIND_DROPLET,
+    KIND_FADE,
+    KIND_MIST,
+    PARTICLE_DTYPE,
+    as_floats,
+)
+from rain_core.effects.spray.water import MIST_D_MM, SPLASH_MIN_MM
+
+_MIST_VT_M_S = physics.terminal_velocity(MIST_D_MM)
+
+
+def _terminal_velocity(d_mm: np.ndarray) -> np.ndarray:
+    """``physics.terminal_velocity`` without its argument check: the sizes are the launches' own, clipped."""
+    return physics._terminal_velocity_from(physics.GUNN_KINZER_D_MM, physics.GUNN_KINZER_V_M_S, physics._GK_SLOPES,
+                                           d_mm)
+
+
+def quantile_90(x: np.ndarray) -> float:
+    """np.quantile(x, 0.9) (linear interpolation) from a partial sort."""
+    n = len(x)
+    pos = 0.9 * (n - 1)
+    lo = int(pos)
+    hi = min(lo + 1, n - 1)
+    part = np.partition(x, (lo, hi))
+    return float(part[lo] + (pos - lo) * (part[hi] - part[lo]))
+
+
+class SpawnBuffers:
+    """Arrays reused from frame to frame (grown when a frame spawns more, never shrunk): the launches' outputs
+    and the records of both rings, so a frame allocates no parcel-sized arrays of its own for them."""
+
+    def __init__(self):
+        self.size = 0
+        self._grow(256)
+
+    def _grow(self, n: int) -> None:
+        self.size = n
+        self.launch = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3)),
+                       np.empty(n))
+        self.records = np.zeros(n, PARTICLE_DTYPE)
+
+    def ensure(self, n: int) -> SpawnBuffers:
+        if n > self.size:
+            self._grow(max(n, 2 * self.size))
+        return self
+
+
+def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now, now: float, wind,
+                       body_hit) -> None:
+    """What ``SprayEmitter._spawn_parcels`` does on its reference path, for parcels sorted by bucket: rows [:nd]
+    droplets (bucket k in rows bounds[k]:bounds[k + 1]), [nd:] mist puffs; ``w`` the flat wheel index of each.
+    ``body_hit``: the body test (``body_hit_time_fast``'s signature), looked up by the emitter."""
+    rng = em.rng
+    n = len(w)
+    nm = n - nd
+    buf = em._spawn_buffers.ensure(n)
+    out = buf.launch
+    if nd:
+        launch_droplets_sorted(rng, geo, w[:nd], bounds, age_now[:nd], out)
+    if nm:
+        launch_mist(rng, geo, w[nd:], None, age_now[nd:], out=tuple(a[nd:n] for a in out))
+    p0, v0, d_mm, sigma0, growth, air, updraught = (a[:n] for a in out)
+    vt = np.empty(n)
+    vt[:nd] = _terminal_velocity(d_mm[:nd])
+    vt[nd:] = _MIST_VT_M_S
+    u = wind + air
+    u[:, 1] -= vt * (1.0 - updraught)
+    excess = v0 - u
+    speed = np.sqrt(np.einsum("nc,nc->n", excess, excess))
+    tau = np.empty(n)
+    tau[:nd] = drag_time_constant_unchecked(d_mm[:nd], speed[:nd], vt[:nd])
+    tau[nd:] = WAKE_TAU_S
+    t_ground = ground_time(p0, v0, u, tau)
+    vi = w // 4
+    life = np.empty(n)
+    fate = np.empty(n, dtype=np.int64)
+    if nd:
+        d = slice(0, nd)
+        vd = vi[d]
+        vel = np.take(geo.velocity, vd, axis=0)  # np.take: faster than fancy indexing on these
+        t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d],
+                          np.take(geo.position, vd, axis=0) - vel * age_now[d, None], vel,
+                          np.take(geo.right, vd, axis=0), np.take(geo.forward, vd, axis=0),
+                          np.take(geo.box_params, vd, axis=0))
+        hit = t_body < t_ground[d]
+        fate[d] = np.where(hit, FATE_BODY, FATE_ROAD)
+        np.minimum(t_body, t_ground[d], out=life[d])
+        growth[d] *= speed[d]
+    if nm:
+        cap = rng.uniform(*MIST_LIFE_S, nm)
+        fate[nd:] = np.where(cap < t_ground[nd:], FATE_AIR, FATE_ROAD)
+        np.minimum(cap, t_ground[nd:], out=life[nd:])
+    # Drawn up to 1 ms before the surface so float32 never shows it past the road or the body.
+    life -= 1e-3
+    np.maximum(life, 0.0, out=life)
+    horizon = np.empty(n)
+    q90 = em._life_q90
+    for ring, sl in ((0, slice(0, nd)), (1, slice(nd, n))):
+        if sl.stop > sl.start:
+            q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile_90(life[sl]), 0.05)
+            horizon[sl] = max(q90[ring], 0.05)
+    # The ring is refilled every q90 seconds (that is how the emission rate was set): a parcel living longer
+    # would be overwritten in flight, so it fades out at that age instead.
+    faded = life > horizon
+    fate[faded] = FATE_AIR
+    np.minimum(life, horizon, out=life)
+    em.stats.fates += np.bincount(fate, weights=mass, minlength=3)
+    if nd:
+        _road_landings(em, frame, fate[:nd], p0, v0, u, tau, life, birth, mass)
+    # The records of both rings, in one array: ring 0's rows first.
+    rec = buf.records[:n]
+    period = np.floor(p0[:, 2] / layout.PERIOD_M)
+    p0[:, 2] -= period * layout.PERIOD_M  # z within its period, so float32 keeps mm
+    rec["p0"], rec["period"], rec["v0"], rec["tau"], rec["u"], rec["birth"] = p0, period, v0, tau, u, birth
+    rec["life"], rec["sigma0"], rec["growth"] = life, sigma0, growth
+    rec["area"] = extinction_area_m2(mass, d_mm)
+    kind = rec["kind"]
+    kind[:] = np.where(fate == FATE_AIR, KIND_DROPLET + KIND_FADE, KIND_DROPLET)
+    kind[nd:] += KIND_MIST - KIND_DROPLET
+    rec["d_mm"] = d_mm
+    glint = rec["glint"]
+    glint[:nd] = np.where(d_mm[:nd] >= SPLASH_MIN_MM, 1.0, 0.5)
+    glint[nd:] = MIST_SIGMA_MAX * geo.height[vi[nd:]]  # mist puffs hold σ_max (m)
+    _file(em, rec, birth, birth + life, nd, now)
+    st = em.stats
+    st.parcels += nd
+    st.last_parcels += nd
+    st.mist_puffs += nm
+    st.last_mist += nm
+
+
+def _road_landings(em, frame, fate_d, p0, v0, u, tau, life, birth, mass) -> None:
+    """The droplets that land on the road: (time, x, z, downward momentum) to the candidates whose water depth
+    the next frame's film lookup decides (SprayEmitter.observe): flight_position / flight_velocity at landing,
+    for the columns used."""
+    road = np.flatnonzero(fate_d == FATE_ROAD)
+    if len(road) == 0 or not em._standing_water_possible(frame):
+        return
+    t, tau_r = life[road], tau[road]
+    p, v, ur = p0[road], v0[road], u[road]
+    relax = -tau_r * np.expm1(-t / tau_r)
+    rows = np.empty((len(road), 4))
+    rows[:, 0] = birth[road] + t
+    rows[:, 1] = p[:, 0] + ur[:, 0] * t + (v[:, 0] - ur[:, 0]) * relax
+    rows[:, 2] = p[:, 2] + ur[:, 2] * t + (v[:, 2] - ur[:, 2]) * relax
+    vel_y = ur[:, 1] + (v[:, 1] - ur[:, 1]) * np.exp(-t / tau_r)
+    rows[:, 3] = mass[road] * np.maximum(-vel_y, 0.0)
+    em._candidates = np.concatenate([em._candidates, rows])
+
+
+def _file(em, rec, birth, death, nd: int, now: float) -> None:
+    """Push the records still alive at ``now`` (parcels that died within this frame are not drawn) into their
+    rings: rows [:nd] ring 0, the rest ring 1. Each ring's ``rand`` draw as the reference makes them (ring 0's,
+    then ring 1's: one call)."""
+    keep = death > now
+    k0 = int(np.count_nonzero(keep[:nd]))
+    k = int(np.count_nonzero(keep))
+    if k == 0:
+        return
+    if k < len(keep):
+        idx = np.flatnonzero(keep)
+        rec = np.take(as_floats(rec), idx, axis=0).view(PARTICLE_DTYPE).reshape(k)
+        birth, death = birth[idx], death[idx]
+    rec["rand"] = em.rng.random(k)
+    for ring, sl in ((0, slice(0, k0)), (1, slice(k0, k))):
+        if sl.stop > sl.start:
+            em.dirty[ring].extend(em.rings[ring].push(rec[sl], birth[sl], death[sl]))
