@@ -155,6 +155,85 @@ def _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount):
     return np.maximum(crack, puddle) * (1.0 - shelter)
 
 
+def _pack(maps: tuple) -> np.ndarray:
+    """Maps on one (nz, nx) grid packed for one-gather bilinear sampling: row j·(nx + 1) + c holds, for the cell
+    whose lower-left texel column is i = c − 1 (−1 … nx − 1) and row j, the four texels a GL LINEAR, clamp-x,
+    repeat-z sample reads — (j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1), columns clamped, rows wrapped — of
+    every map in turn: (nz·(nx + 1), 4·len(maps)) float32, the maps' own values."""
+    nz, nx = maps[0].shape
+    i0 = np.arange(-1, nx)
+    ia, ib = np.clip(i0, 0, nx - 1), np.clip(i0 + 1, 0, nx - 1)
+    ja, jb = np.arange(nz), (np.arange(nz) + 1) % nz
+    out = np.empty((nz, nx + 1, 4 * len(maps)), dtype=np.float32)
+    for k, m in enumerate(maps):
+        for q, (rows, cols) in enumerate(((ja, ia), (ja, ib), (jb, ia), (jb, ib))):
+            out[:, :, 4 * k + q] = m[rows[:, None], cols[None, :]]
+    return out.reshape(nz * (nx + 1), 4 * len(maps))
+
+
+class _PackedGrids:
+    """The four maps of the water model — road heightmap and its smoothed twin (heightmap grid), puddle noise and
+    shelter (puddle-map grid) — packed (``_pack``) into one table, with each grid's constants as (2, 1) columns,
+    so both grids' samples take one pass of NumPy calls and one gather."""
+
+    def __init__(self, seed: int, world):
+        grids = ((world.road_heightmap, smooth_heightmap_for(world)), (puddle_noise(seed), shelter_map_for(world)))
+        tables = [_pack(g) for g in grids]
+        extents = (tuple(world.heightmap_extent_m), (2 * ROAD_HALF_WIDTH_M, layout.PERIOD_M))
+        shapes = [g[0].shape for g in grids]
+        col = lambda values: np.array(values, dtype=np.float64)[:, None]  # noqa: E731
+        # sample_heightmap's scalars, as arrays: the same IEEE operations element by element.
+        self.half_x = col([e[0] / 2 for e in extents])
+        self.ext_x = col([e[0] for e in extents])
+        self.ext_z = col([e[1] for e in extents])
+        self.nx = col([s[1] for s in shapes])
+        self.nz = col([s[0] for s in shapes])
+        self.top_col = col([s[1] - 1 for s in shapes])
+        self.row_len = col([s[1] + 1 for s in shapes])
+        # Row of cell (i = −1, j = 0) of each grid in the one table.
+        self.offset = col([1.0, 1.0 + len(tables[0])])
+        self.table = np.concatenate(tables)
+
+    def sample(self, x, z):
+        """(2, 2, k): [grid][map] bilinear samples at x, z (float64 (k,) m), each bit for bit what
+        ``sample_heightmap`` gives for that map alone."""
+        fx = (x + self.half_x) / self.ext_x * self.nx - 0.5
+        fz = z / self.ext_z * self.nz - 0.5
+        i0 = np.floor(fx)
+        j0 = np.floor(fz)
+        tx = fx - i0
+        tz = fz - j0
+        # Clamping the column to −1 … nx − 1 picks the texels sample_heightmap's clamped taps pick; the row wraps.
+        # Small integers: exact in float64.
+        cell = np.mod(j0, self.nz) * self.row_len + np.minimum(np.maximum(i0, -1.0), self.top_col) + self.offset
+        texels = self.table.take(cell.astype(np.int64), axis=0)  # (2, k, 8): 4 taps of 2 maps
+        texels = texels.reshape(2, -1, 2, 4).transpose(0, 2, 3, 1)  # (grid, map, tap, k)
+        ux, uz = 1 - tx, 1 - tz
+        ux, tx, uz, tz = ux[:, None], tx[:, None], uz[:, None], tz[:, None]
+        top = texels[:, :, 0] * ux + texels[:, :, 1] * tx
+        bot = texels[:, :, 2] * ux + texels[:, :, 3] * tx
+        return top * uz + bot * tz
+
+
+@lru_cache(maxsize=2)
+def _packed_grids(seed: int, world) -> _PackedGrids:
+    return _PackedGrids(seed, world)
+
+
+def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
+    """Standing water (mm) and the shelter at on-road points x, z (float64 (k,) m): ``_standing_water_mm`` and
+    the gutter streams as ``water_depths_mm`` computes them. crack_at = cracks·CRACK_LEVEL, puddle_at = the
+    puddle level (Python floats)."""
+    (h, h_smooth), (n, shelter) = grids.sample(x, z)
+    crack = CRACK_MAX_MM * np.clip((crack_at - h) / CRACK_DEPTH_SPAN, 0.0, 1.0)
+    ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
+    puddle = PUDDLE_MAX_MM * np.clip((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0, 1.0)
+    standing = np.maximum(crack, puddle) * (1.0 - shelter)
+    if gutter_k > 0.0:
+        standing = np.maximum(standing, gutter_depth_mm(x, z, gutter_k))
+    return standing, shelter
+
+
 def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0, gutter_k=0.0):
     """(standing water, film) depths in mm at road points x, z (m; arrays broadcast): standing water in cracks,
     puddles and the kerb streams (``gutter_k``: the spread coefficient of rain_core.gutter, 0 without), and the
@@ -178,16 +257,39 @@ def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=
         return standing, film
     if everywhere:
         on_road = ...
-    xr, zr = x[on_road], z[on_road]
-    # Maps on one grid are sampled together (one set of indices and weights; each value as if sampled alone).
-    h, h_smooth = sample_heightmap((world.road_heightmap, smooth_heightmap_for(world)), world.heightmap_extent_m,
-                                   xr, zr)
-    n, shelter = sample_road_map((puddle_noise(int(seed)), shelter_map_for(world)), xr, zr)
-    standing[on_road] = _standing_water_mm(h, h_smooth, n, shelter, cracks, puddles, puddle_amount)
-    if gutter_k > 0.0:
-        standing[on_road] = np.maximum(standing[on_road], gutter_depth_mm(xr, zr, gutter_k))
-    film[on_road] = WET_FILM_MM * wetness * (1.0 - shelter)
+    xr, zr = x[on_road].reshape(-1), z[on_road].reshape(-1)
+    level = PUDDLE_LEVEL_MAX * (puddles * puddle_amount) ** PUDDLE_LEVEL_EXPONENT
+    road, shelter = _road_depths(_packed_grids(int(seed), world), xr, zr, cracks * CRACK_LEVEL, level, gutter_k)
+    standing[on_road] = road.reshape(standing[on_road].shape)
+    film[on_road] = (WET_FILM_MM * wetness * (1.0 - shelter)).reshape(standing[on_road].shape)
     return standing, film
+
+
+def film_depth_sampler(cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0, gutter_k=0.0):
+    """:func:`film_depth_mm` with these arguments fixed (checked here, once): returns ``depth(x, z)`` → mm for
+    float64 arrays x, z (m) of one shape, the same values bit for bit, for a caller that asks every frame (the
+    spray's wheels and landings). Arguments and units as :func:`film_depth_mm`."""
+    cracks, puddles, puddle_amount, wetness = (
+        checks.number(name, v, 0.0, 1.0) for name, v in (("cracks", cracks), ("puddles", puddles),
+                                                        ("puddle_amount", puddle_amount), ("wetness", wetness)))
+    grids = _packed_grids(int(seed), world if world is not None else default_world())
+    crack_at = cracks * CRACK_LEVEL
+    puddle_at = PUDDLE_LEVEL_MAX * (puddles * puddle_amount) ** PUDDLE_LEVEL_EXPONENT
+    wet = WET_FILM_MM * wetness
+    gutter_k = float(gutter_k)
+
+    def depth(x, z):
+        on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
+        if on_road.all():
+            standing, shelter = _road_depths(grids, x.reshape(-1), z.reshape(-1), crack_at, puddle_at, gutter_k)
+            return np.maximum(standing, wet * (1.0 - shelter)).reshape(x.shape)
+        out = np.zeros(x.shape)
+        if on_road.any():
+            standing, shelter = _road_depths(grids, x[on_road], z[on_road], crack_at, puddle_at, gutter_k)
+            out[on_road] = np.maximum(standing, wet * (1.0 - shelter))
+        return out
+
+    return depth
 
 
 def film_depth_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -110,6 +111,12 @@ def _inside(x, y, z, box):
     return in_box & ~in_well
 
 
+@lru_cache(maxsize=8)
+def _steps(k: int) -> np.ndarray:
+    """(k, 1) float32 fractions 1/k … 1 of a search window (made once per k)."""
+    return (np.arange(1, k + 1, dtype=np.float32) / np.float32(k))[:, None]
+
+
 def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right, forward, box_params,
                        samples: int = 12, zoom: int = 16, rounds: int = 2) -> np.ndarray:
     """First age (s, ≤ t_max) at which each drop is inside its thrower's body, else t_max: what
@@ -127,30 +134,39 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     if n == 0:
         return result
     # Local coordinates (right, up, back) of the start, the relative drift and the excess: (3, n) each. The
-    # bodies turn about +Y only, so right and forward lie in the x–z plane.
-    vecs = np.stack([p0 - body_origin, u - body_velocity, v0 - u])  # (3 vectors, n, 3)
-    rx, rz, fx, fz = right[:, 0], right[:, 2], forward[:, 0], forward[:, 2]
-    local = np.stack([vecs[..., 0] * rx + vecs[..., 2] * rz, vecs[..., 1],
-                      -(vecs[..., 0] * fx + vecs[..., 2] * fz)], axis=1)  # (3 vectors, 3 axes, n)
+    # bodies turn about +Y only, so right and forward lie in the x–z plane. (Written into one buffer: np.stack
+    # costs more than the arithmetic on a frame's few hundred drops.)
+    vecs = np.empty((3, n, 3))
+    np.subtract(p0, body_origin, out=vecs[0])
+    np.subtract(u, body_velocity, out=vecs[1])
+    np.subtract(v0, u, out=vecs[2])
+    vx, vz = vecs[..., 0], vecs[..., 2]
+    local = np.empty((3, 3, n))  # (vectors, axes, drops)
+    np.add(vx * right[:, 0], vz * right[:, 2], out=local[:, 0])
+    local[:, 1] = vecs[..., 1]
+    np.add(vx * forward[:, 0], vz * forward[:, 2], out=local[:, 2])
+    np.negative(local[:, 2], out=local[:, 2])
     P, U, D = local
     box = box_params.T  # (8, n)
-    half = np.stack([box[0], box[3], box[1]])  # |x| < half width, y < height, |z| < half length
+    # Per axis (x, y, z) the faces: |x| < half width, floor < y < height, |z| < half length.
+    upper = box[[0, 3, 1]]
+    lower = np.negative(upper)
+    lower[1] = box[2]
     tau_ = np.asarray(tau, dtype=np.float64)
-    # Beyond the body for good: |x| > half width (x), y < floor (y, settling), |z| > half length (z), from
-    # t_out on, where the coordinate's linear bound crosses the face it moves away from.
+    # Beyond the body for good: past the face each coordinate moves away from, from t_out on, where the
+    # coordinate's linear bound crosses that face (U = 0: never).
     lo_b = P + np.minimum(D, 0.0) * tau_  # coordinate ≥ lo_b + U·t when U ≥ 0
     hi_b = P + np.maximum(D, 0.0) * tau_  # ≤ hi_b + U·t when U ≤ 0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out_pos = np.where(U > 0.0, (half - lo_b) / U, np.inf)  # beyond +face
-        out_neg = np.where(U < 0.0, (-half - hi_b) / U, np.inf)  # beyond −face
-        out_floor = np.where(U[1] < 0.0, (box[2] - hi_b[1]) / U[1], np.inf)  # under the floor
-    t_out = np.minimum.reduce([out_pos[0], out_neg[0], out_pos[2], out_neg[2], out_pos[1], out_floor])
-    t_end = np.minimum(np.maximum(t_out, 0.0), t_max)
+    rising = U > 0.0
+    exit_t = np.where(rising, upper, lower)
+    exit_t -= np.where(rising, lo_b, hi_b)
+    np.divide(exit_t, U, out=exit_t, where=U != 0.0)
+    exit_t[U == 0.0] = np.inf
+    t_end = np.minimum(np.maximum(exit_t.min(axis=0), 0.0), t_max)
     # Never near: the whole flight's bounds miss the box.
     span_lo = lo_b + np.minimum(U, 0.0) * t_end
     span_hi = hi_b + np.maximum(U, 0.0) * t_end
-    near = ((span_lo[0] < box[0]) & (span_hi[0] > -box[0]) & (span_lo[2] < box[1]) & (span_hi[2] > -box[1])
-            & (span_lo[1] < box[3]) & (span_hi[1] > box[2]) & (t_end > 0.0))
+    near = (span_lo < upper).all(axis=0) & (span_hi > lower).all(axis=0) & (t_end > 0.0)
     rows = np.nonzero(near)[0]
     if len(rows) == 0:
         return result
@@ -176,7 +192,7 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
         return _inside(P[0] + U[0] * t + D[0] * rel, P[1] + U[1] * t + D[1] * rel, P[2] + U[2] * t + D[2] * rel,
                        bx)
 
-    steps = (np.arange(1, samples + 1, dtype=f32) / f32(samples))[:, None]
+    steps = _steps(samples)
     end = t_end[rows].astype(f32)
     ts = end * steps
     hit = inside(ts, coarse=True)
@@ -189,7 +205,7 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     lo = np.where(first > 0, ts[np.maximum(first - 1, 0), keep], f32(0.0))
     P, U, D, bx = (a[:, keep] for a in (P, U, D, bx))
     tau_r, rate = tau_r[keep], rate[keep]
-    zsteps = (np.arange(1, zoom + 1, dtype=f32) / f32(zoom))[:, None]
+    zsteps = _steps(zoom)
     idx = np.arange(len(keep))
     for _ in range(rounds):
         ts = lo + (hi - lo) * zsteps

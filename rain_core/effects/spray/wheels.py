@@ -17,7 +17,7 @@ from rain_core.effects.spray.water import (
     hydroplaning_risk_unchecked,
 )
 from rain_core.gutter import frame_spread_coefficient
-from rain_core.water_film import film_depth_mm
+from rain_core.water_film import film_depth_sampler
 
 
 def road_film_depth_fn(frame):
@@ -34,13 +34,28 @@ def road_film_depth_fn(frame):
     seed = int(getattr(road_settings, "puddle_seed", 0))
     world = getattr(frame, "world", None)
     gutter_k = frame_spread_coefficient(frame)  # the kerb streams: more water, more spray near the kerb
+    # The sampler (its arguments checked once) is kept while they stay the same: the weather's levels change
+    # slowly, or not at all once settled or pinned.
+    key = (wetness, cracks, puddles, amount, seed, gutter_k)
+    hit = _SAMPLER_CACHE.get(key)
+    if hit is None or hit[0] is not world:
+        if len(_SAMPLER_CACHE) > 16:
+            _SAMPLER_CACHE.clear()
+        hit = (world, film_depth_sampler(cracks, puddles, puddle_amount=amount, seed=seed, world=world,
+                                         wetness=wetness, gutter_k=gutter_k))
+        _SAMPLER_CACHE[key] = hit
+    sampler = hit[1]
 
     def depth(x, z):
-        x, z = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64))
-        return np.asarray(film_depth_mm(x, z, cracks, puddles, puddle_amount=amount, seed=seed, world=world,
-                                        wetness=wetness, gutter_k=gutter_k), dtype=np.float64)
+        x, z = np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64)
+        if x.shape != z.shape:
+            x, z = np.broadcast_arrays(x, z)
+        return sampler(x, z)
 
     return depth
+
+
+_SAMPLER_CACHE: dict[tuple, tuple] = {}  # road_film_depth_fn's arguments → (world, film_depth_sampler)
 
 
 @dataclass

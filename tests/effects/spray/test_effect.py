@@ -49,7 +49,8 @@ def test_effect_is_skipped_on_a_dry_road_and_reports_hydroplaning(truck_scene):
 
 
 def test_road_film_depth_is_the_roads_film():
-    assert wheels.film_depth_mm is water_film.film_depth_mm  # one model of the film, no copy of its constants
+    # One model of the film, no copy of its constants: water_film's sampler, film_depth_mm bit for bit.
+    assert wheels.film_depth_sampler is water_film.film_depth_sampler
     wet_mm = water_film.WET_FILM_MM
     x, z = np.array([0.0, 3.0, 7.5, 1.75]), np.array([10.0, 20.0, 30.0, 500.0])
     wet = road_film_depth_fn(SimpleNamespace(weather=WeatherState(wetness=0.5), settings=None, world=None))
@@ -57,7 +58,7 @@ def test_road_film_depth_is_the_roads_film():
     flooded = WeatherState(wetness=1.0, cracks=1.0, puddles=1.0)
     fn = road_film_depth_fn(SimpleNamespace(weather=flooded, settings=None, world=None))
     zz = np.arange(100.0, 1100.0, 0.5)
-    assert np.allclose(fn(np.full_like(zz, 5.25), zz), water_film.film_depth_mm(5.25, zz, 1.0, 1.0, wetness=1.0))
+    assert np.array_equal(fn(np.full_like(zz, 5.25), zz), water_film.film_depth_mm(5.25, zz, 1.0, 1.0, wetness=1.0))
     assert fn(np.full_like(zz, 5.25), zz).max() > 3.0  # standing water where the wheels run
 
 

@@ -1,0 +1,75 @@
+"""rain_core.water_film's fast paths: the packed one-gather sampling inside ``water_depths_mm`` and the per-frame
+``film_depth_sampler`` give the reference's numbers bit for bit (the reference: each map sampled alone by
+``rain_core.world.sample_heightmap``, the model's formulas as written in DESIGN §3)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rain_core import layout, water_film
+from rain_core.gutter import gutter_depth_mm
+from rain_core.world import sample_heightmap
+
+
+def _reference(x, z, cracks, puddles, amount, seed, world, wetness, gutter_k):
+    """(standing, film) mm, every map sampled alone, float64, in the model's own order of operations."""
+    x, z = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64))
+    standing, film = np.zeros(x.shape), np.zeros(x.shape)
+    on = np.abs(x) <= water_film.ROAD_HALF_WIDTH_M
+    xr, zr = x[on], z[on]
+    h = sample_heightmap(world.road_heightmap, world.heightmap_extent_m, xr, zr)
+    hs = sample_heightmap(water_film.smooth_heightmap_for(world), world.heightmap_extent_m, xr, zr)
+    n = water_film.sample_road_map(water_film.puddle_noise(seed), xr, zr)
+    shelter = water_film.sample_road_map(water_film.shelter_map_for(world), xr, zr)
+    road = water_film._standing_water_mm(h, hs, n, shelter, cracks, puddles, amount)
+    if gutter_k > 0.0:
+        road = np.maximum(road, gutter_depth_mm(xr, zr, gutter_k))
+    standing[on] = road
+    film[on] = water_film.WET_FILM_MM * wetness * (1.0 - shelter)
+    return standing, film
+
+
+def _points(rng, n):
+    x = rng.uniform(-9.0, 9.0, n)
+    # The clamped columns' edges, the centre line, and the periods' seams along z.
+    x[:40] = np.repeat([-7.0, 7.0, np.nextafter(7.0, 0.0), -np.nextafter(7.0, 0.0), 0.0], 8)
+    z = rng.uniform(-2.0 * layout.PERIOD_M, 2.0 * layout.PERIOD_M, n)
+    z[:30] = np.repeat([0.0, 48.0, layout.PERIOD_M, -layout.PERIOD_M, np.nextafter(48.0, 0.0), -0.01], 5)
+    return x, z
+
+
+@pytest.mark.parametrize("levels", [(1.0, 1.0, 1.0, 0, 1.0, 0.2), (0.4, 0.7, 0.5, 3, 0.3, 0.0),
+                                    (0.0, 0.0, 0.5, 1, 0.0, 0.05), (1.0, 0.2, 0.9, 0, 1.0, 0.0)])
+def test_fast_paths_give_the_references_bits(levels):
+    cracks, puddles, amount, seed, wetness, gutter_k = levels
+    world = water_film.default_world()
+    x, z = _points(np.random.default_rng(seed + 5), 6000)
+    ref_standing, ref_film = _reference(x, z, cracks, puddles, amount, seed, world, wetness, gutter_k)
+    standing, film = water_film.water_depths_mm(x, z, cracks, puddles, amount, seed, world, wetness, gutter_k)
+    assert np.array_equal(standing, ref_standing) and np.array_equal(film, ref_film)
+    depth = water_film.film_depth_mm(x, z, cracks, puddles, amount, seed, world, wetness, gutter_k)
+    assert np.array_equal(depth, np.maximum(ref_standing, ref_film))
+    sampler = water_film.film_depth_sampler(cracks, puddles, amount, seed, world, wetness, gutter_k)
+    assert np.array_equal(sampler(x, z), depth)
+    on = np.abs(x) <= water_film.ROAD_HALF_WIDTH_M  # all points on the road: the sampler's no-scatter branch
+    assert np.array_equal(sampler(x[on], z[on]), depth[on])
+    assert np.array_equal(sampler(x[:100].reshape(4, 25), z[:100].reshape(4, 25)), depth[:100].reshape(4, 25))
+    off = np.array([8.0, -7.5])
+    assert np.array_equal(sampler(off, np.array([1.0, 2.0])), np.zeros(2))
+
+
+def test_shapes_and_scalars_are_kept():
+    world = water_film.default_world()
+    standing, film = water_film.water_depths_mm(1.75, np.array([[10.0, 20.0], [30.0, 40.0]]), 1.0, 1.0,
+                                                world=world, wetness=1.0)
+    assert standing.shape == film.shape == (2, 2)
+    one = water_film.water_depths_mm(1.75, 10.0, 1.0, 1.0, world=world, wetness=1.0)
+    assert one[0].shape == () and one[0] == standing[0, 0] and one[1] == film[0, 0]
+
+
+def test_the_sampler_checks_its_arguments_once():
+    with pytest.raises(ValueError, match="puddles"):
+        water_film.film_depth_sampler(0.5, 1.5)
+    with pytest.raises(ValueError, match="wetness"):
+        water_film.film_depth_sampler(0.5, 0.5, wetness=-0.1)
