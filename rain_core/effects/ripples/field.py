@@ -194,38 +194,54 @@ class RippleField:
         self._unknown_cols[:] = True
         self._fill_unknown_depths()
 
-    def _ask_depths(self, rows, cols) -> np.ndarray:
+    def _ask_depths(self, rows, cols, extra_xz=None) -> tuple[np.ndarray, np.ndarray | None]:
+        """(depths of the cells rows × cols, depths at the extra world points (k, 2) m or None), in mm, from one
+        call of the film-depth function (its cost is mostly per call below a strip's size); only the cells'
+        depths are checked (the wheels clamp theirs)."""
         # Positions from the world lattice index (anchor + cell): a lattice point gets the same coordinates,
         # hence the same depth, whichever window asks about it (so strips asked after scrolls agree exactly
         # with a full evaluation).
         ax, az = self._anchor
         xs, zs = np.meshgrid((ax + np.asarray(cols)) * self.cell_m, (az + np.asarray(rows)) * self.cell_m)
-        depth = np.asarray(self._film_fn(xs, zs), dtype=np.float64)
-        depth = np.broadcast_to(depth, xs.shape)
+        cells = xs.size
+        if extra_xz is not None:
+            xs = np.concatenate([xs.reshape(-1), extra_xz[:, 0]])
+            zs = np.concatenate([zs.reshape(-1), extra_xz[:, 1]])
+        depth = np.broadcast_to(np.asarray(self._film_fn(xs, zs), dtype=np.float64), xs.shape)
+        extra = None
+        if extra_xz is not None:
+            depth, extra = depth[:cells].reshape(len(rows), len(cols)), depth[cells:]
         if not np.all(np.isfinite(depth)) or np.any(depth < 0.0):
             raise ValueError("film_depth_fn must return finite depths >= 0 mm")
-        return depth
+        return depth, extra
 
-    def _fill_unknown_depths(self, extra_rows=None):
+    def _fill_unknown_depths(self, extra_rows=None, extra_xz=None) -> np.ndarray | None:
         """Ask the film-depth function about the rows and columns not known yet (after a scroll, whole strips)
-        and about extra_rows, in at most two calls, and update the mask over what was asked."""
+        and about extra_rows, in at most two calls, and update the mask over what was asked. ``extra_xz``
+        ((k, 2) world m, the wheels' points) rides along with the first call; returns their depths (mm), None
+        when nothing was asked."""
         rows = np.flatnonzero(self._unknown_rows)
         if extra_rows is not None and len(extra_rows):
             rows = np.union1d(rows, extra_rows)
         cols = np.flatnonzero(self._unknown_cols)
         if rows.size == 0 and cols.size == 0:
-            return
+            return None
+        asked = None
         if rows.size:
-            self._wet[rows, :] = self._ask_depths(rows, np.arange(self.n)) > 0.0
-        if cols.size:  # the columns' cells outside the rows just asked
+            depth, asked = self._ask_depths(rows, np.arange(self.n), extra_xz)
+            self._wet[rows, :] = depth > 0.0
+        if cols.size:  # the columns' cells outside the rows just asked (all of them when no rows were)
             others = np.ones(self.n, bool)
             others[rows] = False
             others = np.flatnonzero(others)
             if others.size:
-                self._wet[np.ix_(others, cols)] = self._ask_depths(others, cols) > 0.0
+                depth, extra = self._ask_depths(others, cols, None if rows.size else extra_xz)
+                self._wet[np.ix_(others, cols)] = depth > 0.0
+                asked = asked if rows.size else extra
         self._unknown_rows[:] = False
         self._unknown_cols[:] = False
         self._apply_depth_mask(rows, cols)
+        return asked
 
     def _apply_depth_mask(self, rows: np.ndarray, cols: np.ndarray):
         """Bring the solver's mask up to date where depths were just asked (whole ``rows``, whole ``cols``):
@@ -246,9 +262,10 @@ class RippleField:
             self._water_fraction_stale = True
             self.version += 1
 
-    def _refresh_depth_band(self, dt: float) -> int:
+    def _refresh_depth_band(self, dt: float, extra_xz=None) -> tuple[int, np.ndarray | None]:
         """Re-ask the film depth of the next band of rows (the whole window every mask_refresh_s), together
-        with any cells that scrolled in. Returns the rows of the band."""
+        with any cells that scrolled in (and ``extra_xz``, as ``_fill_unknown_depths``). Returns the rows of the
+        band and the extra points' depths."""
         if self.mask_refresh_s == 0.0:
             rows = np.arange(self.n)
         else:
@@ -257,8 +274,7 @@ class RippleField:
             stop = min(int(self._refresh_row), start + self.n)
             rows = np.arange(start, max(stop, start)) % self.n
             self._refresh_row %= self.n
-        self._fill_unknown_depths(rows)
-        return rows.size
+        return rows.size, self._fill_unknown_depths(rows, extra_xz)
 
     def _count_water(self, stride: int = 1) -> tuple[int, int]:
         """(water cells, cells) among the interior cells on every ``stride``-th row and column (the fixed edges
@@ -498,6 +514,9 @@ class RippleField:
         # With a film-depth function the cells that scroll in are asked together with this frame's band.
         fill = film_depth_fn is None or self._wet is None
         shift = (0, 0) if center_xz is None else self._recenter(*center_xz, fill=fill)
+        # The wheels' depths ride along with the strips' call (one call of the road's function a frame).
+        wheel_xz = batch.depth_points() if film_depth_fn is not None and batch.needs_depth else None
+        wheel_depths = None
         if film_depth_fn is not None:
             if self._wet is None:
                 self.refresh_water_mask(film_depth_fn)
@@ -508,13 +527,14 @@ class RippleField:
                     self._rows_to_renew = self.n  # the depths may have changed: renew every row once more
                 self._film_key = key
                 if self._rows_to_renew > 0:
-                    self._rows_to_renew -= self._refresh_depth_band(dt)
+                    renewed, wheel_depths = self._refresh_depth_band(dt, wheel_xz)
+                    self._rows_to_renew -= renewed
                 else:  # the same depths as when every row was last asked: only the strips that entered
-                    self._fill_unknown_depths()
+                    wheel_depths = self._fill_unknown_depths(extra_xz=wheel_xz)
         self._batch = []
         try:
             drops = self._raindrops(rate, dt)
-            bumps = int(self._wakes(batch.rows(film_depth_fn)).sum()) if len(batch) else 0
+            bumps = int(self._wakes(batch.rows(film_depth_fn, wheel_depths)).sum()) if len(batch) else 0
             self.add_droplet_impacts(impacts)
             self._flush_batch()
         finally:

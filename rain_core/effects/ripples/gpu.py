@@ -85,6 +85,9 @@ class WaveSolverGPU(WaveSolver):
         self._bump_buffer = None
         self._bump_vao = None
         self._grow_bumps(1024)
+        # A scroll of the state not drawn yet: the field writes the strips of the mask that entered right after
+        # a scroll, and one shift pass under the new mask both moves the state and holds its new dry cells.
+        self._pending_shift: tuple[int, int] | None = None
 
     def _grow_bumps(self, count: int) -> None:
         """Room for ``count`` bumps in the instance buffer (doubling, so a growing batch reallocates rarely)."""
@@ -117,20 +120,33 @@ class WaveSolverGPU(WaveSolver):
             set_uniforms(prog, changed)
             written.update(changed)
 
-    def _draw(self, name: str, target, **uniforms):
+    def _draw(self, name: str, target, uniforms: dict, bind_state: bool = True, bind_mask: bool = True):
+        """One full-grid pass of ``name`` into ``target``; the state (and mask) textures bound unless the caller
+        says they need not be (the mask's own pass reads no state; sub-steps after the first find the mask
+        still bound)."""
         prog = self._progs[name]
         self._own(prog)
         self._set(prog, uniforms)
         state_unit, mask_unit, _ = units.SCRATCH
-        self.state.src.color.use(state_unit)
-        self.mask_texture.use(mask_unit)
+        if bind_state:
+            self.state.src.color.use(state_unit)
+        if bind_mask:
+            self.mask_texture.use(mask_unit)
         target.fbo.use()
         self._vaos[name].render(vertices=3)
 
-    def _pass(self, name: str, **uniforms):
+    def _pass(self, name: str, uniforms: dict, bind_mask: bool = True):
         """Run a full-grid pass from state.src into state.dst and swap."""
-        self._draw(name, self.state.dst, **uniforms)
+        self._draw(name, self.state.dst, uniforms, bind_mask=bind_mask)
         self.state.swap()
+
+    def _shift_state(self) -> bool:
+        """Draw the pending scroll of the state, if any. Returns whether it drew (the mask is then bound)."""
+        if self._pending_shift is None:
+            return False
+        shift, self._pending_shift = self._pending_shift, None
+        self._pass("shift", {"u_shift": shift})
+        return True
 
     def add_impulses_unchecked(self, xs, zs, radii, amounts):
         """Queue the bumps (see ``WaveSolver.add_impulses_unchecked``); they are drawn together before the next
@@ -192,11 +208,13 @@ class WaveSolverGPU(WaveSolver):
         finally:
             out.release()
 
-    def _flush(self):
-        """Add the queued bumps to both stored levels: one buffer write and one instanced additive draw, and one
-        instanced draw per queued raindrop batch (no upload)."""
+    def _flush(self) -> bool:
+        """Draw the pending scroll, then add the queued bumps to both stored levels: one buffer write and one
+        instanced additive draw, and one instanced draw per queued raindrop batch (no upload). Returns whether
+        it drew anything (the mask texture is then bound to its unit)."""
+        shifted = self._shift_state()
         if not self._queued and not self._rain:
-            return
+            return shifted
         bumps = None
         if self._queued:
             bumps = self._queued[0] if len(self._queued) == 1 else np.concatenate(self._queued)
@@ -205,8 +223,9 @@ class WaveSolverGPU(WaveSolver):
                 self._grow_bumps(len(bumps))
             self._bump_buffer.write(bumps)
         rain, self._rain = self._rain, []
-        self.mask_texture.use(units.SCRATCH[1])
-        self.state.src.fbo.use()
+        if not shifted:  # else the scroll's pass left the mask bound and the new state its framebuffer
+            self.mask_texture.use(units.SCRATCH[1])
+            self.state.src.fbo.use()
         self.ctx.enable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE if rain else moderngl.BLEND)
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         try:
@@ -218,6 +237,7 @@ class WaveSolverGPU(WaveSolver):
                 self._vaos["rain"].render(moderngl.POINTS, vertices=batch.count)
         finally:
             self.ctx.disable(moderngl.BLEND | moderngl.PROGRAM_POINT_SIZE)
+        return True
 
     def _get_state(self):
         self._flush()
@@ -227,6 +247,7 @@ class WaveSolverGPU(WaveSolver):
     def _set_state(self, z, zp):
         self._queued = []
         self._rain = []
+        self._pending_shift = None  # the whole state is replaced
         data = np.stack([np.asarray(z, np.float32), np.asarray(zp, np.float32)], axis=-1)
         self.state.src.color.write(np.ascontiguousarray(data).tobytes())
 
@@ -242,15 +263,14 @@ class WaveSolverGPU(WaveSolver):
         return self.state.src.color
 
     def _advance(self, k: int, alpha: float, kc2: float):
-        self._flush()
-        self._own(self._progs["step"])
-        self._set(self._progs["step"], {"u_alpha": alpha, "u_k": kc2})
-        for _ in range(k):
-            self._pass("step")
+        bound = self._flush()
+        uniforms = {"u_alpha": alpha, "u_k": kc2}
+        for i in range(k):  # the mask stays bound to its unit from the flush or the first sub-step on
+            self._pass("step", uniforms, bind_mask=i == 0 and not bound)
 
     def _sums(self, dt_old, synced=None):
         self._flush()
-        self._draw("reduce", self.reduce_target, u_dt_old=0.0 if dt_old is None else dt_old)
+        self._draw("reduce", self.reduce_target, {"u_dt_old": 0.0 if dt_old is None else dt_old})
         sums = np.frombuffer(self.reduce_target.color.read(), np.float32).reshape(-1, 4).astype(np.float64)
         total = sums.sum(axis=0)
         return float(total[0]), float(total[1]), float(total[2])
@@ -262,8 +282,8 @@ class WaveSolverGPU(WaveSolver):
             lam, mu = self._guard(dt_old, dt_new, self._sums(dt_old))
         self.retimes += dt_old is not None
         self._flush()
-        self._pass("retime", u_dt_old=0.0 if dt_old is None else dt_old, u_dt_new=dt_new,
-                   u_lambda=lam, u_mu=mu)
+        self._pass("retime", {"u_dt_old": 0.0 if dt_old is None else dt_old, "u_dt_new": dt_new,
+                              "u_lambda": lam, "u_mu": mu})
         self._dt = dt_new
 
     def energy(self) -> float:
@@ -279,17 +299,27 @@ class WaveSolverGPU(WaveSolver):
         self.mask_texture.write((np.asarray(m) > 0.5).astype(np.uint8).__mul__(255).tobytes())
 
     def _apply_mask_to_blocks(self, regions):
-        self._flush()
+        if self._queued or self._rain:  # laid under the old mask (a cell turning wet must not get them)
+            self._flush()
         for rows, cols in regions:  # only the blocks travel; one pass then holds their dry cells
             data = (self._mask[rows, cols] > 0.5).astype(np.uint8) * np.uint8(255)
             self.mask_texture.write(data, viewport=(cols.start, rows.start, data.shape[1], data.shape[0]),
                                     alignment=1)
-        self._pass("shift", u_shift=(0, 0))
+        self._hold_under_mask()
 
     def _apply_mask_to_state(self):
-        self._flush()
+        if self._queued or self._rain:
+            self._flush()
         self._upload_mask()
-        self._pass("shift", u_shift=(0, 0))
+        self._hold_under_mask()
+
+    def _hold_under_mask(self) -> None:
+        """Zero the held cells of the mask just written: the pending scroll's pass does it as it moves the state
+        (held cells store 0 on either side of a scroll, so scrolling under the new mask is the same as scrolling
+        and then applying it), else a pass of zero shift."""
+        if self._pending_shift is None:
+            self._pending_shift = (0, 0)
+        self._shift_state()
 
     def set_water_mask(self, mask):
         super().set_water_mask(mask)
@@ -303,10 +333,10 @@ class WaveSolverGPU(WaveSolver):
         self._flush()
         if self._mask is not None:
             shift_in_place(self._mask, dx, dz, 1.0)
-            self._draw("mask_shift", self.mask.dst, u_shift=(dx, dz))
+            self._draw("mask_shift", self.mask.dst, {"u_shift": (dx, dz)}, bind_state=False)
             self.mask.swap()
-        if not self._asleep:
-            self._pass("shift", u_shift=(dx, dz))
+        if not self._asleep:  # drawn by the next pass that needs the state: after the new mask's strips
+            self._pending_shift = (dx, dz)
 
     def release(self):
         """Free the GL objects, and the programs when the shader library is our own."""

@@ -12,7 +12,7 @@ from rain_core.gfx import units
 from rain_core.gfx.frame import WaterNormals
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import float_target, fullscreen_triangle
-from rain_core.gfx.uniforms import set_uniforms
+from rain_core.gfx.uniforms import owned_uniforms
 
 
 class RippleTextures:
@@ -37,6 +37,7 @@ class RippleTextures:
             self._height_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
             self._height_tex.repeat_x = self._height_tex.repeat_y = False
         self._version: int | None = None  # field.version the textures show (None: not drawn yet)
+        self._uniforms = {"u_height": units.SCRATCH[0], "u_inv_2h": 0.5 / field.cell_m}
 
     def refresh(self):
         """Bring height_texture and normal_texture up to date (done on access)."""
@@ -49,10 +50,10 @@ class RippleTextures:
             height = self._height_tex
         else:
             height = field.solver.texture
-        unit = units.SCRATCH[0]
-        height.use(unit)
-        # Set every time: the library's cached program may be shared with another field's textures.
-        set_uniforms(self._prog, u_height=unit, u_inv_2h=0.5 / field.cell_m)
+        height.use(self._uniforms["u_height"])
+        # Through the program's one owned-uniforms cache: the library's cached program may be shared with another
+        # field's textures, and what this one wrote last is skipped (it never changes for one field).
+        owned_uniforms(self._prog).update(self._uniforms)
         self._normals.fbo.use()
         self._vao.render(vertices=3)
         self._version = field.version

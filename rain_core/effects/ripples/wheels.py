@@ -77,14 +77,22 @@ class WheelBatch:
             raise ValueError("the wheel arrays must have one entry per wheel")
         return cls(p0, p1, speed, width, depth)
 
-    def rows(self, film_depth_fn: FilmDepthFn | None) -> np.ndarray:
-        """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call."""
+    def depth_points(self) -> np.ndarray:
+        """(k, 2) world (x, z) in m where the unknown film depths are asked: the middle of each such path."""
+        unknown = slice(None) if self.film_depth_mm is None else np.isnan(self.film_depth_mm)
+        return 0.5 * (self.p0_xz[unknown] + self.p1_xz[unknown])
+
+    def rows(self, film_depth_fn: FilmDepthFn | None, asked: np.ndarray | None = None) -> np.ndarray:
+        """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call (or given:
+        ``asked``, what film_depth_fn returned at ``depth_points()``)."""
         depth = np.full(len(self), np.nan) if self.film_depth_mm is None else self.film_depth_mm.copy()
         unknown = np.isnan(depth)
         if unknown.any():
-            mid = 0.5 * (self.p0_xz[unknown] + self.p1_xz[unknown])
-            asked = np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64)
-            depth[unknown] = np.clip(np.nan_to_num(np.broadcast_to(asked, mid[:, 0].shape), nan=0.0), 0.0, 1e3)
+            if asked is None:
+                mid = self.depth_points()
+                asked = np.broadcast_to(np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64),
+                                        mid[:, 0].shape)
+            depth[unknown] = np.clip(np.nan_to_num(asked, nan=0.0), 0.0, 1e3)
         return np.column_stack([self.p0_xz, self.p1_xz, self.speed_m_s, depth, self.tire_width_m])
 
 

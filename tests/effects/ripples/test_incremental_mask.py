@@ -137,3 +137,39 @@ def test_gpu_mask_follows_the_scrolls_and_the_strips(gl_ctx, shaders):
         assert np.max(np.abs(gpu.height - ref.height)) < 1e-3 * scale
     finally:
         gpu.release()
+
+
+class CountingFilm(Film):
+    def __init__(self, level: float):
+        super().__init__(level)
+        self.calls = 0
+
+    def __call__(self, x, z):
+        self.calls += 1
+        return super().__call__(x, z)
+
+
+def test_wheel_depths_ride_along_with_the_strips():
+    """The wheels' film depths are asked in the strips' call (one call of the road's function a frame while the
+    window scrolls), and give the wake the depths a call of their own gives."""
+    from rain_core.effects.ripples.wheels import WheelBatch
+
+    film = CountingFilm(0.2)
+    fields = [RippleField(n=N, extent_m=EXTENT, backend="numpy32", recenter_margin_cells=1, seed=2)
+              for _ in range(2)]
+    x = z = 0.0
+    for frame, (dx, dz) in enumerate(MOVES * 2):
+        p0 = np.array([[x - 0.5, z], [x + 0.5, z], [x, z + 0.4]])
+        x, z = x + dx, z + dz
+        p1 = np.array([[x - 0.5, z], [x + 0.5, z], [x, z + 0.4]])
+        speed, width = np.full(3, 9.0), np.full(3, 0.2)
+        asked = WheelBatch(p0, p1, speed, width)
+        mid = 0.5 * (p0 + p1)
+        given = WheelBatch(p0, p1, speed, width, Film(0.2)(mid[:, 0], mid[:, 1]))
+        film.calls = 0
+        report = fields[0].update(1 / 30, center_xz=(x, z), rate_mm_h=10.0, wheels=asked, film_depth_fn=film)
+        fields[1].update(1 / 30, center_xz=(x, z), rate_mm_h=10.0, wheels=given, film_depth_fn=Film(0.2))
+        if frame and report["shift"] != (0, 0):
+            assert film.calls == 1 + (report["shift"][0] != 0 and report["shift"][1] != 0)
+        assert report["wake_bumps"] > 0
+        np.testing.assert_array_equal(fields[0].height, fields[1].height)
