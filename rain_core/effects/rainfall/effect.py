@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import weakref
 
 import moderngl
 import numpy as np
@@ -36,7 +37,7 @@ from rain_core.effects.rainfall.vehicle_fate import vehicle_uniforms
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import set_uniform, set_uniforms
+from rain_core.gfx.uniforms import set_uniforms
 
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
@@ -47,9 +48,9 @@ _OWN_UNIFORMS = ("u_box_", "u_veh_", "u_occ_", "u_splash_", "u_shape_", "u_thin"
                  "u_drop_table", "u_road_", "u_time_", "u_epoch", "u_wind", "u_turb_eps", "u_period_world",
                  "u_ground_y", "u_width_", "u_alpha_max", "u_alpha_spread", "u_stretch_max", "u_crown_per_d",
                  "u_cam_vel", "u_exposure_s", "u_near", "u_rain_env", "u_brightness", "u_focal_px")
-# Per program (programs may be shared by effects through a ShaderLibrary): (the effect that wrote last, its
-# last written values).
-_WRITTEN: dict[int, tuple[int, dict]] = {}
+# Per program (programs may be shared by effects through a ShaderLibrary): (the effect that wrote last, the
+# program (weakly), its last written values, name → (the program's uniform or None, whether it is one of ours)).
+_WRITTEN: dict[int, tuple] = {}
 _TOKENS = itertools.count()  # a unique token per effect (an id() can be reused once an effect is collected)
 
 
@@ -232,17 +233,22 @@ class RainfallEffect(Effect):
                             s.camera.exposure_s, rc.size, rc.frame.camera.near_m)
 
     def _lights(self, rc, boxes: Boxes) -> tuple:
-        """rc.lights without the lights whose range cannot reach the outer box (wrapped frame)."""
+        """rc.lights without the lights whose range cannot reach the outer box (wrapped frame); rc.lights itself
+        when every light reaches it (nothing to repack)."""
         pos_b, dir_b, col_b, count = rc.lights
-        pos = np.frombuffer(pos_b, np.float32).reshape(-1, 4)
-        lo = boxes.lo[-1] - [0.0, 0.0, rc.shift_z]
-        hi = boxes.hi[-1] - [0.0, 0.0, rc.shift_z]
-        gap = np.maximum(np.maximum(lo - pos[:count, :3], pos[:count, :3] - hi), 0.0)
-        keep = np.flatnonzero(np.linalg.norm(gap, axis=1) < np.abs(pos[:count, 3]))  # w < 0: a low beam
-        # The three arrays packed in one pass (one gather, one tobytes), then cut into their three byte strings.
         size = len(pos_b)
         if len(dir_b) != size or len(col_b) != size:
             raise ValueError("rc.lights: the position, direction and colour buffers must have the same size")
+        if count == 0:
+            return rc.lights
+        pos = np.frombuffer(pos_b, np.float32, count=4 * count).reshape(count, 4)
+        lo = boxes.lo[-1] - [0.0, 0.0, rc.shift_z]
+        hi = boxes.hi[-1] - [0.0, 0.0, rc.shift_z]
+        gap = np.maximum(np.maximum(lo - pos[:, :3], pos[:, :3] - hi), 0.0)
+        keep = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) < pos[:, 3] * pos[:, 3])  # w < 0: a low beam
+        if keep.size == count:
+            return rc.lights
+        # The three arrays packed in one pass (one gather, one tobytes), then cut into their three byte strings.
         arr = np.frombuffer(pos_b + dir_b + col_b, np.float32).reshape(3, -1, 4)
         packed = np.zeros_like(arr)
         packed[:, : keep.size] = arr[:, keep]
@@ -308,25 +314,33 @@ class RainfallEffect(Effect):
 
     def _set(self, prog, values: dict) -> None:
         """set_uniforms, skipping own uniforms whose value is the one last written to this program."""
-        owner, cache = _WRITTEN.get(id(prog), (None, None))
-        if owner != self._token:
-            cache = {}
-            _WRITTEN[id(prog)] = (self._token, cache)
+        owner, ref, cache, slots = _WRITTEN.get(id(prog), (None, None, None, None))
+        if owner != self._token or ref() is not prog:  # another writer, or a new program under a reused id
+            cache, slots = {}, {}
+            _WRITTEN[id(prog)] = (self._token, weakref.ref(prog), cache, slots)
         for name, value in values.items():
-            if not name.startswith(_OWN_UNIFORMS):
-                set_uniform(prog, name, value)
+            slot = slots.get(name)
+            if slot is None:  # resolved once per program: its uniform (None: not declared) and whether it is ours
+                slot = slots[name] = (prog.get(name, None), name.startswith(_OWN_UNIFORMS))
+            uniform, own = slot
+            if uniform is None:  # the program does not declare it: nothing to convert or write
                 continue
-            # The same read-only array as last time (the vehicles' pieces) is the same value: no conversion.
-            frozen = isinstance(value, np.ndarray) and not value.flags.writeable
-            if frozen and cache.get(name + "#array") is value:
-                continue
-            cache[name + "#array"] = value if frozen else None
+            if own:
+                # The same read-only array as last time (the vehicles' pieces) is the same value: no conversion.
+                frozen = isinstance(value, np.ndarray) and not value.flags.writeable
+                if frozen and cache.get(name + "#array") is value:
+                    continue
+                cache[name + "#array"] = value if frozen else None
             if isinstance(value, np.ndarray):
                 value = np.ascontiguousarray(value, dtype=np.float32).tobytes()
-            if cache.get(name) == value:
-                continue
-            set_uniform(prog, name, value)
-            cache[name] = value
+            if own:
+                if cache.get(name) == value:
+                    continue
+                cache[name] = value
+            if isinstance(value, bytes):
+                uniform.write(value)
+            else:
+                uniform.value = value
 
     def render(self, stage: str, rc) -> None:
         upd = self.last_update
