@@ -37,7 +37,8 @@ class DropArray:
         self._rows = self._buf.view(_ROW).ravel()  # one element a drop: whole-row gathers are ~7× faster
         self._fresh_buf = np.zeros(512, bool)  # born, grown or merged since the last merge test
         self._dirty = False  # some drop's position columns are still to be written (drop_rows.DIRTY)
-        self._rest_air = None  # the air (head, cross) the drops' RB and EV columns hold for
+        self._rest_air = None  # the air (head, cross) of the epoch the drops' RB columns hold for (fast_motion)
+        self._step_air = None  # the air (head, cross) of the last step: the drops' EV columns hold for it
         self._shed_all = False  # test every drop against the glass's edges in the next _shed_outside
 
     @property

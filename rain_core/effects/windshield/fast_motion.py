@@ -15,6 +15,7 @@ from rain_core.effects.windshield.constants import (
     DROP_EVAP_KG_M_S,
     EVAP_AIR_M_S,
     FLOW_AT_BOTTOM,
+    FLOW_AT_TOP,
     FLOW_SPREAD,
     FRONTAL_PER_RADIUS2,
     GAMMA_W,
@@ -57,6 +58,27 @@ _EMPTY_I = np.zeros(0, np.int64)
 # A resting drop whose bound RB (drop_rows; see FastMotion._move) is below this is not tested: the margin covers
 # the rounding of the bound and the Newton radius's tiny lag behind the mass (relative ≲ 1e-8).
 _REST_TEST = 0.999
+# The bounds hold for any air within this relative distance of the air of the last full test (the "epoch"), so a
+# car whose speed drifts by a fraction of a per cent a frame retests only the drops near their pinning, not all.
+_AIR_SLACK = 0.02
+_Q_MAX = 1.01  # |Q| of a drop on the glass is at most 1 (its side edge); the margin covers rounding
+_U_MIN = min(FLOW_AT_BOTTOM, FLOW_AT_TOP)  # the smallest along-glass factor UP (head·UP is the air's t part)
+
+
+def _air_deviation(head: float, cross: float, epoch: tuple | None) -> float | None:
+    """An upper bound on |A − A_E| / |A_E| over the glass, A the air over a drop (airflow.air_velocity) for
+    (head, cross) m/s and A_E that for the epoch's; None when no bound holds (no epoch, a headwind turned
+    tailwind, no head air in the epoch). For a headwind A = (head·UP·FLOW_SPREAD·Q + CROSSWIND_GAIN·cross,
+    head·UP) (a tailwind: UP = FLOW_AT_BOTTOM and |head| across), so |A − A_E| ≤ |Δhead|·UP·(1 + FLOW_SPREAD·|Q|)
+    + CROSSWIND_GAIN·|Δcross| and |A_E| ≥ |head_E|·UP."""
+    if epoch is None:
+        return None
+    h0, c0 = epoch
+    if head == h0 and cross == c0:
+        return 0.0
+    if h0 == 0.0 or (head >= 0.0) != (h0 >= 0.0):
+        return None
+    return (abs(head - h0) * (1.0 + FLOW_SPREAD * _Q_MAX) + CROSSWIND_GAIN * abs(cross - c0) / _U_MIN) / abs(h0)
 
 
 class FastMotion:
@@ -75,7 +97,13 @@ class FastMotion:
         (evaporation: its mass m and radius a shrink), its force over pin is α·G/pin + β·D/pin with α = (m/a)
         over its value then and β = a·profile(a)² over its value then, both in [0, 1] (profile grows with a), so
         it stays ≤ RB (a convex function on [0, 1]² is largest at a corner) and the drop stays put, as the full
-        test would find. Anything else (moving, placed, grown, a new air) sets RB = +inf."""
+        test would find. Anything else (moving, placed, grown) sets RB = +inf.
+
+        The air may change too, within an epoch: while |A' − A| ≤ ε·|A| over every drop (A its air at the test,
+        ``_air_deviation``), the drag D = k·a²·q(|A|)²·|A|·A (q the profile, concave in √|A| from 0) changes by
+        at most c·|D|, c = (2ε + ε²)(1 + ε) + ε (|A|·q² is within (1 ± ε)² of its value), so RB = max(|G + D| +
+        c·|D|, |G|, (1 + c)·|D|) / pin bounds it (the same corners). An air outside the epoch starts a new one:
+        every drop is tested. The drops' EV column follows the air of every step."""
         n = self._n
         if n == 0:
             return 0, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
@@ -83,29 +111,46 @@ class FastMotion:
             self._flush_placed()
         d = self._buf[:n]
         head, cross = float(air_local[2]), float(air_local[0])
+        new_air = self._step_air != (head, cross)  # then every drop's EV is rewritten
+        self._step_air = (head, cross)
+        dev = _air_deviation(head, cross, self._rest_air)
         cand = None  # None: every drop
-        if self._rest_air != (head, cross):  # a new air: every drop is tested, its EV and RB rewritten
+        if dev is None or dev > _AIR_SLACK:  # a new epoch: every drop is tested, its bound made for this air
             self._rest_air = (head, cross)
+            dev = 0.0
         else:
             cand = np.flatnonzero(d[:, _RB] >= _REST_TEST)
             if len(cand) == n:
                 cand = None
+        # A bound made now must hold for any air of the epoch, within (slack + dev) / (1 − dev) of this one over
+        # every drop (relative): the drag then differs from this one's by at most ``grow`` times it (docstring).
+        slack = (_AIR_SLACK + dev) / (1.0 - dev) if self._rest_air[0] != 0.0 else 0.0
+        grow = (2.0 * slack + slack * slack) * (1.0 + slack) + slack
         c = d if cand is None else d.take(cand, axis=0)
         k = len(c)
         s_g = t_g = ds = dt_ = _EMPTY1
         go = _EMPTY_I
+        whole = cand is None or new_air  # the air over every drop (for EV), the tested ones' taken from it
+        if whole or k:
+            src = d if whole else c
+            # The air over the glass (airflow.air_velocity), from the position's factors (drop_rows).
+            if head >= 0.0:
+                up = head * src[:, _UP]
+                side = up * FLOW_SPREAD * src[:, _Q] + CROSSWIND_GAIN * cross
+            else:  # a tailwind: a weak, separated flow down the glass
+                up = np.full(len(src), head * FLOW_AT_BOTTOM)
+                side = abs(head * FLOW_AT_BOTTOM) * FLOW_SPREAD * src[:, _Q] + CROSSWIND_GAIN * cross
+            air_speed = np.sqrt(side * side + up * up)
+            ev = np.sqrt(1.0 + air_speed / EVAP_AIR_M_S)  # the air's factor on the evaporation (below)
+            if not whole:
+                d[cand, _EV] = ev
+            else:
+                d[:, _EV] = ev
+                if cand is not None:
+                    up, side, air_speed = up.take(cand), side.take(cand), air_speed.take(cand)
         if k:
             a = c[:, _A]  # the radius at the start of the step (the Newton update below comes after its last use)
             m = c[:, _M]
-            # The air over the glass (airflow.air_velocity), from the position's factors (drop_rows).
-            if head >= 0.0:
-                up = head * c[:, _UP]
-                side = up * FLOW_SPREAD * c[:, _Q] + CROSSWIND_GAIN * cross
-            else:  # a tailwind: a weak, separated flow down the glass
-                up = np.full(k, head * FLOW_AT_BOTTOM)
-                side = abs(head * FLOW_AT_BOTTOM) * FLOW_SPREAD * c[:, _Q] + CROSSWIND_GAIN * cross
-            air_speed = np.sqrt(side * side + up * up)
-            ev = np.sqrt(1.0 + air_speed / EVAP_AIR_M_S)  # the air's factor on the evaporation (below)
             # Drag in the boundary layer (airflow.drag).
             delta = 5.0 * np.sqrt(c[:, _BL] / np.maximum(air_speed, 1e-3))
             eta = np.minimum(np.maximum(HEIGHT_PER_RADIUS * a / delta, 0.0), 1.0)
@@ -125,13 +170,18 @@ class FastMotion:
             moving = speed > 0.0
             slides = moving | (fmag > pin)  # moving, or starting to
             # The bound that spares a resting drop the test while it stays put (see the docstring).
-            rb = np.maximum(np.maximum(fmag, m * np.sqrt(gs * gs + gt * gt)), coef * rel) / pin
+            drag = coef * rel
+            if grow:
+                fmag_hi = drag * grow
+                fmag_hi += fmag
+                drag *= 1.0 + grow
+            else:
+                fmag_hi = fmag
+            rb = np.maximum(np.maximum(fmag_hi, m * np.sqrt(gs * gs + gt * gt)), drag) / pin
             rb[slides] = np.inf
             if cand is None:
-                d[:, _EV] = ev
                 d[:, _RB] = rb
             else:
-                d[cand, _EV] = ev
                 d[cand, _RB] = rb
             go_l = np.flatnonzero(slides)
             if len(go_l):

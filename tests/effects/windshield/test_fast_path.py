@@ -246,3 +246,39 @@ def test_resting_drops_skipped_by_their_bound_would_not_have_started(monkeypatch
             assert np.array_equal(sim._buf[: sim.count, :RB], twin._buf[: twin.count, :RB])
             assert np.array_equal(sim.film, twin.film) and sim.evaporated == twin.evaporated
     assert sim.count > 300 and skipped > 100 * 240  # most resting drops were spared their test
+
+
+
+@pytest.mark.parametrize("slack", [None, 0.2])
+def test_resting_drops_skipped_through_a_drifting_air_would_not_have_started(monkeypatch, slack):
+    # The bounds hold within an epoch of nearby airs (fast_motion._air_deviation): a car whose speed and crosswind
+    # drift a little every frame (an autopilot, gusts) retests only the drops near their pinning, with the same
+    # glass, bit for bit, as a twin that tests every drop every step; the epoch restarts as the air leaves it.
+    # A wide epoch (slack 0.2: the drag changes by ~70 % within it) stresses the bound's allowance for the air.
+    import copy
+
+    from rain_core.effects.windshield import fast_motion
+    from rain_core.effects.windshield.drop_rows import RB
+
+    if slack is not None:
+        monkeypatch.setattr(fast_motion, "_AIR_SLACK", slack)
+    sim = WindshieldSim(seed=22)
+    twin = copy.deepcopy(sim)
+    skipped = epochs = 0
+    for k in range(240):
+        speed = 50.0 + 0.4 * k + 10.0 * math.sin(k / 20)  # rising, ~0.2-0.8 % a frame
+        wind = np.array([1.0 + 0.5 * math.sin(k / 40), 0.0, 0.3])
+        inputs = GlassInputs.for_speed(speed, 10.0, wind_m_s=wind, drop_budget=1500, wiper_mode="off")
+        skipped += int((sim._buf[: sim.count, RB] < fast_motion._REST_TEST).sum())
+        epoch = sim._rest_air
+        sim.step(1 / 30, inputs)
+        epochs += sim._rest_air is not epoch
+        with monkeypatch.context() as m:
+            m.setattr(fast_motion, "_REST_TEST", -np.inf)
+            twin.step(1 / 30, inputs)
+        if k % 40 == 39:
+            assert np.array_equal(sim._buf[: sim.count, :RB], twin._buf[: twin.count, :RB])
+            assert np.array_equal(sim.film, twin.film) and sim.evaporated == twin.evaporated
+    assert sim.count > 300 and skipped > 100 * 240
+    if slack is None:
+        assert 5 < epochs < 120  # the epoch follows the air, but not every frame
