@@ -149,12 +149,46 @@ def launch_droplets(rng, geo: WheelGeometry, w, bucket, age_now):
     return tuple(a[back_to] for a in out)
 
 
+def wheel_table(geo: WheelGeometry) -> np.ndarray:
+    """The per-wheel quantities the launches read, side by side, (W, 15): wheel velocity (3), contact (3), travel
+    (3), outward (3), radius, width, speed — so a frame's parcels gather them in one ``np.take``. Made once per
+    geometry (the emitter makes one per frame)."""
+    table = getattr(geo, "_wheel_table", None)
+    if table is None:
+        table = np.column_stack([geo.wheel_velocity, geo.contacts, geo.travel, geo.outward, geo.radius, geo.width,
+                                 geo.speed])
+        geo._wheel_table = table
+    return table
+
+
+# Per bucket: the lognormal's median, log-σ, min and max, the parcel's start size and spread rate (columns).
+_BUCKET_TABLE = np.column_stack([_SIZES, _SIGMA0, _GROWTH])
+# Side (3) and bow (4) waves share one formula with these per-bucket constants: the start ahead of the contact
+# (× radius), its height (m), and the lift law a + b·u² (× speed).
+_WAVE_TABLE = np.array([[0.3, 0.005, 0.04, 0.3], [0.9, 0.01, 0.08, 0.35]])
+
+
+def _draws(rng, d_mm, bounds, ks):
+    """Each bucket of ``ks`` in turn: its size's normal draw (into d_mm) and its uniform draws, the reference's
+    order; returns the uniform rows of the buckets side by side, (rows, parcels), or None if they have none."""
+    rows = []
+    for k in ks:
+        lo, hi = int(bounds[k]), int(bounds[k + 1])
+        if hi > lo:
+            d_mm[lo:hi] = rng.standard_normal(hi - lo)
+            rows.append(_uniform_rows(rng, k, hi - lo))
+    if not rows:
+        return None
+    return rows[0] if len(rows) == 1 else np.concatenate(rows, axis=1)
+
+
 def launch_droplets_sorted(rng, geo: WheelGeometry, w, bounds, age_now, out=None, order=None):
     """The droplet launches of parcels already sorted by bucket (bucket k is rows bounds[k]:bounds[k + 1]), as
     the emitter makes them: every bucket is a contiguous slice, the per-wheel quantities are gathered once for
-    all parcels, each bucket's uniform draws are one generator call. Writes (p0, v0, d_mm, sigma0, growth, air,
-    updraught) into ``out`` (arrays of at least len(w) rows) if given; returns them. ``order``: the sort that
-    made these rows (only for the ``across`` draw, which the reference makes in the callers' order)."""
+    all parcels (:func:`wheel_table`), each bucket's uniform draws are one generator call, and the buckets that
+    share a formula (spray 0–1, side and bow waves 3–4) are computed together. Writes (p0, v0, d_mm, sigma0,
+    growth, air, updraught) into ``out`` (arrays of at least len(w) rows) if given; returns them. ``order``: the
+    sort that made these rows (only for the ``across`` draw, which the reference makes in the callers' order)."""
     n = len(w)
     if out is None:
         out = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3)),
@@ -163,54 +197,66 @@ def launch_droplets_sorted(rng, geo: WheelGeometry, w, bounds, age_now, out=None
     across = rng.random(n) - 0.5  # where on the tread width (× b below)
     if order is not None:
         across = across[order]
-    vel = _rows(geo.wheel_velocity, w)
-    c = _rows(geo.contacts, w) - vel * age_now[:, None]  # where the contact patch was at birth
-    f, o = _rows(geo.travel, w), _rows(geo.outward, w)
-    r, b, v = geo.radius[w][:, None], geo.width[w][:, None], geo.speed[w][:, None]
+    rows = np.take(wheel_table(geo), w, axis=0)
+    vel = rows[:, 0:3]
+    c = rows[:, 3:6] - vel * age_now[:, None]  # where the contact patch was at birth
+    f, o = rows[:, 6:9], rows[:, 9:12]
+    r, b, v = rows[:, 12:13], rows[:, 13:14], rows[:, 14:15]
     across = across[:, None] * b
-    sizes = np.repeat(_SIZES, np.diff(bounds[:6]), axis=0)  # (n, 4) each parcel's bucket's size law
-    unif = np.empty(n)  # the sigma0 draw of each parcel
-    air[:] = 0.0
-    updraught[:] = 0.0
-    for k in range(5):
-        lo_i, hi_i = int(bounds[k]), int(bounds[k + 1])
-        m = hi_i - lo_i
-        if m == 0:
-            continue
-        sl = slice(lo_i, hi_i)
-        d_mm[sl] = rng.standard_normal(m)  # the size's normal draw (made a size for all buckets below)
-        u = _uniform_rows(rng, k, m)
-        unif[sl] = u[0]
+    counts = bounds[1:6] - bounds[:5]
+    per = np.repeat(_BUCKET_TABLE, counts, axis=0)  # (n, 6) each parcel's bucket's constants
+    b0, b2, b3, b5 = int(bounds[0]), int(bounds[2]), int(bounds[3]), int(bounds[5])
+    # Spray (buckets 0 and 1; see the reference for the physics of each bucket).
+    u = _draws(rng, d_mm, bounds, (0, 1))
+    if u is not None:
+        sl = slice(b0, b2)
+        sigma0[sl] = u[0]
         cs, fs, os_, vs, rs, vels = c[sl], f[sl], o[sl], v[sl], r[sl], vel[sl]
-        if k < 2:  # spray (see the reference for the physics of each bucket)
-            back, up, out_ = rs * u[1, :, None], rs * u[2, :, None], b[sl] * u[3, :, None]
-            p0[sl] = cs - fs * back + os_ * out_
-            p0[sl, 1] += up[:, 0]
-            share = u[4, :, None]
-            air[sl] = vels * share
-            v0[sl] = air[sl] + vs * (os_ * u[6, :, None])
-            v0[sl, 1] += (vs * u[5, :, None])[:, 0]
-            updraught[sl] = u[7]
-        elif k == 2:  # tread pickup
-            alpha = np.radians(5.0 + 45.0 * u[1] ** 1.6)[:, None]
-            speed = vs * u[2, :, None]
-            lateral = vs * (0.1 + 0.12 * rng.standard_normal(m))[:, None]  # rng.normal(0.1, 0.12), bit for bit
-            ca, sa = np.cos(alpha), np.sin(alpha)
-            p0[sl] = cs - fs * (rs * sa) + os_ * across[sl]
-            p0[sl, 1] += (rs * (1.0 - ca))[:, 0]
-            v0[sl] = vels - fs * (speed * ca) + os_ * lateral
-            v0[sl, 1] += (speed * sa)[:, 0]
-        else:  # side waves (3), bow waves (4)
-            side = k == 3
-            p0[sl] = cs + fs * ((0.3 if side else 0.9) * rs) + os_ * (b[sl] / 2.0 if side else across[sl])
-            p0[sl, 1] += 0.005 if side else 0.01
-            lift = (0.04 + 0.3 * u[3] ** 2) if side else (0.08 + 0.35 * u[3] ** 2)
-            v0[sl] = vs * (fs * u[1, :, None] + os_ * u[2, :, None])
-            v0[sl, 1] += (vs * lift[:, None])[:, 0]
+        back, up, out_ = rs * u[1, :, None], rs * u[2, :, None], b[sl] * u[3, :, None]
+        p0[sl] = cs - fs * back + os_ * out_
+        p0[sl, 1] += up[:, 0]
+        share = u[4, :, None]
+        np.multiply(vels, share, out=air[sl])
+        v0[sl] = air[sl] + vs * (os_ * u[6, :, None])
+        v0[sl, 1] += (vs * u[5, :, None])[:, 0]
+        updraught[sl] = u[7]
+    air[b2:] = 0.0
+    updraught[b2:] = 0.0
+    # Tread pickup (bucket 2).
+    u = _draws(rng, d_mm, bounds, (2,))
+    if u is not None:
+        sl = slice(b2, b3)
+        m = b3 - b2
+        sigma0[sl] = u[0]
+        cs, fs, os_, vs, rs, vels = c[sl], f[sl], o[sl], v[sl], r[sl], vel[sl]
+        alpha = np.radians(5.0 + 45.0 * u[1] ** 1.6)[:, None]
+        speed = vs * u[2, :, None]
+        lateral = vs * (0.1 + 0.12 * rng.standard_normal(m))[:, None]  # rng.normal(0.1, 0.12), bit for bit
+        ca, sa = np.cos(alpha), np.sin(alpha)
+        p0[sl] = cs - fs * (rs * sa) + os_ * across[sl]
+        p0[sl, 1] += (rs * (1.0 - ca))[:, 0]
+        v0[sl] = vels - fs * (speed * ca) + os_ * lateral
+        v0[sl, 1] += (speed * sa)[:, 0]
+    # Side waves (3) and bow waves (4).
+    u = _draws(rng, d_mm, bounds, (3, 4))
+    if u is not None:
+        sl = slice(b3, b5)
+        sigma0[sl] = u[0]
+        cs, fs, os_, vs, rs = c[sl], f[sl], o[sl], v[sl], r[sl]
+        k = np.repeat(_WAVE_TABLE, counts[3:5], axis=0)
+        n3 = int(counts[3])
+        aside = np.empty((b5 - b3, 1))
+        np.divide(b[b3:b3 + n3], 2.0, out=aside[:n3])  # side waves leave at the tread's edge
+        aside[n3:] = across[b3 + n3:b5]
+        p0[sl] = cs + fs * (k[:, 0:1] * rs) + os_ * aside
+        p0[sl, 1] += k[:, 1]
+        lift = k[:, 2] + k[:, 3] * u[3] ** 2
+        v0[sl] = vs * (fs * u[1, :, None] + os_ * u[2, :, None])
+        v0[sl, 1] += (vs * lift[:, None])[:, 0]
     # _lognormal and the parcel sizes of every bucket at once (the same operations, parcel by parcel).
-    np.minimum(np.maximum(sizes[:, 0] * np.exp(sizes[:, 1] * d_mm), sizes[:, 2]), sizes[:, 3], out=d_mm)
-    np.multiply(np.repeat(_SIGMA0, np.diff(bounds[:6])), unif, out=sigma0)
-    growth[:] = np.repeat(_GROWTH, np.diff(bounds[:6]))
+    np.minimum(np.maximum(per[:, 0] * np.exp(per[:, 1] * d_mm), per[:, 2]), per[:, 3], out=d_mm)
+    np.multiply(per[:, 4], sigma0, out=sigma0)
+    growth[:] = per[:, 5]
     return p0, v0, d_mm, sigma0, growth, air, updraught
 
 
@@ -226,10 +272,11 @@ def launch_mist(rng, geo: WheelGeometry, w, bucket, age_now, out=None):
     :func:`launch_droplets_sorted`."""
     n = len(w)
     vi = w // 4
-    c = _rows(geo.contacts, w) - _rows(geo.wheel_velocity, w) * age_now[:, None]
-    f, o = _rows(geo.travel, w), _rows(geo.outward, w)
-    r, v = geo.radius[w][:, None], geo.speed[w][:, None]
-    vel = _rows(geo.wheel_velocity, w)
+    rows = np.take(wheel_table(geo), w, axis=0)
+    vel = rows[:, 0:3]
+    c = rows[:, 3:6] - vel * age_now[:, None]
+    f, o = rows[:, 6:9], rows[:, 9:12]
+    r, v = rows[:, 12:13], rows[:, 14:15]
     # Its seven uniform draws (_MIST_UNIFORMS) in one call, as _uniform_rows: (7, n, 1).
     u = (_MIST_LO + _MIST_SPAN * rng.random((7, n)))[..., None]
     # The fine spray of every wheel is drawn into the wake: puffs start just behind the body, in line with the

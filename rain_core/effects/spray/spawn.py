@@ -28,10 +28,26 @@ from rain_core.effects.spray.water import MIST_D_MM, SPLASH_MIN_MM
 _MIST_VT_M_S = physics.terminal_velocity(MIST_D_MM)
 
 
+# The Gunn–Kinzer interpolant's knots and slopes per interval, for _terminal_velocity's gathers.
+_GK_X = physics.GUNN_KINZER_D_MM
+_GK_X0, _GK_H = _GK_X[:-1].copy(), _GK_X[1:] - _GK_X[:-1]
+_GK_Y0, _GK_Y1 = physics.GUNN_KINZER_V_M_S[:-1].copy(), physics.GUNN_KINZER_V_M_S[1:].copy()
+_GK_D0, _GK_D1 = physics._GK_SLOPES[:-1].copy(), physics._GK_SLOPES[1:].copy()
+
+
 def _terminal_velocity(d_mm: np.ndarray) -> np.ndarray:
-    """``physics.terminal_velocity`` without its argument check: the sizes are the launches' own, clipped."""
-    return physics._terminal_velocity_from(physics.GUNN_KINZER_D_MM, physics.GUNN_KINZER_V_M_S, physics._GK_SLOPES,
-                                           d_mm)
+    """``physics.terminal_velocity`` (m/s) of the droplets' sizes d_mm (mm), bit for bit, without its argument
+    check and its Stokes and break-up branches: the launches clip every size to 0.1–5 mm, inside the table
+    (0.078–5.8 mm), where it is ``physics._hermite`` — evaluated here with the same operations in the same order,
+    each interval's knots gathered from per-interval tables."""
+    k = np.searchsorted(_GK_X, d_mm, side="right") - 1
+    h = _GK_H.take(k)
+    t = (d_mm - _GK_X0.take(k)) / h
+    t2 = t * t
+    t3 = t2 * t
+    two_t3, three_t2 = 2 * t3, 3 * t2
+    return ((two_t3 - three_t2 + 1) * _GK_Y0.take(k) + (t3 - 2 * t2 + t) * h * _GK_D0.take(k)
+            + (three_t2 - two_t3) * _GK_Y1.take(k) + (t3 - t2) * h * _GK_D1.take(k))
 
 
 def quantile_90(x: np.ndarray) -> float:
