@@ -26,7 +26,7 @@ from rain_core.effects.windshield.constants import (
 )
 from rain_core.effects.windshield.inputs import GlassInputs
 from rain_core.effects.windshield.sim import WindshieldSim
-from rain_core.effects.windshield.splats import drop_splats, film_splats
+from rain_core.effects.windshield.splats import drop_splats, film_splats, half_bits
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
@@ -47,6 +47,7 @@ DROP_LENS = 0.5  # the lens's slopes × the contact angle's: seen at the raked g
 DROP_RIM = 0.45  # darkening of a drop towards its outline, on top of the Fresnel reflection of the cabin
 DROP_HIGHLIGHT = 6.0  # the sky focused by the cap: its highlight is brighter than the sky, × the zenith radiance
 _UNIT_A, _UNIT_B, _UNIT_C, _UNIT_D = units.WINDSHIELD  # each pass binds its (up to) four textures to these
+_DROP_FORMAT = "4f 4f2/i"  # splats.DROP_ROW: the segment as float32, the rest as float16
 
 
 class WindshieldEffect(Effect):
@@ -112,23 +113,26 @@ class WindshieldEffect(Effect):
         )
         # One instance buffer per water target (film deposits, drops), each written once a frame with only what
         # the frame draws, then drawn with one instanced call (so no buffer is rewritten while a draw may read it).
+        # The drop rows carry their radius, height and kind as half floats (splats.DROP_ROW).
         self._splat_bufs = [ctx.buffer(reserve=32 * 1024) for _ in range(2)]
         self._splat_vaos = [
-            ctx.vertex_array(self.splat_prog, [(buf, "4f 4f/i", "in_seg", "in_info")]) for buf in self._splat_bufs
+            ctx.vertex_array(self.splat_prog, [(buf, fmt, "in_seg", "in_info")])
+            for buf, fmt in zip(self._splat_bufs, ("4f 4f/i", _DROP_FORMAT), strict=True)
         ]
         # The drop pass reads the drops' rows where the drop texture's splats left them: nothing more is uploaded.
-        self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], "4f 4f/i", "in_seg", "in_info")])
+        self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], _DROP_FORMAT, "in_seg", "in_info")])
         self._drop_rows = 0  # rows in the drop buffer this frame
         self.upload_bytes = 0  # bytes written to the GPU by the last frame's water pass
         self.splat_draws = 0  # instanced splat draws in the last frame
         self.resolution = 0
         self._film: list = []
         self._film_index = 0
-        self._coarse = [ctx.texture((FILM_CELLS, FILM_CELLS), 1, dtype="f4") for _ in range(2)]
+        # The CPU film as half floats (the film texture it rescales is half float too): half the upload.
+        self._coarse = [ctx.texture((FILM_CELLS, FILM_CELLS), 1, dtype="f2") for _ in range(2)]
         for tex in self._coarse:
             tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
             tex.repeat_x = tex.repeat_y = False
-            tex.write(np.zeros((FILM_CELLS, FILM_CELLS), np.float32).tobytes())
+            tex.write(np.zeros((FILM_CELLS, FILM_CELLS), np.float16).tobytes())
         self._coarse_index = 0
         self._frame_copy = None
         self._last_time: float | None = None
@@ -288,7 +292,7 @@ class WindshieldEffect(Effect):
         tallest drop. ``which``: 0 the film deposits, 1 the drops and beads (each has its own buffer)."""
         if not len(splats):
             return
-        data = np.ascontiguousarray(splats, dtype=np.float32)
+        data = splats if which else np.ascontiguousarray(splats, dtype=np.float32)  # drops: splats.DROP_ROW
         buf = self._splat_bufs[which]
         if data.nbytes > buf.size:
             buf.orphan(int(data.nbytes * 1.5))
@@ -313,7 +317,8 @@ class WindshieldEffect(Effect):
         ctx.disable(moderngl.CULL_FACE)
         # The CPU film now, as mean thickness (µm) per cell.
         cur = 1 - self._coarse_index
-        coarse = (self.sim.film_thickness_m() * 1e6).astype(np.float32)
+        # As float16 bits (half floats end at 65504; NumPy's float16 cast is slow).
+        coarse = half_bits(np.minimum(self.sim.film_thickness_m() * 1e6, 6e4).astype(np.float32)).astype(np.uint16)
         self._coarse[cur].write(coarse)
         self.upload_bytes = coarse.nbytes
         self.splat_draws = 0

@@ -165,7 +165,8 @@ def test_splats_are_one_instanced_draw_per_water_target_with_only_what_the_frame
     sets = [len(film_splats(effect.sim, texel)), len(drop_splats(effect.sim, texel))]
     rows = sum(sets)
     assert rows > 0 and effect.splat_draws == sum(k > 0 for k in sets)  # film deposits, drops: ≤ one draw each
-    assert effect.upload_bytes == 32 * rows + 4 * FILM_CELLS * FILM_CELLS  # 8 float32 a splat, the coarse film
+    # 8 float32 a film splat, 4 float32 + 4 float16 a drop splat, the coarse film as float16.
+    assert effect.upload_bytes == 32 * sets[0] + 24 * sets[1] + 2 * FILM_CELLS * FILM_CELLS
     assert effect.status()["upload_kb"] == effect.upload_bytes / 1024
     scene.release()
 
@@ -189,3 +190,19 @@ def test_shelter_lookup_is_kept_per_position_and_matches_the_roof(gl_ctx, shader
         seen.add(want)
     assert seen == {True, False}, f"no roof over the road at x = {x0} in ±400 m"
     scene.release()
+
+
+def test_half_bits_are_numpys_float16_to_the_last_bit():
+    # The drop rows' radius and height go to the GPU as float16 through splats.half_bits (NumPy's cast is slow):
+    # it must give NumPy's bits (ties may round the other way: one unit in the last place).
+    from rain_core.effects.windshield.splats import half_bits
+
+    rng = np.random.default_rng(3)
+    x = (rng.random(20000) * 10.0 ** rng.uniform(-4.2, 4.5, 20000)).astype(np.float32)
+    x = np.concatenate([x, np.float32([2.0**-14, 1.0, 0.5, 65504.0])])
+    out = half_bits(x)
+    expected = x.astype(np.float16).view(np.uint16).astype(np.int64)
+    normal = x >= 2.0**-14
+    assert np.abs(out[normal].astype(np.int64) - expected[normal]).max() <= 1
+    assert (out[normal] == expected[normal]).mean() > 0.999
+    assert np.all(out[~normal].view(np.float16) <= np.float16(2.0**-14))  # below the normals: 0 or the smallest
