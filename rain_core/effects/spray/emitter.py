@@ -198,6 +198,9 @@ class SprayEmitter:
 
     def throwing(self) -> bool:
         """Whether any wheel of the last observed frame throws water."""
+        flag = getattr(self.geometry, "throwing", None) if self.wheels else False  # gather_wheels' answer
+        if flag is not None:
+            return flag
         return any(float(w.budget.thrown.sum()) > 0.0 for w in self.wheels)
 
     def alive_until(self) -> float:

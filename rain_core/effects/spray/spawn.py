@@ -80,6 +80,16 @@ class SpawnBuffers:
         return self
 
 
+def _vehicle_table(geo) -> np.ndarray:
+    """Per vehicle, side by side (V, 20): position (3), velocity (3), right (3), forward (3), the BodyBox fields
+    (8) — what the body test reads of each droplet's thrower. Made once per geometry (one per frame)."""
+    table = getattr(geo, "_vehicle_table", None)
+    if table is None:
+        table = np.column_stack([geo.position, geo.velocity, geo.right, geo.forward, geo.box_params])
+        geo._vehicle_table = table
+    return table
+
+
 def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now, now: float, wind,
                        body_hit) -> None:
     """What ``SprayEmitter._spawn_parcels`` does on its reference path, for parcels sorted by bucket: rows [:nd]
@@ -111,12 +121,10 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     fate = np.empty(n, dtype=np.int64)
     if nd:
         d = slice(0, nd)
-        vd = vi[d]
-        vel = np.take(geo.velocity, vd, axis=0)  # np.take: faster than fancy indexing on these
-        t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d],
-                          np.take(geo.position, vd, axis=0) - vel * age_now[d, None], vel,
-                          np.take(geo.right, vd, axis=0), np.take(geo.forward, vd, axis=0),
-                          np.take(geo.box_params, vd, axis=0))
+        rows = np.take(_vehicle_table(geo), vi[d], axis=0)  # one gather for all the per-vehicle quantities
+        vel = rows[:, 3:6]
+        t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d], rows[:, 0:3] - vel * age_now[d, None], vel,
+                          rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
         hit = t_body < t_ground[d]
         fate[d] = np.where(hit, FATE_BODY, FATE_ROAD)
         np.minimum(t_body, t_ground[d], out=life[d])

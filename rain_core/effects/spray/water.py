@@ -152,7 +152,8 @@ def allocate_water_unchecked(speed_m_s, tire_width_m, film_depth_m, available=No
     h_mm = h * 1e3
     if available is None:
         available = flux_per_mm * h_mm  # M_w = v·b·WFD·ρ_w
-    flux_per_mm, h_mm, v = np.broadcast_arrays(flux_per_mm, h_mm, v)
+    if not flux_per_mm.shape == h_mm.shape == v.shape:  # (the emitter's arrays are all (W,) already)
+        flux_per_mm, h_mm, v = np.broadcast_arrays(flux_per_mm, h_mm, v)
     # Each mechanism takes its band of the depth, and throws the share its speed ramp releases.
     allocated = flux_per_mm[..., None] * np.minimum(np.maximum(h_mm[..., None] - _BAND_LO_MM, 0.0), _BAND_MM)
     release = np.minimum(np.maximum((v[..., None] - _RAMP_LO) / _RAMP_SPAN, 0.0), 1.0)
