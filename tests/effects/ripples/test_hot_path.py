@@ -106,3 +106,56 @@ def test_float32_footprint_equals_the_reference(masked, choices):
     flat_f, vals_f = fast._footprint(xs, zs, radii, amounts)
     np.testing.assert_array_equal(flat_f, flat_r)
     np.testing.assert_array_equal(vals_f, vals_r)
+
+
+
+def _advance_2d(solver, k: int, alpha: float, kc2: float):
+    """The float32 step on the 2-D interior views (the form the fast path had before it went flat)."""
+    z, zp = solver._z, solver._zp
+    a, kk = np.float32(alpha), np.float32(kc2)
+    mask = None if solver._mask is None else solver._mask[1:-1, 1:-1]
+    for _ in range(k):
+        zi, pi = z[1:-1, 1:-1], zp[1:-1, 1:-1]
+        np.subtract(zi, pi, out=pi)
+        pi *= a
+        pi += zi
+        s = z[:-2, 1:-1] + z[2:, 1:-1]
+        s += z[1:-1, :-2]
+        s += z[1:-1, 2:]
+        s -= zi * np.float32(4.0)
+        s *= kk
+        pi += s
+        if mask is not None:
+            pi *= mask
+        z, zp = zp, z
+    solver._z, solver._zp = z, zp
+
+
+@pytest.mark.parametrize("masked", [False, True])
+def test_float32_flat_stencil_equals_the_2d_one(masked):
+    """The stencil over whole rows as one flat range gives the levels the 2-D interior form gives, edges 0,
+    through scrolls, mask blocks, sources and sub-step changes."""
+    from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+
+    n, h = 40, 0.05
+    flat, plain = (WaveSolverF32(n, h, 0.35, 0.3, sleep_energy=0.0) for _ in range(2))
+    plain._advance = lambda k, alpha, kc2: _advance_2d(plain, k, alpha, kc2)
+    rng = np.random.default_rng(2)
+    if masked:
+        mask = np.zeros((n, n), bool)
+        mask[:, 10:30] = rng.random((n, 20)) > 0.2
+        for s in (flat, plain):
+            s.set_water_mask(mask)
+    for frame in range(30):
+        xs, zs, amounts = rng.uniform(-0.1, 2.0, 6), rng.uniform(-0.1, 2.0, 6), rng.uniform(-1e-3, 1e-3, 6)
+        block, dx = rng.random((3, 20)) > 0.4, int(rng.integers(-2, 3))
+        for s in (flat, plain):
+            if frame % 5 == 3:
+                s.shift(dx, 2)
+            if masked:
+                s.set_water_mask_blocks([(n - 3, 12, block)])
+            s.add_impulses(xs, zs, 0.08, amounts)
+            s.step([1 / 30, 1 / 60, 1 / 45][frame % 3])
+        np.testing.assert_array_equal(flat._z, plain._z)
+        np.testing.assert_array_equal(flat._zp, plain._zp)
+        assert not flat._z[:, [0, -1]].any() and not flat._z[[0, -1], :].any()
