@@ -32,6 +32,7 @@ from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import float_target, fullscreen_triangle
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform, set_uniforms
+from rain_core.layout import PERIOD_M
 from rain_core.physics import RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
@@ -48,6 +49,22 @@ DROP_RIM = 0.45  # darkening of a drop towards its outline, on top of the Fresne
 DROP_HIGHLIGHT = 6.0  # the sky focused by the cap: its highlight is brighter than the sky, × the zenith radiance
 _UNIT_A, _UNIT_B, _UNIT_C, _UNIT_D = units.WINDSHIELD  # each pass binds its (up to) four textures to these
 _DROP_FORMAT = "4f 4f2/i"  # splats.DROP_ROW: the segment as float32, the rest as float16
+
+
+def roof_height(world, x: float, z: float) -> float:
+    """``world.occluder_height`` at one point (x, z) m, in Python scalars (~50× cheaper than the array version
+    for one point): the same nearest cell (``OccluderMap.lookup``) of the fine map inside its x range, else of the
+    coarse map, else -inf. Worlds without the maps are asked through ``occluder_height``."""
+    maps = (getattr(world, "occluder_map", None), getattr(world, "occluder_map_coarse", None))
+    if maps[0] is None or maps[1] is None:
+        return float(np.asarray(world.occluder_height(x, z)))
+    for m in maps:
+        grid = m.grid
+        nz, nx = grid.shape
+        i = math.floor((x - m.x0_m) / m.cell_m)
+        if 0 <= i < nx:
+            return float(grid[math.floor((z % PERIOD_M) / m.cell_m) % nz, i])
+    return -math.inf
 
 
 class WindshieldEffect(Effect):
@@ -195,7 +212,7 @@ class WindshieldEffect(Effect):
         key = (frame.world, x, z)
         memo = self._shelter_memo
         if memo is None or memo[0][0] is not key[0] or memo[0][1:] != key[1:]:
-            memo = self._shelter_memo = (key, float(np.asarray(frame.world.occluder_height(x, z))))
+            memo = self._shelter_memo = (key, roof_height(frame.world, x, z))
         return memo[1] > y
 
     def active(self, frame) -> bool:

@@ -78,10 +78,10 @@ def _rotation(value) -> np.ndarray:
     if rot.shape != (3, 3):
         raise ValueError(f"GlassInputs.car_rotation must be a (3, 3) rotation matrix, got shape {rot.shape}")
     r = rot.tolist()
-    cols = [[r[0][j], r[1][j], r[2][j]] for j in range(3)]
-    off = max(abs(sum(a * b for a, b in zip(cols[i], cols[j], strict=True)) - (i == j)) for i in range(3)
-              for j in range(3))
     (a, b, c), (d, e, f), (g, h, k) = r
+    # |RᵀR − I|: the columns (a, d, g), (b, e, h), (c, f, k), their norms and their (symmetric) dot products.
+    off = max(abs(a * a + d * d + g * g - 1.0), abs(b * b + e * e + h * h - 1.0), abs(c * c + f * f + k * k - 1.0),
+              abs(a * b + d * e + g * h), abs(a * c + d * f + g * k), abs(b * c + e * f + h * k))
     det = a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g)
     if not (off <= ROTATION_TOLERANCE and abs(det - 1.0) <= ROTATION_TOLERANCE):  # NaN fails too
         raise ValueError(

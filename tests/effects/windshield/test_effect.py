@@ -192,6 +192,25 @@ def test_shelter_lookup_is_kept_per_position_and_matches_the_roof(gl_ctx, shader
     scene.release()
 
 
+def test_roof_height_is_the_worlds_occluder_height_at_any_point(gl_ctx, shaders):
+    # _sheltered looks the roof up in Python scalars (effect.roof_height): it must give World.occluder_height's
+    # answer everywhere: on the fine map and the coarse one, beyond both, at negative and far z (periodic).
+    from rain_core.effects.windshield.effect import roof_height
+
+    s = Settings()
+    effect = WindshieldEffect(gl_ctx, s, seed=1, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+    world = scene.world
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.uniform(-12.0, 12.0, 3000), rng.uniform(-120.0, 120.0, 1000)])
+    z = rng.uniform(-2500.0, 2500.0, len(x))
+    want = world.occluder_height(x, z)
+    got = np.array([roof_height(world, float(a), float(b)) for a, b in zip(x, z, strict=True)])
+    assert np.array_equal(got, want)
+    assert np.isfinite(want).sum() > 100 and np.isneginf(want).sum() > 100
+    scene.release()
+
+
 def test_half_bits_are_numpys_float16_to_the_last_bit():
     # The drop rows' radius and height go to the GPU as float16 through splats.half_bits (NumPy's cast is slow):
     # it must give NumPy's bits (ties may round the other way: one unit in the last place).
