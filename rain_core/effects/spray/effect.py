@@ -44,6 +44,7 @@ class SprayEffect(Effect):
         self._vaos: list[moderngl.VertexArray | None] = [None, None]
         self._capacity = [-1, -1]
         self._program = None
+        self._static_key = None  # what the rarely changing uniforms were made of (see _set_uniforms)
         self._color_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
                                           repeat_x=False, repeat_y=False)
@@ -138,23 +139,32 @@ class SprayEffect(Effect):
         # The pass reads the scene's depth, so it writes through a framebuffer without that depth attached.
         return self._color_fbo.fbo(rc.hdr.color)
 
-    @staticmethod
-    def _set_uniforms(prog, rc, now: float) -> None:
+    def _set_uniforms(self, prog, rc, now: float) -> None:
         """The pass's own uniforms, through the program's OwnedUniforms: only those that changed since the last
-        write are written (the clock, camera velocity and forward change every frame; the rest rarely)."""
+        write are written (the clock, camera velocity and forward change every frame; the rest rarely, so they
+        are looked at only when what they are made of changes)."""
         frame = rc.frame
         camera = frame.camera
         vel = frame.ego.velocity() if frame.ego is not None else (0.0, 0.0, 0.0)
-        fwd = camera.basis()[2]
-        owned_uniforms(prog).update({
-            "u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
-            "u_camera_vel": (float(vel[0]), float(vel[1]), float(vel[2])),
-            "u_exposure_s": float(getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)),
-            "u_cam_forward": (float(fwd[0]), float(fwd[1]), float(fwd[2])), "u_depth": units.SPRAY_DEPTH,
-            "u_viewport": (float(rc.size[0]), float(rc.size[1])),
-            "u_near": float(camera.near_m), "u_far": float(camera.far_m),
-            "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
-        })
+        # camera.basis()[2] (the normalised forward) without the right and up vectors it also makes.
+        fwd = np.asarray(camera.forward, dtype=np.float64)
+        norm = np.sqrt(fwd.dot(fwd))
+        if norm > 0:
+            fwd = fwd / norm
+        owned = owned_uniforms(prog)
+        owned.update({"u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
+                      "u_camera_vel": (float(vel[0]), float(vel[1]), float(vel[2])),
+                      "u_cam_forward": (float(fwd[0]), float(fwd[1]), float(fwd[2]))})
+        exposure_s = getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)
+        key = (owned, exposure_s, rc.size[0], rc.size[1], camera.near_m, camera.far_m, camera.fov_y_deg)
+        if key != self._static_key:
+            self._static_key = key
+            owned.update({
+                "u_exposure_s": float(exposure_s), "u_depth": units.SPRAY_DEPTH,
+                "u_viewport": (float(rc.size[0]), float(rc.size[1])),
+                "u_near": float(camera.near_m), "u_far": float(camera.far_m),
+                "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
+            })
 
     def render(self, stage: str, rc) -> None:
         if stage != "transparent":
