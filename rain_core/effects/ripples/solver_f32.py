@@ -59,33 +59,37 @@ class WaveSolverF32(WaveSolver):
         """The reference's footprint of bumps of one reach: the same values in the same order (so the same
         float32 sums), in fewer and cheaper passes. A cell at offset o from the centre's cell lies |o − f| cells
         off (f ∈ [0, 1) the centre's fraction), so o = −reach is never inside a rim of at most reach cells: the
-        window is 2·reach per side (16 cells for a raindrop instead of 25). The rim test runs on that dense
-        block; the kept cells are found by one flatnonzero, and only the bumps near the fixed edges are
-        clipped to the interior."""
+        window is 2·reach per side (16 cells for a raindrop instead of 25). The rim test runs on the dense
+        block laid out offset-major (every pass runs along the K bumps, not along a row of 4); the kept cells
+        are found by one flatnonzero in the reference's bump-major order, and only the bumps near the fixed
+        edges are clipped to the interior."""
         h, n = self.cell_m, self.n
         if r_eff.max() > (reach - 1e-6) * h:  # a rim within rounding of reach cells: the reference's window
             super()._footprint_group(xs, zs, r_eff, amounts, reach, flats, values)
             return
-        w = 2 * reach
-        offsets = np.arange(1 - reach, reach + 1)
+        w, count = 2 * reach, len(xs)
+        offsets = np.arange(1 - reach, reach + 1)[:, None]
         c0 = np.floor(xs / h).astype(np.int64)
         r0 = np.floor(zs / h).astype(np.int64)
-        dx2 = ((c0[:, None] + offsets) * h - xs[:, None]) ** 2  # (K, w), as the reference's cols·h − x
-        dz2 = ((r0[:, None] + offsets) * h - zs[:, None]) ** 2
-        rel = dx2[:, None, :] + dz2[:, :, None]  # d² (K, w rows, w cols), then d / r in place
+        dx2 = ((offsets + c0) * h - xs) ** 2  # (w, K), as the reference's cols·h − x
+        dz2 = ((offsets + r0) * h - zs) ** 2
+        rel = dz2[:, None, :] + dx2[None, :, :]  # d² (w rows, w cols, K), then d / r in place
         np.sqrt(rel, out=rel)
-        rel /= r_eff[0] if r_eff[0] == r_eff[-1] and np.all(r_eff == r_eff[0]) else r_eff[:, None, None]
+        rel /= r_eff[0] if r_eff[0] == r_eff[-1] and np.all(r_eff == r_eff[0]) else r_eff
         inside = rel < 1.0  # the reference's rim test (its squared-distance pre-test only saves work there)
         edge = (c0 < reach) | (c0 > n - 2 - reach) | (r0 < reach) | (r0 > n - 2 - reach)
         if edge.any():  # windows that reach the fixed edges: only their interior cells
-            k = np.flatnonzero(edge)
-            rows, cols = r0[k, None] + offsets, c0[k, None] + offsets
-            inside[k] &= (((rows >= 1) & (rows <= n - 2))[:, :, None] & ((cols >= 1) & (cols <= n - 2))[:, None, :])
-        idx = np.flatnonzero(inside)
-        k, m = np.divmod(idx, w * w)
-        i, j = np.divmod(m, w)
-        vals = 0.5 * (1.0 + np.cos(np.pi * rel.reshape(-1)[idx])) * amounts[k]
-        flat = (r0[k] + (i + (1 - reach))) * n + (c0[k] + (j + (1 - reach)))
+            e = np.flatnonzero(edge)
+            rows, cols = offsets + r0[e], offsets + c0[e]
+            inside[:, :, e] &= ((rows >= 1) & (rows <= n - 2))[:, None, :] & ((cols >= 1) & (cols <= n - 2))[None]
+        idx = np.flatnonzero(inside.transpose(2, 0, 1))  # bump-major, as the reference lists them
+        if w & (w - 1) == 0:  # w² a power of two: shifts and masks instead of a division
+            k, m = idx >> ((w * w).bit_length() - 1), idx & (w * w - 1)
+        else:
+            k, m = np.divmod(idx, w * w)
+        vals = 0.5 * (1.0 + np.cos(np.pi * rel.reshape(-1)[m * count + k])) * amounts[k]
+        i, j = np.divmod(np.arange(w * w), w)
+        flat = ((r0 + (1 - reach)) * n + (c0 + (1 - reach)))[k] + (i * n + j)[m]
         if not vals.all():
             nonzero = vals != 0.0
             flat, vals = flat[nonzero], vals[nonzero]
