@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from functools import lru_cache
 
 import numpy as np
 
@@ -102,6 +103,21 @@ def body_hit_time(p0, v0, u, tau, t_max, body_origin, body_velocity, right, forw
 
 
 
+def _inside(x, y, z, box):
+    """``BodyBox.contains`` for local coordinates (n, k) and per-row box fields ``box`` (8 arrays of (n, 1))."""
+    hw, hl, floor, height, hwb, well_hl, well_top, well_x = box
+    ax, az = np.abs(x), np.abs(z)
+    in_box = (ax < hw) & (y > floor) & (y < height) & (az < hl)
+    in_well = (np.abs(az - hwb) < well_hl) & (y < well_top) & (ax > well_x)
+    return in_box & ~in_well
+
+
+@lru_cache(maxsize=8)
+def _steps(k: int) -> np.ndarray:
+    """(k, 1) float32 fractions 1/k … 1 of a search window (made once per k)."""
+    return (np.arange(1, k + 1, dtype=np.float32) / np.float32(k))[:, None]
+
+
 @lru_cache(maxsize=8)
 def _steps(k: int) -> np.ndarray:
     """(k, 1) float32 fractions 1/k … 1 of a search window (made once per k)."""
@@ -169,13 +185,6 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     tau_r = tau_[rows].astype(f32)
     rate = -1.0 / tau_r
     bx = box[:, rows].astype(f32)
-    # The three axes together, (axis, 1, k): one pass of the flight for all of them. The box as faces per axis
-    # (|x| < w ⟺ −w < x < w exactly in floats), the wheel wells apart.
-    P, U, D = (a[:, None, :] for a in (P, U, D))
-    hi_face = bx[[0, 3, 1]][:, None, :]
-    lo_face = -hi_face
-    lo_face[1] = bx[2]
-    well = bx[4:]  # half wheelbase, well half-length, well top, well inner x: (4, k)
 
     one = f32(1.0)
 
@@ -187,11 +196,8 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
             rel = tau_r * (one - np.exp(t * rate))
         else:
             rel = tau_r * -np.expm1(t * rate)
-        pos = P + U * t + D * rel  # (3, m, k)
-        in_box = ((pos < hi_face) & (pos > lo_face)).all(axis=0)
-        x, y, z = pos
-        in_well = ((np.abs(np.abs(z) - well[0]) < well[1]) & (y < well[2])) & (np.abs(x) > well[3])
-        return in_box & ~in_well
+        return _inside(P[0] + U[0] * t + D[0] * rel, P[1] + U[1] * t + D[1] * rel, P[2] + U[2] * t + D[2] * rel,
+                       bx)
 
     steps = _steps(samples)
     end = t_end[rows].astype(f32)
@@ -204,8 +210,7 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     first = np.argmax(hit[:, keep], axis=0)
     hi = ts[first, keep]
     lo = np.where(first > 0, ts[np.maximum(first - 1, 0), keep], f32(0.0))
-    P, U, D, hi_face, lo_face = (a[:, :, keep] for a in (P, U, D, hi_face, lo_face))
-    well = well[:, keep]
+    P, U, D, bx = (a[:, keep] for a in (P, U, D, bx))
     tau_r, rate = tau_r[keep], rate[keep]
     zsteps = _steps(zoom)
     idx = np.arange(len(keep))
