@@ -100,6 +100,49 @@ class SharedResources:
     rain_rings: RainRings | None = None
 
 
+class FrameUniforms(dict):
+    """A dict of frame uniforms that counts its changes (``version``), so a program asking for the frame's
+    uniforms again costs one comparison, not a walk over every entry."""
+
+    __slots__ = ("version",)
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.version = 0
+
+    def __setitem__(self, key, value):
+        self.version += 1
+        super().__setitem__(key, value)
+
+    def __delitem__(self, key):
+        self.version += 1
+        super().__delitem__(key)
+
+    def __ior__(self, other):
+        self.version += 1
+        return super().__ior__(other)
+
+    def update(self, *args, **kwargs):
+        self.version += 1
+        super().update(*args, **kwargs)
+
+    def pop(self, *args):
+        self.version += 1
+        return super().pop(*args)
+
+    def popitem(self):
+        self.version += 1
+        return super().popitem()
+
+    def setdefault(self, key, default=None):
+        self.version += 1
+        return super().setdefault(key, default)
+
+    def clear(self):
+        self.version += 1
+        super().clear()
+
+
 @dataclass
 class RenderContext:
     """What a pass needs to draw: GL objects, the frame, camera matrices in the wrapped frame, the shared value,
@@ -120,7 +163,7 @@ class RenderContext:
     shared: SharedResources = field(default_factory=SharedResources)
     # Uniforms beyond the camera and lighting that every program gets: the medium the active effects report
     # (Effect.frame_uniforms) over the clear-air defaults, and the sun shadow map's.
-    uniforms: dict = field(default_factory=dict)
+    uniforms: dict = field(default_factory=FrameUniforms)
     active: tuple = ()  # the effects that run this frame
     # The renderer's uniform buffers for the frame block (rain_core.gfx.frame_block): set_frame_uniforms binds one.
     frame_blocks: frame_block.FrameBlocks | None = None
@@ -143,10 +186,12 @@ class RenderContext:
     def _frame_values(self) -> dict:
         """Camera, exposure, sun/sky and light values of this context, computed once (every program of the frame
         gets the same; ``view``/``projection`` replaced means a new context, see dataclasses.replace)."""
-        key = (self.view, self.projection, self.frame, self.lights)
         cached = self.__dict__.get("_frame_cache")
-        if cached is not None and all(a is b for a, b in zip(cached[0], key, strict=True)):
-            return cached[1]
+        if cached is not None:
+            k = cached[0]
+            if k[0] is self.view and k[1] is self.projection and k[2] is self.frame and k[3] is self.lights:
+                return cached[1]
+        key = (self.view, self.projection, self.frame, self.lights)
         lighting = self.frame.lighting
         values = {
             "u_view_proj": mat4_bytes(self.view_proj),
@@ -169,16 +214,24 @@ class RenderContext:
 
     def _frame_state(self) -> tuple[dict, bytes]:
         """(every frame uniform: the frame's own values under ``uniforms``, the frame block's bytes), recomputed
-        only when the frame values or an entry of ``uniforms`` changed (compared by identity: cheap)."""
+        only when the frame values or an entry of ``uniforms`` changed (compared by identity; a ``FrameUniforms``
+        not written since is not walked at all)."""
         base = self._frame_values()
-        items = tuple(self.uniforms.items())
+        uniforms = self.uniforms
         cached = self.__dict__.get("_state_cache")
+        versioned = type(uniforms) is FrameUniforms
+        if versioned and cached is not None and cached[0] is base and cached[4] is uniforms \
+                and cached[5] == uniforms.version:
+            return cached[2], cached[3]
+        items = tuple(uniforms.items())
         if (cached is not None and cached[0] is base and len(cached[1]) == len(items)
                 and all(a[0] == b[0] and a[1] is b[1] for a, b in zip(cached[1], items, strict=True))):
+            if versioned:  # written again with the same values: the next ask takes the quick path
+                self.__dict__["_state_cache"] = (*cached[:4], uniforms, uniforms.version)
             return cached[2], cached[3]
-        merged = {**base, **self.uniforms}  # the frame's own uniforms (medium, shadow) take precedence
+        merged = {**base, **uniforms}  # the frame's own uniforms (medium, shadow) take precedence
         data = frame_block.pack(merged)
-        self.__dict__["_state_cache"] = (base, items, merged, data)
+        self.__dict__["_state_cache"] = (base, items, merged, data, uniforms, uniforms.version if versioned else None)
         return merged, data
 
     def set_frame_uniforms(self, program: moderngl.Program) -> None:

@@ -21,7 +21,7 @@ from rain_core import layout
 from rain_core.gfx import units
 from rain_core.gfx.effect import STAGES, Effect
 from rain_core.gfx.exposure import AutoExposure
-from rain_core.gfx.frame import Frame, PassStat, RenderContext, SharedResources
+from rain_core.gfx.frame import Frame, FrameUniforms, PassStat, RenderContext, SharedResources
 from rain_core.gfx.frame_block import FrameBlocks
 from rain_core.gfx.mirrors import DoorMirrors
 from rain_core.gfx.scene_draw import SceneDrawer
@@ -63,6 +63,7 @@ class Renderer:
         self._gpu_timing = bool(gpu_timing)
         self._gpu_source = "none"
         self.stats: list[PassStat] = []
+        self._to_describe: list = []  # (PassStat, effect) whose note pass_table() fills in
 
         self._make_targets()
         self.shadow = ShadowMap(ctx, self.shaders)
@@ -156,7 +157,7 @@ class Renderer:
         the frame adds to it)."""
         if self._clear_air is None or self._clear_air[0] is not lighting:
             self._clear_air = (lighting, {**clear_air_uniforms(lighting), **NO_SHADOW})
-        return dict(self._clear_air[1])
+        return FrameUniforms(self._clear_air[1])
 
     def _light_candidates(self, frame: Frame, shift_z: float, camera_z: float):
         """lighting.light_candidates, kept for the frame being rendered: the road's mirror view (same vehicles,
@@ -219,6 +220,7 @@ class Renderer:
     def _render(self, frame: Frame) -> None:
         ctx = self.ctx
         self.stats = []
+        self._to_describe = []
         self.scene.forget_vehicles(frame.vehicles)
         observed = {}
         for effect in self.effects:
@@ -238,15 +240,10 @@ class Renderer:
         rc.shared = SharedResources()
         for effect in active:  # e.g. the rain medium, which every program of the frame sees
             rc.uniforms.update(effect.frame_uniforms(frame))
-        note = [""]
-
-        def update(effect):  # describe() is the effect's cost too: timed with its update
-            effect.update(frame, rc)
-            note[0] = effect.describe()
-
         for effect in active:
-            self._timed(f"{effect.name}.update", lambda e=effect: update(e))
-            self.stats[-1].note = note[0]
+            self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
+            # Its note is written when the table is asked for (pass_table): a headless frame never reads it.
+            self._to_describe.append((self.stats[-1], effect))
         if sun_is_up(frame.lighting):
             self._timed("shadow", lambda: rc.uniforms.update(self.shadow.render(rc, self.scene.draw_items(rc, False))))
         else:  # the sun is down: nothing casts a sun shadow
@@ -332,7 +329,11 @@ class Renderer:
         self._blit_vao.render(moderngl.TRIANGLES, vertices=3)
 
     def pass_table(self) -> list[tuple[str, bool, float, float | None, str]]:
-        """(pass, ran, CPU ms, GPU ms or None, note) for each pass of the last frame."""
+        """(pass, ran, CPU ms, GPU ms or None, note) for each pass of the last frame. The notes (each effect's
+        ``describe()``) are taken now, on the first call after the frame."""
+        for stat, effect in self._to_describe:
+            stat.note = effect.describe()
+        self._to_describe = []
         return [(s.name, s.ran, s.cpu_ms, s.gpu_ms, s.note) for s in self.stats]
 
     def release(self) -> None:

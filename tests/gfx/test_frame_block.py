@@ -224,3 +224,37 @@ def test_owned_uniforms_skip_only_equal_values():
 def test_owned_uniforms_are_one_per_program_object(gl_ctx, shaders):
     prog = shaders.program("core/scene.vert", "core/scene.frag")
     assert owned_uniforms(prog) is owned_uniforms(prog)
+
+
+def test_frame_uniforms_count_every_change_and_the_block_follows(gl_ctx):
+    """FrameUniforms bumps its version on every kind of write, so set_frame_uniforms' quick path (same dict, same
+    version) never serves a stale block."""
+    from rain_core.gfx.frame import FrameUniforms
+
+    u = FrameUniforms({"a": 1})
+    seen = [u.version]
+    for write in (lambda: u.__setitem__("b", 2), lambda: u.update(c=3), lambda: u.__ior__({"d": 4}),
+                  lambda: u.setdefault("e", 5), lambda: u.pop("e"), lambda: u.__delitem__("d"), u.popitem, u.clear):
+        write()
+        seen.append(u.version)
+    assert seen == sorted(set(seen))  # strictly increasing: each write counted
+    scene = _scene(gl_ctx, 12.0)
+    try:
+        scene.step(1 / 30)
+        frame = scene.render()
+        renderer = scene.renderer
+        rc = renderer.render_context(frame)
+        assert type(rc.uniforms) is FrameUniforms
+        prog = renderer.scene.scene_prog
+        rc.set_frame_uniforms(prog)
+        before = renderer.frame_blocks.read_bound()
+        rc.uniforms.update({"u_shadow_params": (1.0, 0.25, 0.5)})  # an update in place, as the renderer does
+        rc.set_frame_uniforms(prog)
+        after = renderer.frame_blocks.read_bound()
+        assert after != before
+        assert frame_block.unpack(after)["u_shadow_params"] == (1.0, 0.25, 0.5)
+        rc.uniforms |= {"u_shadow_params": (2.0, 0.25, 0.5)}
+        rc.set_frame_uniforms(prog)
+        assert frame_block.unpack(renderer.frame_blocks.read_bound())["u_shadow_params"] == (2.0, 0.25, 0.5)
+    finally:
+        scene.release()

@@ -54,6 +54,22 @@ def test_passes_are_recorded(noon_chase):
             assert cpu_ms >= 0 and (gpu_ms is None or gpu_ms >= 0)
 
 
+def test_update_rows_carry_the_effects_notes(gl_ctx):
+    """An effect's update row carries its describe(), taken when the table is asked for (not every frame)."""
+    scene = make_scene(gl_ctx, rate=8.0)
+    try:
+        run(scene, frames=2)
+        notes = {name: note for name, ran, _cpu, _gpu, note in scene.renderer.pass_table()
+                 if name.endswith(".update")}
+        assert "rainfall.update" in notes
+        for effect in scene.effects:
+            if f"{effect.name}.update" in notes:
+                assert notes[f"{effect.name}.update"] == effect.describe()
+        assert "streaks drawn" in notes["rainfall.update"]
+    finally:
+        scene.release()
+
+
 def test_night_is_darker_but_lamps_light_the_road(gl_ctx):
     """At the hour's meter (automatic exposure lifts the night towards the day's key: tests/gfx/test_exposure.py)."""
     day = make_scene(gl_ctx, hour=12.0, auto_exposure=False)
