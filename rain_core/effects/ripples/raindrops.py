@@ -172,10 +172,11 @@ def raindrops(batch: RainBatch, n: int, cell_m: float, water: np.ndarray | None 
     interior cell), as the shader makes them: (index, x m, z m from cell (0, 0), crater radius m, dent m) — the
     dent before the solver widens footprints narrower than MIN_FOOTPRINT_CELLS (volume kept)."""
     h0, h2, ix, iz = _cells(batch.key, batch.count, n)
-    index = np.arange(batch.count)
-    if water is not None:  # the offsets and sizes of the drops on water only
-        wet = np.asarray(water).reshape(-1)[iz * n + ix] > 0.5
-        index, h0, h2, ix, iz = index[wet], h0[wet], h2[wet], ix[wet], iz[wet]
+    if water is None:
+        index = np.arange(batch.count)
+    else:  # the offsets and sizes of the drops on water only (a few in five: taken by index, not by mask)
+        index = np.flatnonzero(np.asarray(water).reshape(-1)[iz * n + ix] > 0.5)
+        h0, h2, ix, iz = h0[index], h2[index], ix[index], iz[index]
     x, z = _centres(h2, ix, iz)
     diam, momentum = drops_at_quantiles(batch.law, _unit(h0))
     return (index, x * cell_m, z * cell_m, batch.crater_m_per_mm * diam, batch.peak_per_momentum * momentum)
