@@ -49,7 +49,7 @@ class ArrivalTable:
         if self.first is None:
             if len(u) < _TABLE_FROM and not self._searched:
                 self._searched = True
-                j = np.searchsorted(self.cdf, x, "right") - 1  # the interval the bucket walk below finds
+                j = self.cdf.searchsorted(x, "right") - 1  # the interval the bucket walk below finds
                 return self._interpolate(j, x)
             self._build_buckets()
         k = np.minimum((u * _CDF_BUCKETS).astype(np.int64), _CDF_BUCKETS - 1)
@@ -58,7 +58,7 @@ class ArrivalTable:
             j += x >= self.cdf_next[j]
         wide = self.span[k] > self.steps
         if wide.any():  # the far tail of the law, where one bucket spans many grid intervals
-            j[wide] = np.searchsorted(self.cdf, x[wide], "right") - 1
+            j[wide] = self.cdf.searchsorted(x[wide], "right") - 1
         return self._interpolate(j, x)
 
     def _interpolate(self, j: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -162,7 +162,7 @@ class DropArray:
         is drop_rows.DIRTY): the same values, computed once a step for all of them."""
         self._dirty = False
         d = self._buf[: self._n]
-        idx = np.flatnonzero(d[:, _KEY] == _DIRTY)
+        idx = (d[:, _KEY] == _DIRTY).nonzero()[0]
         if len(idx):
             d[idx, _PLACED] = self._placed(d[idx, _S], d[idx, _T])
 
@@ -176,9 +176,9 @@ class DropArray:
         keys = self._buf[:n, _KEY]
         if not (keys[1:] < keys[:-1]).any():
             return
-        order = np.argsort(keys, kind="stable")
+        order = keys.argsort(kind="stable")
         # Only the span of rows that change places is rewritten.
-        moved = np.flatnonzero(order != np.arange(n))
+        moved = (order != np.arange(n)).nonzero()[0]
         lo, hi = int(moved[0]), int(moved[-1]) + 1
         order = order[lo:hi]
         self._rows[lo:hi] = self._rows.take(order)

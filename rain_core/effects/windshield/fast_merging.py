@@ -84,7 +84,7 @@ class FastMerging:
         ps += tau * qs
         pt += tau * qt
         rr = a[i] + a[j]
-        touch = np.flatnonzero(ps * ps + pt * pt <= rr * rr)
+        touch = (ps * ps + pt * pt <= rr * rr).nonzero()[0]
         if len(touch) == 0:
             return
         i, j = i[touch], j[touch]
@@ -93,9 +93,9 @@ class FastMerging:
         both.sort()
         nodes = both[np.concatenate(([True], both[1:] != both[:-1]))]
         k = len(i)
-        ij = np.searchsorted(nodes, np.concatenate([i, j]))
+        ij = nodes.searchsorted(np.concatenate([i, j]))
         slot = components(len(nodes), ij[:k], ij[k:])  # the root's place in ``nodes``
-        grown = np.flatnonzero(np.bincount(slot, minlength=len(nodes)) > 1)
+        grown = (np.bincount(slot, minlength=len(nodes)) > 1).nonzero()[0]
         if len(grown) == 0:
             return
         # Sums over each group in index order, as the reference's bincount adds them.

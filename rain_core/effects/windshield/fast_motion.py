@@ -119,7 +119,7 @@ class FastMotion:
             self._rest_air = (head, cross)
             dev = 0.0
         else:
-            cand = np.flatnonzero(d[:, _RB] >= _REST_TEST)
+            cand = (d[:, _RB] >= _REST_TEST).nonzero()[0]
             if len(cand) == n:
                 cand = None
         # A bound made now must hold for any air of the epoch, within (slack + dev) / (1 − dev) of this one over
@@ -183,7 +183,7 @@ class FastMotion:
                 d[:, _RB] = rb
             else:
                 d[cand, _RB] = rb
-            go_l = np.flatnonzero(slides)
+            go_l = slides.nonzero()[0]
             if len(go_l):
                 go = go_l if cand is None else cand[go_l]
                 # The sliding update, for the drops that slide (the others stay at rest).
@@ -227,7 +227,7 @@ class FastMotion:
         a -= (ra2 * a - m * (1.0 / _MASS_PER_A3)) / (3.0 * ra2)
         if len(go):
             step_len = np.sqrt(ds * ds + dt_ * dt_)
-            run = np.flatnonzero(step_len > 0.0)
+            run = (step_len > 0.0).nonzero()[0]
             if len(run):
                 self._run(go[run], s_g[run], t_g[run], ds[run], dt_[run], step_len[run], a_g[run])
         return n, go, s_g, t_g, ds, dt_
@@ -239,7 +239,7 @@ class FastMotion:
         ms, mt = s0 + 0.5 * ds, t0 + 0.5 * dt
         inside = self._inside(ms, mt)
         if not inside.all():
-            sel = np.flatnonzero(inside)
+            sel = inside.nonzero()[0]
             if len(sel) == 0:
                 return
             idx, s0, t0, ds, dt, step_len, a, ms, mt = (v[sel] for v in (idx, s0, t0, ds, dt, step_len, a, ms, mt))
@@ -270,11 +270,11 @@ class FastMotion:
         total_k = int(k.sum())
         if total_k:
             if total_k == np.count_nonzero(k):  # one droplet per drop at most: the common case
-                local = np.flatnonzero(k)
+                local = k.nonzero()[0]
                 gap = 1.3 * a[local]
             else:
                 local = np.repeat(np.arange(len(idx)), k)
-                within = np.arange(total_k) - np.repeat(np.cumsum(k) - k, k)
+                within = np.arange(total_k) - np.repeat(k.cumsum() - k, k)
                 gap = (1.3 + TRAIL_SPACING_RADII * within) * a[local]
             # Behind the drop on the path it ran, clear of it (so they do not join again at once).
             gap /= step_len[local]

@@ -54,11 +54,11 @@ class FastWiping:
             in_wedge &= s * s_hi - t * c_hi >= px * s_hi - py * c_hi
             if gone is not None:
                 in_wedge &= ~gone
-            cand = np.flatnonzero(in_wedge)
+            cand = in_wedge.nonzero()[0]
             if len(cand) == 0:
                 return gone
         else:
-            cand = np.arange(n) if gone is None else np.flatnonzero(~gone)
+            cand = np.arange(n) if gone is None else (~gone).nonzero()[0]
         rows = d.take(cand, axis=0)
         rel_s, rel_t = rows[:, _S] - px, rows[:, _T] - py
         r = np.hypot(rel_s, rel_t)
@@ -104,7 +104,7 @@ class FastWiping:
 
     def _swept_cells(self, b: int, blade: Blade, lo: float, hi: float) -> np.ndarray:
         order, phi_sorted = self._cells_by_angle[b]  # the cells within the blade's radii, by angle
-        return np.sort(order[np.searchsorted(phi_sorted, lo, "left") : np.searchsorted(phi_sorted, hi, "right")])
+        return np.sort(order[phi_sorted.searchsorted(lo, "left") : phi_sorted.searchsorted(hi, "right")])
 
     def _cell_bins(self, b: int, blade: Blade, cells: np.ndarray) -> np.ndarray:
         return self._bins_of_cells[b][cells]

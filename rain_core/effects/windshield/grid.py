@@ -140,8 +140,8 @@ def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, member
     total = int(counts.sum())
     if total == len(counts):  # one member each: the common case
         return query_ids, members.take(heads)
-    shift = np.repeat(heads - (np.cumsum(counts) - counts), counts)
-    return np.repeat(query_ids, counts), members.take(shift + np.arange(total))
+    shift = (heads - (counts.cumsum() - counts)).repeat(counts)
+    return query_ids.repeat(counts), members.take(shift + np.arange(total))
 
 
 def _box_cells(lo0, lo1, hi0, hi1, ids: np.ndarray, n1: int) -> tuple[np.ndarray, np.ndarray]:
@@ -151,8 +151,8 @@ def _box_cells(lo0, lo1, hi0, hi1, ids: np.ndarray, n1: int) -> tuple[np.ndarray
     total = int(counts.sum())
     if total == len(ids):
         return lo0 * n1 + lo1, ids
-    owner = np.repeat(np.arange(len(ids)), counts)
-    within = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
+    owner = np.arange(len(ids)).repeat(counts)
+    within = np.arange(total) - (counts.cumsum() - counts).repeat(counts)
     d0, d1 = np.divmod(within, w1[owner])
     return (lo0[owner] + d0) * n1 + lo1[owner] + d1, ids[owner]
 
@@ -208,13 +208,13 @@ class PairFinder:
         keys, owner = _box_cells(lo0, lo1, hi0, hi1, far_ids, p1)
         keys = keys + (p1 + 1)  # the near table's border offset (see pairs)
         c = self._count[keys]
-        hit = np.flatnonzero(c)
+        hit = c.nonzero()[0]
         out_i, out_j = [], []
         deferred = None
         if len(hit):
             c, qid = c[hit], owner[hit]
             if int(c.sum()) > budget:
-                over = np.cumsum(c) > budget
+                over = c.cumsum() > budget
                 deferred = qid[over]
                 keep = ~over
                 hit, c, qid = hit[keep], c[keep], qid[keep]
@@ -241,7 +241,7 @@ class PairFinder:
         near = reach <= 0.5 * NEAR_CELL_M
         out_i, out_j = [], []
         all_far_done = False
-        near_ids = np.flatnonzero(near)
+        near_ids = near.nonzero()[0]
         all_near = len(near_ids) == n
         if len(near_ids):
             ns, nt = (s, t) if all_near else (s[near_ids], t[near_ids])
@@ -249,11 +249,11 @@ class PairFinder:
             k0 = np.minimum(np.maximum(((ns - _GRID_ORIGIN[0]) * inv).astype(np.int16), 0), self._n0 - 1)
             k1 = np.minimum(np.maximum(((nt - _GRID_ORIGIN[1]) * inv).astype(np.int16), 0), self._n1 - 1)
             keys = k0 * np.int16(self._p1) + (k1 + np.int16(self._p1 + 1))
-            order = np.argsort(keys, kind="stable")  # 16-bit keys: a radix sort
+            order = keys.argsort(kind="stable")  # 16-bit keys: a radix sort
             sorted_keys = keys[order]
             members = order if all_near else near_ids[order]
             # Runs of equal keys: where each starts and ends in the sorted order.
-            brk = np.flatnonzero(sorted_keys[1:] != sorted_keys[:-1]) + 1
+            brk = (sorted_keys[1:] != sorted_keys[:-1]).nonzero()[0] + 1
             starts = np.empty(len(brk) + 1, np.int64)
             starts[0] = 0
             starts[1:] = brk
@@ -264,7 +264,7 @@ class PairFinder:
             self._head[run_cells] = starts
             self._count[run_cells] = ends - starts
             if not all_near:
-                far_ids = np.flatnonzero(~near)
+                far_ids = (~near).nonzero()[0]
                 direct = self._far_in_near_table(far_ids, s, t, reach, active, members, budget)
                 if direct is not None:  # the few far-reaching drops were looked up here: no far grid needed
                     fi, fj, f_deferred = direct
@@ -276,22 +276,22 @@ class PairFinder:
                         deferred[f_deferred] = True
                     all_far_done = True
             if all_near:
-                q = np.flatnonzero(active)
+                q = active.nonzero()[0]
                 qk = keys[q]
             else:
-                q = np.flatnonzero(active & near)
+                q = (active & near).nonzero()[0]
                 at = np.empty(n, keys.dtype)  # the near drops' keys by drop index (a search of near_ids costs more)
                 at[near_ids] = keys
                 qk = at[q]
             looked = (qk[:, None] + self._around).ravel()
             c = self._count.take(looked)
-            hit = np.flatnonzero(c)
+            hit = c.nonzero()[0]
             self._count[run_cells] = 0
             if len(hit):
                 c = c[hit]
                 qid = q[hit // 9]
                 if int(c.sum()) > budget:
-                    over = np.cumsum(c) > budget
+                    over = c.cumsum() > budget
                     if deferred is None:
                         deferred = np.zeros(n, bool)
                     deferred[qid[over]] = True
@@ -303,7 +303,7 @@ class PairFinder:
                 out_j.append(j)
 
         if not all_near and not all_far_done:
-            far_ids = np.flatnonzero(~near)
+            far_ids = (~near).nonzero()[0]
             fs, ft, fr = s[far_ids], t[far_ids], reach[far_ids]
             c0, c1 = self._f0, self._f1
             widen = 0.5 * NEAR_CELL_M
@@ -320,8 +320,8 @@ class PairFinder:
             cover = (hi0 - lo0 + 1) * (hi1 - lo1 + 1)
             if 2 * int(cover.sum()) > MERGE_CELLS_MAX:
                 # Over budget: the drops with the largest boxes are looked up where they end, with their size.
-                order = np.argsort(-cover, kind="stable")
-                left = 2 * (int(cover.sum()) - np.cumsum(cover[order])) + 18 * np.arange(1, len(order) + 1)
+                order = (-cover).argsort(kind="stable")
+                left = 2 * (int(cover.sum()) - cover[order].cumsum()) + 18 * np.arange(1, len(order) + 1)
                 fits = left <= MERGE_CELLS_MAX
                 shrink = order[: int(np.argmax(fits)) + 1 if fits.any() else len(order)]
                 fs, ft, fr = fs.copy(), ft.copy(), fr.copy()
@@ -330,10 +330,10 @@ class PairFinder:
                 fr[shrink] = radius[far_ids[shrink]]
                 lo0, lo1, hi0, hi1 = box(fs, ft, fr + widen)
             reg_keys, reg_ids = _box_cells(lo0, lo1, hi0, hi1, far_ids, c1)
-            order = np.argsort(reg_keys, kind="stable")
+            order = reg_keys.argsort(kind="stable")
             reg_keys, reg_ids = reg_keys[order], reg_ids[order]
             per_cell = np.bincount(reg_keys, minlength=c0 * c1)
-            head = np.cumsum(per_cell) - per_cell
+            head = per_cell.cumsum() - per_cell
             # Queries: every near drop by its centre's cell; a far-reaching one by the cells it sits in (its
             # widened box, a superset of its own box).
             q_keys, q_ids = reg_keys, reg_ids
@@ -344,11 +344,11 @@ class PairFinder:
                 q_keys = np.concatenate([kc, q_keys])
                 q_ids = np.concatenate([near_ids, q_ids])
             c = per_cell[q_keys]
-            hit = np.flatnonzero(c)
+            hit = c.nonzero()[0]
             if len(hit):
                 c, qid = c[hit], q_ids[hit]
                 if int(c.sum()) > max(budget, 0):
-                    over = np.cumsum(c) > max(budget, 0)
+                    over = c.cumsum() > max(budget, 0)
                     if deferred is None:
                         deferred = np.zeros(n, bool)
                     deferred[qid[over]] = True

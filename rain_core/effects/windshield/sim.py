@@ -122,7 +122,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
                 blade.r_inner_m + (np.arange(BEAD_BINS) + 0.5) / BEAD_BINS * (blade.r_outer_m - blade.r_inner_m)
             )
             r_c, phi_c = self._cell_polar[b]
-            order = np.argsort(phi_c, kind="stable")
+            order = phi_c.argsort(kind="stable")
             reach = (r_c[order] >= blade.r_inner_m) & (r_c[order] <= blade.r_outer_m)  # the cells it can sweep
             self._cells_by_angle.append((order[reach], phi_c[order][reach]))
             self._bins_of_cells.append(self._bin_of(blade, r_c))
@@ -346,7 +346,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         is_obj = keep >= M_OBJECT_MIN
         cells = self._cells(s, t)
         room = max(self._budget - self._n, 0)
-        obj = np.flatnonzero(is_obj)
+        obj = is_obj.nonzero()[0]
         landed = is_obj
         if len(obj) > room:
             # A full glass: the surplus lands on (joins) a drop already in its cell, or else the film.
@@ -373,19 +373,19 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         # The drops in those cells (a table marks the cells), grouped by cell in index order.
         drop_cells = d[:, _CELL].astype(np.int16)
         if self._dirty:  # only the cell of the drops placed this step is needed: the rest of _placed waits
-            dirty = np.flatnonzero(d[:, _KEY] == _DIRTY)
+            dirty = (d[:, _KEY] == _DIRTY).nonzero()[0]
             drop_cells[dirty] = self._cells(d[dirty, _S], d[dirty, _T])
         cells = cells.astype(np.int16)
         mark = self._cell_mark
         mark[cells] = True
-        idx = np.flatnonzero(mark[drop_cells])
+        idx = mark[drop_cells].nonzero()[0]
         mark[cells] = False
         dc = drop_cells[idx]
-        order = np.argsort(dc, kind="stable")  # 16-bit keys: a radix sort
+        order = dc.argsort(kind="stable")  # 16-bit keys: a radix sort
         # Where each cell's run starts in the sorted cells, and its length (two binary searches, as a count).
         per_cell = np.bincount(dc, minlength=FILM_CELLS * FILM_CELLS)
         c = per_cell[cells]
-        first = (np.cumsum(per_cell) - per_cell)[cells]
+        first = (per_cell.cumsum() - per_cell)[cells]
         placed = c > 0
         if placed.any():
             pick = idx[order[first[placed] + self.rng.integers(0, c[placed])]]
@@ -428,7 +428,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             # Only the drops placed in this sub-step's motion (moved, merged, trail droplets: their position
             # columns are still to be written) can be off the glass; the others rest where they were on it, and
             # arrivals and beads are placed on it.
-            placed = np.flatnonzero(d[:, _KEY] == _DIRTY)
+            placed = (d[:, _KEY] == _DIRTY).nonzero()[0]
             outside = np.zeros(n, bool)
             if len(placed):
                 outside[placed] = ~self._inside(d[placed, _S], d[placed, _T])

@@ -49,7 +49,7 @@ def drop_splats(sim, texel_m: float) -> np.ndarray:
         if bead.any():
             bin_len = (blade.r_outer_m - blade.r_inner_m) / BEAD_BINS
             w = np.minimum(np.sqrt(2.0 * bead / (RHO_WATER * bin_len) / math.pi), 0.01)
-            keep = np.flatnonzero(w > 0)
+            keep = (w > 0).nonzero()[0]
             if len(keep):
                 beads.append((blade, w, keep))
     # Written column by column into the rows the GPU reads (one array for drops and beads: one upload, no float64
@@ -76,7 +76,7 @@ def drop_splats(sim, texel_m: float) -> np.ndarray:
         height /= a_vis
         size[:n, 1] = height  # a sub-texel drop: wider, lower lens
         # (vs, vt) as one complex number: one comparison a drop (the columns are strided rows of the drop array).
-        moving = np.flatnonzero(vel.view(np.complex128)[:, 0] != 0.0 if vel.strides[1] == 8 else vel.any(axis=1))
+        moving = (vel.view(np.complex128)[:, 0] != 0.0 if vel.strides[1] == 8 else vel.any(axis=1)).nonzero()[0]
         if len(moving):
             v = vel[moving]
             speed = norm2(v)
