@@ -225,9 +225,10 @@ def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
     the gutter streams as ``water_depths_mm`` computes them. crack_at = cracks·CRACK_LEVEL, puddle_at = the
     puddle level (Python floats)."""
     (h, h_smooth), (n, shelter) = grids.sample(x, z)
-    crack = CRACK_MAX_MM * np.clip((crack_at - h) / CRACK_DEPTH_SPAN, 0.0, 1.0)
+    # np.clip's values, without its Python-level wrapper (two ufuncs: the same numbers, NaN included).
+    crack = CRACK_MAX_MM * np.minimum(np.maximum((crack_at - h) / CRACK_DEPTH_SPAN, 0.0), 1.0)
     ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
-    puddle = PUDDLE_MAX_MM * np.clip((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0, 1.0)
+    puddle = PUDDLE_MAX_MM * np.minimum(np.maximum((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0), 1.0)
     standing = np.maximum(crack, puddle) * (1.0 - shelter)
     if gutter_k > 0.0:
         standing = np.maximum(standing, gutter_depth_mm(x, z, gutter_k))

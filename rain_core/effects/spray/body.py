@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from functools import lru_cache
 
 import numpy as np
 
@@ -110,12 +109,6 @@ def _inside(x, y, z, box):
     in_box = (ax < hw) & (y > floor) & (y < height) & (az < hl)
     in_well = (np.abs(az - hwb) < well_hl) & (y < well_top) & (ax > well_x)
     return in_box & ~in_well
-
-
-@lru_cache(maxsize=8)
-def _steps(k: int) -> np.ndarray:
-    """(k, 1) float32 fractions 1/k … 1 of a search window (made once per k)."""
-    return (np.arange(1, k + 1, dtype=np.float32) / np.float32(k))[:, None]
 
 
 @lru_cache(maxsize=8)

@@ -140,6 +140,7 @@ _BAND_LO_MM = np.array([DEPTH_BANDS_MM[m][0] for m in MECHANISMS])
 _BAND_MM = np.array([DEPTH_BANDS_MM[m][1] - DEPTH_BANDS_MM[m][0] for m in MECHANISMS])
 _RAMP_LO = np.array([RELEASE_KMH[m][0] for m in MECHANISMS]) * KMH
 _RAMP_SPAN = np.array([RELEASE_KMH[m][1] - RELEASE_KMH[m][0] for m in MECHANISMS]) * KMH
+_SPRAY_LO, _SPRAY_SPAN = SPRAY_KMH[0] * KMH, SPRAY_KMH[1] * KMH - SPRAY_KMH[0] * KMH  # _ramp's lo and hi − lo
 
 
 def allocate_water_unchecked(speed_m_s, tire_width_m, film_depth_m, available=None) -> WaterBudget:
@@ -163,10 +164,15 @@ def allocate_water_unchecked(speed_m_s, tire_width_m, film_depth_m, available=No
     scale = np.divide(available, total, out=np.ones_like(total), where=total > 0)
     allocated *= scale[..., None]
     thrown *= scale[..., None]
-    tread_spray = thrown[..., 1] * spray_share_of_tread(v)
-    buckets = np.stack([thrown[..., 0] * (1.0 - MIST_SHARE), tread_spray * (1.0 - MIST_SHARE),
-                        thrown[..., 1] - tread_spray, thrown[..., 2], thrown[..., 3],
-                        (thrown[..., 0] + tread_spray) * MIST_SHARE], axis=-1)
+    # spray_share_of_tread(v) (v ≥ 0 here) with np.clip's values from two ufuncs.
+    share = TREAD_SPRAY_SHARE * np.minimum(np.maximum((v - _SPRAY_LO) / _SPRAY_SPAN, 0.0), 1.0)
+    tread_spray = thrown[..., 1] * share
+    buckets = np.empty(thrown.shape[:-1] + (6,))
+    np.multiply(thrown[..., 0], 1.0 - MIST_SHARE, out=buckets[..., 0])
+    np.multiply(tread_spray, 1.0 - MIST_SHARE, out=buckets[..., 1])
+    np.subtract(thrown[..., 1], tread_spray, out=buckets[..., 2])
+    buckets[..., 3:5] = thrown[..., 2:4]
+    np.multiply(thrown[..., 0] + tread_spray, MIST_SHARE, out=buckets[..., 5])
     return WaterBudget(np.asarray(available, dtype=np.float64), allocated, thrown, buckets)
 
 
