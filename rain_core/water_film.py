@@ -161,13 +161,14 @@ def _pack(maps: tuple) -> np.ndarray:
     repeat-z sample reads — (j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1), columns clamped, rows wrapped — of
     every map in turn: (nz·(nx + 1), 4·len(maps)) float32, the maps' own values."""
     nz, nx = maps[0].shape
-    i0 = np.arange(-1, nx)
-    ia, ib = np.clip(i0, 0, nx - 1), np.clip(i0 + 1, 0, nx - 1)
-    ja, jb = np.arange(nz), (np.arange(nz) + 1) % nz
     out = np.empty((nz, nx + 1, 4 * len(maps)), dtype=np.float32)
     for k, m in enumerate(maps):
-        for q, (rows, cols) in enumerate(((ja, ia), (ja, ib), (jb, ia), (jb, ib))):
-            out[:, :, 4 * k + q] = m[rows[:, None], cols[None, :]]
+        m = np.asarray(m, dtype=np.float32)
+        # Columns i (clamped: cell −1 reads column 0) and i + 1 (clamped: cell nx − 1 reads column nx − 1).
+        left = np.concatenate([m[:, :1], m], axis=1)
+        right = np.concatenate([m, m[:, -1:]], axis=1)
+        for q, tap in enumerate((left, right, np.roll(left, -1, axis=0), np.roll(right, -1, axis=0))):
+            out[:, :, 4 * k + q] = tap
     return out.reshape(nz * (nx + 1), 4 * len(maps))
 
 
