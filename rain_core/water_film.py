@@ -208,7 +208,9 @@ class _PackedGrids:
         # Small integers: exact in float64.
         cell = np.mod(j0, self.nz) * self.row_len + np.minimum(np.maximum(i0, -1.0), self.top_col) + self.offset
         texels = self.table.take(cell.astype(np.int64), axis=0)  # (2, k, 8): 4 taps of 2 maps
-        texels = texels.reshape(2, -1, 2, 4).transpose(0, 2, 3, 1)  # (grid, map, tap, k)
+        # As float64 (exact), tap-major and contiguous: the products below then run on plain rows (float32 rows
+        # 32 bytes apart made NumPy buffer and cast every operand).
+        texels = texels.transpose(0, 2, 1).astype(np.float64, order="C").reshape(2, 2, 4, -1)  # (grid, map, tap, k)
         ux, uz = 1 - tx, 1 - tz
         ux, tx, uz, tz = ux[:, None], tx[:, None], uz[:, None], tz[:, None]
         top = texels[:, :, 0] * ux + texels[:, :, 1] * tx
