@@ -10,6 +10,7 @@ coarse level is the cell mean), so the picture never shows water the bookkeeping
 from __future__ import annotations
 
 import math
+import weakref
 
 import moderngl
 import numpy as np
@@ -49,6 +50,18 @@ DROP_RIM = 0.45  # darkening of a drop towards its outline, on top of the Fresne
 DROP_HIGHLIGHT = 6.0  # the sky focused by the cap: its highlight is brighter than the sky, × the zenith radiance
 _UNIT_A, _UNIT_B, _UNIT_C, _UNIT_D = units.WINDSHIELD  # each pass binds its (up to) four textures to these
 _DROP_FORMAT = "4f 4f2/i"  # splats.DROP_ROW: the segment as float32, the rest as float16
+
+
+# Program → the key of the rarely changing uniforms last written into it (by any windshield: a shader library may
+# serve several), so a frame writes them only when what they are made of changes. Held weakly, like owned_uniforms.
+_STATIC_KEYS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _set_static(prog, key: tuple, make_values) -> None:
+    """Write ``make_values()`` (a dict) through ``owned_uniforms`` unless ``prog`` last got them for ``key``."""
+    if _STATIC_KEYS.get(prog) != key:
+        owned_uniforms(prog).update(make_values())
+        _STATIC_KEYS[prog] = key
 
 
 def roof_height(world, x: float, z: float) -> float:
@@ -155,6 +168,7 @@ class WindshieldEffect(Effect):
         self._last_time: float | None = None
         self._inputs = GlassInputs()
         self._dt = 0.0
+        self._token = object()  # names this instance in the static uniform keys (_set_static)
 
     # --- resources ------------------------------------------------------------------------------------------
     @property
@@ -347,22 +361,24 @@ class WindshieldEffect(Effect):
         dt = self._dt
         head = max(float(self._inputs.relative_air_local()[2]), 0.0) * 0.65
         residue_um = RESIDUE_M * (1.0 + 4.0 * self._inputs.blade_wear) * 1e6
-        blades, sweeps = [], []
-        for blade, sweep in zip(self.sim.blades, self.sim.frame_sweeps(), strict=True):
-            blades.append((*blade.pivot, blade.r_inner_m, blade.r_outer_m))
-            sweeps.append((sweep[0], sweep[1], 1.0, residue_um) if sweep else (0.0, 0.0, 0.0, 0.0))
-        # Our programs' own uniforms go through owned_uniforms: a value that did not change is not written again.
-        owned_uniforms(self.film_prog).update(dict(
+        sweeps = [(sweep[0], sweep[1], 1.0, residue_um) if sweep else (0.0, 0.0, 0.0, 0.0)
+                  for sweep in self.sim.frame_sweeps()]
+        blades = self._blades_bytes()
+        # Our programs' own uniforms go through owned_uniforms: a value that did not change is not written again;
+        # those that change only with the resolution are not even looked at in between (_set_static).
+        _set_static(self.film_prog, (self._token, n, blades), lambda: dict(
             u_film=_UNIT_A,
             u_coarse=_UNIT_B,
             u_coarse_lod=lod,
             u_texel=(1.0 / n, 1.0 / n),
+            u_blade=blades,
+            u_seed=self.seed % 100000,
+        ))
+        owned_uniforms(self.film_prog).update(dict(
             u_diffusion=min(FILM_DIFFUSION_M2_S * dt / self._texel_m() ** 2, 0.2),
             u_dry_um=FILM_EVAP_KG_M2_S * (1.0 + head / EVAP_AIR_M_S) * dt / RHO_WATER * 1e6,
             u_bead_mix=1.0 - math.exp(-FILM_BEAD_RATE_PER_S * dt),
-            u_blade=np.array(blades, np.float32).tobytes(),
             u_sweep=np.array(sweeps, np.float32).tobytes(),
-            u_seed=self.seed % 100000,
             u_bead_dry=dt / BEAD_LIFE_S,
         ))
         dst.fbo.use()
@@ -381,7 +397,7 @@ class WindshieldEffect(Effect):
         self._drops.color.use(_UNIT_A)
         dst.color.use(_UNIT_B)
         self._coarse[cur].use(_UNIT_C)
-        owned_uniforms(self.normals_prog).update(dict(
+        _set_static(self.normals_prog, (self._token, n), lambda: dict(
             u_drops=_UNIT_A,
             u_film=_UNIT_B,
             u_coarse=_UNIT_C,
@@ -408,33 +424,48 @@ class WindshieldEffect(Effect):
         rot = model[:3, :3]
         lighting = frame.lighting
         cabin = 0.02 * 0.5 * (np.asarray(lighting.sky_zenith) + np.asarray(lighting.sky_horizon)) * lighting.exposure
-        blades = [(*b.pivot, b.r_inner_m, b.r_outer_m) for b in self.sim.blades]
-        drop_lod = math.log2(max(1.0, EYE_APERTURE_BLUR * rc.size[1])) + 0.5
-        # What the glass pass and the drop pass both read.
-        shared = dict(
+        camera = frame.camera
+        blades = self._blades_bytes()
+        refraction = float(settings.windshield.refraction) if settings is not None else 1.0
+        focus = min(float(getattr(camera, "focus_m", math.inf)), 1e9)
+        # What the glass pass and the drop pass both read: the view's (written when it changes) and the car's.
+        view_key = (self._token, self.resolution, blades, rc.size[1], refraction, focus, camera.near_m,
+                    camera.far_m, camera.fov_y_deg)
+
+        def view_values() -> dict:
+            return dict(
+                u_refraction=refraction,
+                u_drop_lod=math.log2(max(1.0, EYE_APERTURE_BLUR * rc.size[1])) + 0.5,
+                u_aperture_m=PUPIL_RADIUS_M,
+                u_focus_m=focus,
+                u_near_far=(camera.near_m, camera.far_m),
+                u_cabin_depth=CABIN_DEPTH_M,
+                u_frame=_UNIT_B,
+                u_depth=_UNIT_C,
+            )
+
+        moving = dict(
             u_model=mat4_bytes(model),
             u_axis_s=tuple(rot @ self.glass.right),
             u_axis_t=tuple(rot @ self.glass.up),
-            u_refraction=float(settings.windshield.refraction) if settings is not None else 1.0,
-            u_drop_lod=drop_lod,
             u_cabin=tuple(float(c) for c in cabin),
-            u_aperture_m=PUPIL_RADIUS_M,
-            u_focus_m=min(float(getattr(frame.camera, "focus_m", math.inf)), 1e9),
-            u_near_far=(frame.camera.near_m, frame.camera.far_m),
-            u_cabin_depth=CABIN_DEPTH_M,
-            u_frame=_UNIT_B,
-            u_depth=_UNIT_C,
         )
+
+        def glass_values() -> dict:
+            values = view_values()
+            values.update(
+                u_film_lod=values["u_drop_lod"] + FILM_EXTRA_LOD,
+                u_texel_m=self._texel_m() if self.resolution else 0.0,
+                u_beads=_UNIT_D,
+                u_blade=blades,
+                u_water=_UNIT_A,
+            )
+            return values
+
+        _set_static(prog, view_key, glass_values)
         owned = owned_uniforms(prog)
-        owned.update(shared)
-        owned.update(dict(
-            u_film_lod=drop_lod + FILM_EXTRA_LOD,
-            u_texel_m=self._texel_m() if self.resolution else 0.0,
-            u_beads=_UNIT_D,
-            u_blade=np.array(blades, np.float32).tobytes(),
-            u_blade_angle=np.array(self.sim.blade_angles(), np.float32).tobytes(),
-            u_water=_UNIT_A,
-        ))
+        owned.update(moving)
+        owned.set("u_blade_angle", np.array(self.sim.blade_angles(), np.float32).tobytes())
         self._water.color.use(_UNIT_A)
         copy.color.use(_UNIT_B)
         copy.depth.use(_UNIT_C)
@@ -446,22 +477,28 @@ class WindshieldEffect(Effect):
         ctx.blend_func = (moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         self._glass_vao.render(moderngl.TRIANGLES)
         if self._drop_rows:
-            self._draw_drops(rc, frame, shared)
+            self._draw_drops(rc, frame, view_key, view_values, moving)
         ctx.disable(moderngl.BLEND)
         ctx.blend_func = moderngl.DEFAULT_BLENDING
         rc.hdr.fbo.depth_mask = True
 
-    def _draw_drops(self, rc, frame, shared: dict) -> None:
-        """The drops as lenses over the glass (premultiplied, blending and depth test as the glass pass set)."""
+    def _draw_drops(self, rc, frame, view_key: tuple, view_values, moving: dict) -> None:
+        """The drops as lenses over the glass (premultiplied, blending and depth test as the glass pass set), with
+        the glass pass's view (its key and values) and the car's uniforms (``moving``)."""
         prog = self.drop_prog
         rc.set_frame_uniforms(prog)
         lighting = frame.lighting
         sky = np.asarray(lighting.sky_zenith, np.float64) * lighting.exposure
+        pixel_rad = math.radians(frame.camera.fov_y_deg) / rc.size[1]
+        _set_static(prog, view_key, lambda: {**view_values(), "u_pixel_rad": pixel_rad})
         owned = owned_uniforms(prog)
-        owned.update(shared)
-        owned.set("u_pixel_rad", math.radians(frame.camera.fov_y_deg) / rc.size[1])
+        owned.update(moving)
         owned.set("u_sky_light", tuple(float(c) for c in sky))
         self._drop_vao.render(moderngl.TRIANGLES, vertices=6, instances=self._drop_rows)
+
+    def _blades_bytes(self) -> bytes:
+        """The blades' pivots and radii (m) as the shaders' u_blade (vec4 each)."""
+        return np.array([(*b.pivot, b.r_inner_m, b.r_outer_m) for b in self.sim.blades], np.float32).tobytes()
 
     def release(self) -> None:
         """Free the textures, buffers and vertex arrays, and the programs when the shader library is our own."""

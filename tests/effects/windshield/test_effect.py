@@ -1,6 +1,8 @@
 """rain_core.effects.windshield.effect: the settings it reads, the skip rule, the GPU water texture against the CPU
 state, the view through wet glass, determinism."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -225,3 +227,47 @@ def test_half_bits_are_numpys_float16_to_the_last_bit():
     assert np.abs(out[normal].astype(np.int64) - expected[normal]).max() <= 1
     assert (out[normal] == expected[normal]).mean() > 0.999
     assert np.all(out[~normal].view(np.float16) <= np.float16(2.0**-14))  # below the normals: 0 or the smallest
+
+
+def test_rarely_changing_uniforms_follow_what_they_are_made_of(gl_ctx, shaders):
+    # The uniforms that change only with the resolution, the view or the settings are written when those change
+    # (effect._set_static), not looked at every frame: a new refraction, resolution or window size must reach them,
+    # and two effects sharing one shader library must each see their own.
+    s = Settings()
+    s.rain.rate_mm_h = 8.0
+    s.quality.windshield_resolution = 128
+    effect = WindshieldEffect(gl_ctx, s, seed=3, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+
+    def frame():
+        scene.step(1 / 30, _Brake)
+        scene.render()
+
+    frame()
+    assert effect.glass_prog["u_refraction"].value == pytest.approx(s.windshield.refraction)
+    assert effect.normals_prog["u_texel"].value == pytest.approx((1 / 128, 1 / 128))
+    s.windshield.refraction = 0.5
+    frame()
+    assert effect.glass_prog["u_refraction"].value == pytest.approx(0.5)
+    s.quality.windshield_resolution = 256
+    frame()
+    assert effect.normals_prog["u_texel"].value == pytest.approx((1 / 256, 1 / 256))
+    assert effect.film_prog["u_texel"].value == pytest.approx((1 / 256, 1 / 256))
+    assert effect.glass_prog["u_drop_lod"].value == pytest.approx(0.5)  # the eye's blur under a texel
+    pixel = effect.drop_prog["u_pixel_rad"].value
+    scene.renderer.resize((320, 540))
+    frame()
+    assert effect.glass_prog["u_drop_lod"].value == pytest.approx(math.log2(0.0037 * 540) + 0.5, rel=1e-6)
+    assert effect.drop_prog["u_pixel_rad"].value == pytest.approx(pixel / 6, rel=1e-6)
+    pixel = effect.drop_prog["u_pixel_rad"].value
+    for seed, size, scale in ((4, (320, 540), 1.0), (5, (160, 270), 2.0)):  # the same programs, another effect
+        other = WindshieldEffect(gl_ctx, s, seed=seed, shaders=shaders)
+        scene2 = _scene(gl_ctx, s, other, size=size)
+        scene2.step(1 / 30, _Brake)
+        scene2.render()
+        assert effect.film_prog["u_seed"].value == seed
+        assert effect.drop_prog["u_pixel_rad"].value == pytest.approx(scale * pixel)
+        frame()
+        assert effect.film_prog["u_seed"].value == 3 and effect.drop_prog["u_pixel_rad"].value == pytest.approx(pixel)
+        scene2.release()
+    scene.release()
