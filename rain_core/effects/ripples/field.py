@@ -196,8 +196,8 @@ class RippleField:
 
     def _ask_depths(self, rows, cols, extra_xz=None) -> tuple[np.ndarray, np.ndarray | None]:
         """(depths of the cells rows × cols, depths at the extra world points (k, 2) m or None), in mm, from one
-        call of the film-depth function (its cost is mostly per call below a strip's size); only the cells'
-        depths are checked (the wheels clamp theirs)."""
+        call of the film-depth function (each call has a fixed cost: the wheels' few points ride along with the
+        strip); only the cells' depths are checked (the wheels clamp theirs)."""
         # Positions from the world lattice index (anchor + cell): a lattice point gets the same coordinates,
         # hence the same depth, whichever window asks about it (so strips asked after scrolls agree exactly
         # with a full evaluation).
