@@ -167,7 +167,7 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     span_lo = lo_b + np.minimum(U, 0.0) * t_end
     span_hi = hi_b + np.maximum(U, 0.0) * t_end
     near = (span_lo < upper).all(axis=0) & (span_hi > lower).all(axis=0) & (t_end > 0.0)
-    rows = np.nonzero(near)[0]
+    rows = near.nonzero()[0]
     if len(rows) == 0:
         return result
     f32 = np.float32
@@ -199,8 +199,8 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     any_hit = hit.any(axis=0)
     if not any_hit.any():
         return result
-    keep = np.nonzero(any_hit)[0]
-    first = np.argmax(hit[:, keep], axis=0)
+    keep = any_hit.nonzero()[0]
+    first = hit[:, keep].argmax(axis=0)
     hi = ts[first, keep]
     lo = np.where(first > 0, ts[np.maximum(first - 1, 0), keep], f32(0.0))
     P, U, D, bx = (a[:, keep] for a in (P, U, D, bx))
@@ -210,7 +210,7 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     for _ in range(rounds):
         ts = lo + (hi - lo) * zsteps
         ts[-1] = hi  # exactly the previous ``hi``, known inside
-        first = np.argmax(inside(ts), axis=0)
+        first = inside(ts).argmax(axis=0)
         hi = ts[first, idx]
         lo = np.where(first > 0, ts[np.maximum(first - 1, 0), idx], lo)
     result[rows[keep]] = lo

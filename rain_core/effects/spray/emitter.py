@@ -311,11 +311,11 @@ class SprayEmitter:
             return
         # One row per parcel: which vehicle, wheel and bucket, and its mass (repeat over the counts: no loop).
         # Bucket-major order: the droplets (buckets 0–4) first, the mist puffs (bucket 5) after them.
-        bi, vi, wi = np.nonzero(counts.transpose(2, 0, 1))
+        bi, vi, wi = counts.transpose(2, 0, 1).nonzero()
         reps = counts[vi, wi, bi]
         mass_per = parcel_mass[vi, wi, bi]
         st.emitted_kg += float(mass_per @ reps)
-        mass = np.repeat(mass_per, reps)
+        mass = mass_per.repeat(reps)
         age_now = elapsed * rng.random(len(mass))  # how long before now each parcel left the tyre
         if self.reference:
             n_drop = int(reps[bi < 5].sum())
@@ -323,8 +323,8 @@ class SprayEmitter:
             self._spawn_parcels(frame, geo, n_drop, vi, wi, bi, mass, now - age_now, age_now, now, wind)
         else:
             bounds = np.zeros(7, dtype=np.int64)
-            np.cumsum(counts.sum(axis=(0, 1)), out=bounds[1:])  # bucket k is rows bounds[k]:bounds[k + 1]
-            spawn_parcels_fast(self, frame, geo, int(bounds[5]), np.repeat(vi * 4 + wi, reps), bounds, mass,
+            counts.sum(axis=(0, 1)).cumsum(out=bounds[1:])  # bucket k is rows bounds[k]:bounds[k + 1]
+            spawn_parcels_fast(self, frame, geo, int(bounds[5]), (vi * 4 + wi).repeat(reps), bounds, mass,
                                now - age_now, age_now, now, wind, body_hit_time_fast)
 
     def _book(self, wheels: list[WheelWater]):

@@ -40,7 +40,7 @@ def _terminal_velocity(d_mm: np.ndarray) -> np.ndarray:
     check and its Stokes and break-up branches: the launches clip every size to 0.1–5 mm, inside the table
     (0.078–5.8 mm), where it is ``physics._hermite`` — evaluated here with the same operations in the same order,
     each interval's knots gathered from per-interval tables."""
-    k = np.searchsorted(_GK_X, d_mm, side="right") - 1
+    k = _GK_X.searchsorted(d_mm, side="right") - 1
     h = _GK_H.take(k)
     t = (d_mm - _GK_X0.take(k)) / h
     t2 = t * t
@@ -121,7 +121,7 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     fate = np.empty(n, dtype=np.int64)
     if nd:
         d = slice(0, nd)
-        rows = np.take(_vehicle_table(geo), vi[d], axis=0)  # one gather for all the per-vehicle quantities
+        rows = _vehicle_table(geo).take(vi[d], axis=0)  # one gather for all the per-vehicle quantities
         vel = rows[:, 3:6]
         t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d], rows[:, 0:3] - vel * age_now[d, None], vel,
                           rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
@@ -202,7 +202,7 @@ def _file(em, rec, birth, death, nd: int, now: float) -> None:
         return
     if k < len(keep):
         idx = np.flatnonzero(keep)
-        rec = np.take(as_floats(rec), idx, axis=0).view(PARTICLE_DTYPE).reshape(k)
+        rec = as_floats(rec).take(idx, axis=0).view(PARTICLE_DTYPE).reshape(k)
         birth, death = birth[idx], death[idx]
     rec["rand"] = em.rng.random(k)
     for ring, sl in ((0, slice(0, k0)), (1, slice(k0, k))):

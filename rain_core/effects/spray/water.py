@@ -198,6 +198,9 @@ def hydroplaning_risk_unchecked(speed_m_s, film_depth_m, tyre_pressure_kpa) -> n
     checked once at the frame's boundary)."""
     v = np.abs(np.asarray(speed_m_s, dtype=np.float64))
     lift = (v / hydroplaning_speed_m_s(tyre_pressure_kpa)) ** 2
-    speed_part = np.clip((lift - HYDRO_LIFT_ONSET) / (1.0 - HYDRO_LIFT_ONSET), 0.0, 1.0)
-    depth_part = _ramp(np.asarray(film_depth_m, dtype=np.float64) * 1e3, *HYDRO_DEPTH_MM)
+    # np.clip's (and _ramp's) values from two ufuncs, without the wrapper.
+    speed_part = np.minimum(np.maximum((lift - HYDRO_LIFT_ONSET) / (1.0 - HYDRO_LIFT_ONSET), 0.0), 1.0)
+    lo, hi = HYDRO_DEPTH_MM
+    depth_mm = np.asarray(film_depth_m, dtype=np.float64) * 1e3
+    depth_part = np.minimum(np.maximum((depth_mm - lo) / (hi - lo), 0.0), 1.0)
     return speed_part * depth_part

@@ -253,18 +253,18 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None) -> tuple[list[W
     az = pz + c * consts[:, 3]
     base = geo.forward * speed[:, None]
     geo.velocity = base + np.column_stack([omega * (pz - az), zero, omega * (ax - px)])
-    wv = np.repeat(base, 4, axis=0)
-    om4 = np.repeat(omega, 4)
-    wv[:, 0] += om4 * (contacts[:, 2] - np.repeat(az, 4))
-    wv[:, 2] -= om4 * (contacts[:, 0] - np.repeat(ax, 4))
+    wv = base.repeat(4, axis=0)  # (ndarray methods: np.repeat's Python wrapper costs more than the work)
+    om4 = omega.repeat(4)
+    wv[:, 0] += om4 * (contacts[:, 2] - az.repeat(4))
+    wv[:, 2] -= om4 * (contacts[:, 0] - ax.repeat(4))
     backwards = np.where(speed < 0.0, -1.0, 1.0)
     geo.speed = np.sqrt(np.einsum("wc,wc->w", wv, wv))
-    signed = geo.speed * np.repeat(backwards, 4)
-    geo.travel = np.repeat(geo.forward * backwards[:, None], 4, axis=0)
-    geo.outward = np.repeat(geo.right, 4, axis=0) * fleet.outward_sign
+    signed = geo.speed * backwards.repeat(4)
+    geo.travel = (geo.forward * backwards[:, None]).repeat(4, axis=0)
+    geo.outward = geo.right.repeat(4, axis=0) * fleet.outward_sign
     geo.radius = fleet.radius
     geo.width = fleet.widths
-    geo.wheel_velocity = np.repeat(geo.velocity, 4, axis=0)
+    geo.wheel_velocity = geo.velocity.repeat(4, axis=0)
     geo.boxes, geo.box_index, geo.box_params = fleet.boxes, fleet.box_index, fleet.box_params
     extra = np.zeros((0, 2)) if extra_xz is None else np.asarray(extra_xz, dtype=np.float64).reshape(-1, 2)
     if n + len(extra):
