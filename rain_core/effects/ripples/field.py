@@ -48,7 +48,7 @@ def _runs(index: np.ndarray):
     """(start, stop) of each run of consecutive values in a sorted index array."""
     if index.size == 0:
         return []
-    breaks = np.flatnonzero(np.diff(index) != 1) + 1
+    breaks = (index[1:] - index[:-1] != 1).nonzero()[0] + 1  # array methods: NumPy's wrappers cost more here
     starts = np.concatenate([[0], breaks])
     stops = np.concatenate([breaks, [index.size]])
     return [(int(index[a]), int(index[b - 1]) + 1) for a, b in zip(starts, stops, strict=True)]
@@ -207,11 +207,13 @@ class RippleField:
         if extra_xz is not None:
             xs = np.concatenate([xs.reshape(-1), extra_xz[:, 0]])
             zs = np.concatenate([zs.reshape(-1), extra_xz[:, 1]])
-        depth = np.broadcast_to(np.asarray(self._film_fn(xs, zs), dtype=np.float64), xs.shape)
+        depth = np.asarray(self._film_fn(xs, zs), dtype=np.float64)
+        if depth.shape != xs.shape:  # e.g. a constant depth
+            depth = np.broadcast_to(depth, xs.shape)
         extra = None
         if extra_xz is not None:
             depth, extra = depth[:cells].reshape(len(rows), len(cols)), depth[cells:]
-        if not np.all(np.isfinite(depth)) or np.any(depth < 0.0):
+        if not np.isfinite(depth).all() or (depth < 0.0).any():
             raise ValueError("film_depth_fn must return finite depths >= 0 mm")
         return depth, extra
 
@@ -220,10 +222,10 @@ class RippleField:
         and about extra_rows, in at most two calls, and update the mask over what was asked. ``extra_xz``
         ((k, 2) world m, the wheels' points) rides along with the first call; returns their depths (mm), None
         when nothing was asked."""
-        rows = np.flatnonzero(self._unknown_rows)
+        rows = self._unknown_rows.nonzero()[0]
         if extra_rows is not None and len(extra_rows):
             rows = np.union1d(rows, extra_rows)
-        cols = np.flatnonzero(self._unknown_cols)
+        cols = self._unknown_cols.nonzero()[0]
         if rows.size == 0 and cols.size == 0:
             return None
         asked = None
@@ -233,7 +235,7 @@ class RippleField:
         if cols.size:  # the columns' cells outside the rows just asked (all of them when no rows were)
             others = np.ones(self.n, bool)
             others[rows] = False
-            others = np.flatnonzero(others)
+            others = others.nonzero()[0]
             if others.size:
                 depth, extra = self._ask_depths(others, cols, None if rows.size else extra_xz)
                 self._wet[np.ix_(others, cols)] = depth > 0.0
@@ -255,7 +257,7 @@ class RippleField:
             for lo, hi in _runs(index):
                 region = (slice(lo, hi), slice(None)) if axis == 0 else (slice(None), slice(lo, hi))
                 water = self._wet[region]
-                if not np.array_equal(water, current[region] > 0.5):
+                if not (water == (current[region] > 0.5)).all():
                     blocks.append((lo, 0, water) if axis == 0 else (0, lo, water))
         if blocks:
             self.solver.set_water_mask_blocks(blocks)
@@ -306,7 +308,9 @@ class RippleField:
 
     def _emit(self, xs: np.ndarray, zs: np.ndarray, radii, amounts: np.ndarray) -> None:
         """Window-metre centres, radii (scalar or per bump, ≤ the span) and peaks (m), already valid."""
-        radii = np.broadcast_to(np.asarray(radii, dtype=np.float64), xs.shape)
+        radii = np.asarray(radii, dtype=np.float64)
+        if radii.shape != xs.shape:  # one radius for all
+            radii = np.broadcast_to(radii, xs.shape)
         if self._batch is not None:
             self._batch.append((xs, zs, radii, amounts))
         else:
@@ -351,8 +355,8 @@ class RippleField:
         # peak by ds/R so the trough depth does not depend on the frame rate or the grid.
         spacing = np.where(length > 0.0, length / count, radius)
         peak = -trough * np.minimum(spacing / radius, 1.0)
-        wheel = np.repeat(np.arange(count.size), count)
-        t = (np.arange(wheel.size) - np.repeat(np.cumsum(count) - count, count) + 0.5) / count[wheel]
+        wheel = np.arange(count.size).repeat(count)
+        t = (np.arange(wheel.size) - (count.cumsum() - count).repeat(count) + 0.5) / count[wheel]
         xs, zs = ax[wheel] + t * (bx - ax)[wheel], az[wheel] + t * (bz - az)[wheel]
         # The water under the tyre is not lost: it is pushed out sideways (the side waves of DESIGN §3's
         # Flintsch allocation). Each trough bump gets a crest on either side, touching its rim (2 × the
@@ -379,14 +383,14 @@ class RippleField:
         lo, hi = -pad, self.solver.length_m + pad
         dx, dz = bx - ax, bz - az
         # The four edges at once, (4, W): a wheel's worth of tiny arrays costs NumPy's per-call overhead only.
-        p = np.stack([-dx, dx, -dz, dz])
-        q = np.stack([ax - lo, hi - ax, az - lo, hi - az])
+        p = np.array([-dx, dx, -dz, dz])
+        q = np.array([ax - lo, hi - ax, az - lo, hi - az])
         flat = p == 0.0
-        inside = ~np.any(flat & (q < 0.0), axis=0)
+        inside = ~(flat & (q < 0.0)).any(axis=0)
         with np.errstate(divide="ignore", invalid="ignore"):
             r = np.where(flat, 0.0, q / np.where(flat, 1.0, p))
-        t0 = np.max(np.where(p < 0.0, r, 0.0), axis=0)  # entering edges (and 0)
-        t1 = np.min(np.where(p > 0.0, r, 1.0), axis=0)  # leaving edges (and 1)
+        t0 = np.where(p < 0.0, r, 0.0).max(axis=0)  # entering edges (and 0)
+        t1 = np.where(p > 0.0, r, 1.0).min(axis=0)  # leaving edges (and 1)
         inside &= t0 <= t1
         return ax + t0 * dx, az + t0 * dz, ax + t1 * dx, az + t1 * dz, inside
 
@@ -455,10 +459,10 @@ class RippleField:
                              f"{checks.quote(impacts)}") from None
         if len(impacts) == 0 or self.wake_gain == 0.0:
             return 0
-        impacts = impacts[np.all(np.isfinite(impacts), axis=1)]
+        impacts = impacts[np.isfinite(impacts).all(axis=1)]
         ox, oz = self.origin_xz
         dent = -self.wake_gain * RAIN_DENT_M_PER_KG_M_S * np.abs(impacts[:, 2])
-        dent = np.clip(dent, -MAX_IMPULSE_M, MAX_IMPULSE_M)
+        dent = np.minimum(np.maximum(dent, -MAX_IMPULSE_M), MAX_IMPULSE_M)  # np.clip's, without its wrapper
         self._emit(impacts[:, 0] - ox, impacts[:, 1] - oz, radius, dent)
         return len(impacts)
 

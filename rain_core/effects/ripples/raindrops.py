@@ -175,7 +175,7 @@ def raindrops(batch: RainBatch, n: int, cell_m: float, water: np.ndarray | None 
     if water is None:
         index = np.arange(batch.count)
     else:  # the offsets and sizes of the drops on water only (a few in five: taken by index, not by mask)
-        index = np.flatnonzero(np.asarray(water).reshape(-1)[iz * n + ix] > 0.5)
+        index = (np.asarray(water).reshape(-1)[iz * n + ix] > 0.5).nonzero()[0]
         h0, h2, ix, iz = h0[index], h2[index], ix[index], iz[index]
     x, z = _centres(h2, ix, iz)
     diam, momentum = drops_at_quantiles(batch.law, _unit(h0))

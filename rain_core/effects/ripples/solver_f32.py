@@ -75,14 +75,14 @@ class WaveSolverF32(WaveSolver):
         dz2 = ((offsets + r0) * h - zs) ** 2
         rel = dz2[:, None, :] + dx2[None, :, :]  # d² (w rows, w cols, K), then d / r in place
         np.sqrt(rel, out=rel)
-        rel /= r_eff[0] if r_eff[0] == r_eff[-1] and np.all(r_eff == r_eff[0]) else r_eff
+        rel /= r_eff[0] if r_eff[0] == r_eff[-1] and (r_eff == r_eff[0]).all() else r_eff
         inside = rel < 1.0  # the reference's rim test (its squared-distance pre-test only saves work there)
         edge = (c0 < reach) | (c0 > n - 2 - reach) | (r0 < reach) | (r0 > n - 2 - reach)
         if edge.any():  # windows that reach the fixed edges: only their interior cells
-            e = np.flatnonzero(edge)
+            e = edge.nonzero()[0]
             rows, cols = offsets + r0[e], offsets + c0[e]
             inside[:, :, e] &= ((rows >= 1) & (rows <= n - 2))[:, None, :] & ((cols >= 1) & (cols <= n - 2))[None]
-        idx = np.flatnonzero(inside.transpose(2, 0, 1))  # bump-major, as the reference lists them
+        idx = inside.transpose(2, 0, 1).ravel().nonzero()[0]  # bump-major, as the reference lists them
         if w & (w - 1) == 0:  # w² a power of two: shifts and masks instead of a division
             k, m = idx >> ((w * w).bit_length() - 1), idx & (w * w - 1)
         else:

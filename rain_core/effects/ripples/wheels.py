@@ -92,8 +92,10 @@ class WheelBatch:
                 mid = self.depth_points()
                 asked = np.broadcast_to(np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64),
                                         mid[:, 0].shape)
-            depth[unknown] = np.clip(np.nan_to_num(asked, nan=0.0), 0.0, 1e3)
-        return np.column_stack([self.p0_xz, self.p1_xz, self.speed_m_s, depth, self.tire_width_m])
+            # NaN → 0, the rest clamped to [0, 1e3] mm (np.clip(np.nan_to_num(…)) without their wrappers)
+            depth[unknown] = np.minimum(np.maximum(np.where(np.isnan(asked), 0.0, asked), 0.0), 1e3)
+        return np.concatenate([self.p0_xz, self.p1_xz, self.speed_m_s[:, None], depth[:, None],
+                               self.tire_width_m[:, None]], axis=1)
 
 
 _NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
