@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rain_core import layout
-from rain_core.effects.spray import body, emitter, flight, launch, parcels, wheels
+from rain_core.effects.spray import body, emitter, flight, launch, parcels, spawn, wheels
 from rain_core.effects.spray.emitter import SprayEmitter
 from rain_core.effects.spray.water import KMH
 from rain_core.vehicles import CAR_SPEC, TRUCK_SPEC, VAN_SPEC, EgoCar, Vehicle
@@ -236,3 +236,14 @@ def test_only_new_parcels_are_written_and_uploaded():
         assert np.all((older <= now - 1 / 30 + 1e-9) | np.isinf(older))  # earlier frames' (or empty) slots
     count = sum(c for r in dirty for _, c in r)
     assert 0 < count <= em.stats.last_parcels + em.stats.last_mist
+
+
+def test_fast_terminal_velocity_is_the_models_bit_for_bit():
+    """The spawn path's terminal velocity (per-interval tables, no branches) over every size a launch can give
+    (0.1–5 mm, the table's knots among them) is physics.terminal_velocity's, bit for bit."""
+    knots = flight.physics.GUNN_KINZER_D_MM
+    d = np.concatenate([np.random.default_rng(3).uniform(0.1, 5.0, 20000), [0.1, 5.0],
+                        knots[(knots >= 0.1) & (knots <= 5.0)]])
+    assert np.array_equal(spawn._terminal_velocity(d), flight.physics.terminal_velocity(d))
+    sizes = launch._SIZES  # every bucket's clip stays inside the table, where no branch is needed
+    assert sizes[:, 2].min() > knots[0] and sizes[:, 3].max() < knots[-1]
