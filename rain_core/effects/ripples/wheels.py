@@ -54,6 +54,8 @@ class WheelBatch:
         """A validated batch (ValueError naming the bad field): a WheelBatch, or an iterable of ``WheelSweep``
         or (p0, p1, speed, film depth mm or None, tyre width) tuples."""
         if isinstance(wheels, WheelBatch):
+            if wheels._valid():  # the effect's batch every frame: a few reductions, no copies
+                return wheels
             p0, p1, speed, width, depth = (wheels.p0_xz, wheels.p1_xz, wheels.speed_m_s, wheels.tire_width_m,
                                            wheels.film_depth_mm)
         else:
@@ -81,6 +83,28 @@ class WheelBatch:
         """(k, 2) world (x, z) in m where the unknown film depths are asked: the middle of each such path."""
         unknown = slice(None) if self.film_depth_mm is None else np.isnan(self.film_depth_mm)
         return 0.5 * (self.p0_xz[unknown] + self.p1_xz[unknown])
+
+    def _valid(self) -> bool:
+        """Whether ``of`` would return this batch unchanged: float64 arrays of matching shapes, every value in
+        range (False sends ``of`` the long way, which names what is wrong)."""
+        arrays = (self.p0_xz, self.p1_xz, self.speed_m_s, self.tire_width_m)
+        if not all(type(a) is np.ndarray and a.dtype == np.float64 for a in arrays):
+            return False
+        w = len(self.speed_m_s)
+        if self.speed_m_s.shape != (w,) or self.tire_width_m.shape != (w,) or self.p0_xz.shape != (w, 2) \
+                or self.p1_xz.shape != (w, 2) or w == 0:
+            return False
+        depth = self.film_depth_mm
+        if depth is not None:
+            if type(depth) is not np.ndarray or depth.dtype != np.float64 or depth.shape != (w,):
+                return False
+            known = depth[~np.isnan(depth)]
+            if known.size and not (known.min() >= 0.0 and known.max() <= 1e3):
+                return False
+        # NaN fails every comparison, so it takes the long way too.
+        return bool(np.isfinite(self.p0_xz).all() and np.isfinite(self.p1_xz).all()
+                    and self.speed_m_s.min() >= 0.0 and self.speed_m_s.max() <= 1e3
+                    and self.tire_width_m.min() >= 1e-3 and self.tire_width_m.max() <= 10.0)
 
     def rows(self, film_depth_fn: FilmDepthFn | None, asked: np.ndarray | None = None) -> np.ndarray:
         """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call (or given:

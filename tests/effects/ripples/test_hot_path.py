@@ -159,3 +159,26 @@ def test_float32_flat_stencil_equals_the_2d_one(masked):
         np.testing.assert_array_equal(flat._z, plain._z)
         np.testing.assert_array_equal(flat._zp, plain._zp)
         assert not flat._z[:, [0, -1]].any() and not flat._z[[0, -1], :].any()
+
+
+def test_wheel_batch_of_a_valid_batch_is_that_batch_and_bad_ones_still_name_the_field():
+    """``WheelBatch.of`` hands a valid batch (the effect's, every frame) back as it is, after a few reductions;
+    a bad one goes the long way and names what is wrong."""
+    from rain_core.effects.ripples.wheels import WheelBatch
+
+    p0 = np.zeros((4, 2))
+    good = WheelBatch(p0, p0 + 0.5, np.full(4, 9.0), np.full(4, 0.2), np.array([np.nan, 1.0, 0.0, np.nan]))
+    assert WheelBatch.of(good) is good
+    assert WheelBatch.of(WheelBatch(p0, p0, np.full(4, 9.0), np.full(4, 0.2))).film_depth_mm is None
+    nan_p0 = p0.copy()
+    nan_p0[2, 1] = np.nan
+    bad = {"p0_xz": dict(p0_xz=nan_p0), "speed_m_s": dict(speed_m_s=np.array([9.0, -1.0, 9.0, 9.0])),
+           "tire_width_m": dict(tire_width_m=np.array([0.2, 0.2, 0.0, 0.2])),
+           "film_depth_mm": dict(film_depth_mm=np.array([1.0, -2.0, 0.0, 1.0])),
+           "one entry per wheel": dict(speed_m_s=np.full(3, 9.0))}
+    fields = dict(p0_xz=p0, p1_xz=p0 + 0.5, speed_m_s=np.full(4, 9.0), tire_width_m=np.full(4, 0.2))
+    for name, change in bad.items():
+        with pytest.raises(ValueError, match=name):
+            WheelBatch.of(WheelBatch(**{**fields, **change}))
+    as_lists = WheelBatch.of(WheelBatch([[0, 0]], [[1, 1]], [9], [0.2]))  # not arrays: converted, checked
+    assert as_lists.speed_m_s.dtype == np.float64 and as_lists.p0_xz.shape == (1, 2)
