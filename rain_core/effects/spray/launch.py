@@ -285,10 +285,13 @@ def launch_mist(rng, geo: WheelGeometry, w, bucket, age_now, out=None):
     behind = np.maximum(axle_to_tail, 0.0)[:, None] + u[0]
     p0 = c - f * behind + _UP * (r * u[1]) + o * u[2]
     # The wake's recirculation lifts the mist to about the vehicle's height: upward speed ∝ v·height.
-    lift = v * u[3] * (geo.height[vi] / WAKE_LIFT_HEIGHT_M)[:, None]
+    height = geo.height.take(vi)
+    lift = v * u[3] * (height / WAKE_LIFT_HEIGHT_M)[:, None]
     v0 = vel * u[4] + _UP * lift + o * (v * u[5])
     sigma0 = MIST_SIGMA0_M * u[6, :, 0]
-    diffusivity = MIST_DIFFUSIVITY * np.linalg.norm(geo.velocity[vi], axis=1) * geo.height[vi]
+    # K per vehicle, then per puff (np.linalg.norm(·, axis=1) is sqrt(add.reduce(x·x, axis=1)): the same bits).
+    vel_v = geo.velocity
+    diffusivity = (MIST_DIFFUSIVITY * np.sqrt(np.add.reduce(vel_v * vel_v, axis=1)) * geo.height).take(vi)
     if out is None:
         return p0, v0, np.full(n, MIST_D_MM), sigma0, 2.0 * diffusivity, np.zeros((n, 3)), np.zeros(n)
     dst = [a[:n] for a in out]
