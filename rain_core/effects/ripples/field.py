@@ -348,16 +348,16 @@ class RippleField:
         counts = np.zeros(len(wheels), np.int64)
         if not live.any():
             return counts
-        ax, az, bx, bz, radius, trough = (v[live] for v in (ax, az, bx, bz, radius, trough))
-        length = np.hypot(bx - ax, bz - az)
+        if not live.all():
+            ax, az, bx, bz, radius, trough = (v[live] for v in (ax, az, bx, bz, radius, trough))
+        dx, dz = bx - ax, bz - az
+        length = np.hypot(dx, dz)
         count = np.maximum(1, np.ceil(length / self.cell_m)).astype(np.int64)
+        moving = length > 0.0
         # A row of raised cosines of radius R spaced ds sums to R/ds times one peak along its axis: scale each
         # peak by ds/R so the trough depth does not depend on the frame rate or the grid.
-        spacing = np.where(length > 0.0, length / count, radius)
+        spacing = np.where(moving, length / count, radius)
         peak = -trough * np.minimum(spacing / radius, 1.0)
-        wheel = np.arange(count.size).repeat(count)
-        t = (np.arange(wheel.size) - (count.cumsum() - count).repeat(count) + 0.5) / count[wheel]
-        xs, zs = ax[wheel] + t * (bx - ax)[wheel], az[wheel] + t * (bz - az)[wheel]
         # The water under the tyre is not lost: it is pushed out sideways (the side waves of DESIGN §3's
         # Flintsch allocation). Each trough bump gets a crest on either side, touching its rim (2 × the
         # footprint radius the solver will use off the path), each holding half its volume, so a wake leaves
@@ -365,16 +365,23 @@ class RippleField:
         # that did not move) have no sideways direction: they press the trough alone.
         reach = np.maximum(radius, MIN_FOOTPRINT_CELLS * self.cell_m)
         with np.errstate(divide="ignore", invalid="ignore"):
-            nx = np.where(length > 0.0, -(bz - az) / length, 0.0) * 2.0 * reach
-            nz = np.where(length > 0.0, (bx - ax) / length, 0.0) * 2.0 * reach
-        side = (length > 0.0)[wheel]
-        sx, sz = nx[wheel][side], nz[wheel][side]
-        crest = -0.5 * peak[wheel][side]
-        r = radius[wheel]
-        self._emit(np.concatenate([xs, xs[side] + sx, xs[side] - sx]),
-                   np.concatenate([zs, zs[side] + sz, zs[side] - sz]),
-                   np.concatenate([r, r[side], r[side]]), np.concatenate([peak[wheel], crest, crest]))
-        counts[live] = count * np.where(length > 0.0, 3, 1)
+            nx = np.where(moving, -dz / length, 0.0) * 2.0 * reach
+            nz = np.where(moving, dx / length, 0.0) * 2.0 * reach
+        # Each wheel's values to each of its bumps in one gather (the counts are exact as float64).
+        wheel = np.arange(count.size).repeat(count)
+        ax_, dx_, az_, dz_, count_, nx_, nz_, peak_, radius_ = np.array(
+            [ax, dx, az, dz, count, nx, nz, peak, radius])[:, wheel]
+        t = (np.arange(wheel.size) - (count.cumsum() - count).repeat(count) + 0.5) / count_
+        xs, zs = ax_ + t * dx_, az_ + t * dz_
+        if moving.all():  # every wheel rolled: crests on every bump
+            sx, sz, crest, x_side, z_side, r_side = nx_, nz_, -0.5 * peak_, xs, zs, radius_
+        else:
+            side = moving[wheel]
+            sx, sz, crest = nx_[side], nz_[side], -0.5 * peak_[side]
+            x_side, z_side, r_side = xs[side], zs[side], radius_[side]
+        self._emit(np.concatenate([xs, x_side + sx, x_side - sx]), np.concatenate([zs, z_side + sz, z_side - sz]),
+                   np.concatenate([radius_, r_side, r_side]), np.concatenate([peak_, crest, crest]))
+        counts[live] = count * np.where(moving, 3, 1)
         return counts
 
     def _clip_segments(self, ax, az, bx, bz, pad):
