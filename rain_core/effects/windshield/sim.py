@@ -398,18 +398,31 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
     # --- what the last step did (for drawing): kept as columns, assembled only when asked ------------------
     def frame_impacts(self) -> np.ndarray:
         """Impacts of the last step: (n, 4) s, t (m), splash radius (m), satellite film thickness (m)."""
-        rows = []
+        out = np.empty((sum(len(cols[0]) for cols in self._impacts), 4))
+        row = 0
         for s, t, d_mm, splash, obj, a_obj, to_film in self._impacts:
+            end = row + len(s)
+            block = out[row:end]
             r = d_mm * (1e-3 * (math.pi / (6.0 * VOLUME_PER_RADIUS3)) ** (1.0 / 3.0))  # a whole drop's radius ∝ d
             r[obj] = a_obj
             r *= 1.5 + 4.0 * splash
-            rows.append(np.column_stack([s, t, r, to_film / (RHO_WATER * math.pi * r * r)]))
-        return np.concatenate(rows) if rows else np.zeros((0, 4))
+            block[:, 0] = s
+            block[:, 1] = t
+            block[:, 2] = r
+            block[:, 3] = to_film / (RHO_WATER * math.pi * r * r)
+            row = end
+        return out
 
     def frame_trails(self) -> np.ndarray:
         """Paths of running drops in the last step: (n, 5) s0, t0, s1, t1 (m), drop radius (m)."""
-        rows = [np.column_stack(cols) for cols in self._trails]
-        return np.concatenate(rows) if rows else np.zeros((0, 5))
+        out = np.empty((sum(len(cols[0]) for cols in self._trails), 5))
+        row = 0
+        for cols in self._trails:
+            end = row + len(cols[0])
+            for c, col in enumerate(cols):
+                out[row:end, c] = col
+            row = end
+        return out
 
     def _shed_outside(self) -> None:
         """Drops that left the glass are shed; drops worn below half the object size become film. The drops
