@@ -16,7 +16,7 @@ def _cross(a, b) -> np.ndarray:
 
 def _normalize(v) -> np.ndarray:
     v = np.asarray(v, dtype=np.float64)
-    n = np.linalg.norm(v)
+    n = math.sqrt(v.dot(v)) if v.ndim == 1 else np.linalg.norm(v)  # a vector: np.linalg.norm's own formula
     return v / n if n > 0 else v
 
 

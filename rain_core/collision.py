@@ -164,13 +164,13 @@ class StreetCollider:
         circles = self._nearby_circles(pz)
         if len(circles):
             dx, dz = circles[:, 0] - px, circles[:, 1] - pz
-            lf = np.clip(dx * fx + dz * fz, -half_l, half_l)
-            lr = np.clip(dx * rx + dz * rz, -half_w, half_w)
+            lf = np.minimum(np.maximum(dx * fx + dz * fz, -half_l), half_l)  # np.clip, without its wrapper
+            lr = np.minimum(np.maximum(dx * rx + dz * rz, -half_w), half_w)
             qx, qz = px + fx * lf + rx * lr, pz + fz * lf + rz * lr
             ox, oz = qx - circles[:, 0], qz - circles[:, 1]
             dist = np.hypot(ox, oz)
             depth = circles[:, 2] - dist
-            i = int(np.argmax(depth))
+            i = int(depth.argmax())
             if depth[i] > 0.0 and (best is None or depth[i] > best[0]):
                 if dist[i] > 1e-9:
                     n = (ox[i] / dist[i], oz[i] / dist[i])
@@ -206,7 +206,7 @@ def kerb_crossings(before: np.ndarray, after: np.ndarray) -> tuple[int, int]:
     """(up, down): wheels that climbed onto / came off the kerb between two sets of contacts (4, 3) m."""
     edge = layout.ROAD_HALF_WIDTH_M
     was, now = np.abs(before[:, 0]) > edge, np.abs(after[:, 0]) > edge
-    return int(np.sum(now & ~was)), int(np.sum(was & ~now))
+    return int(np.count_nonzero(now & ~was)), int(np.count_nonzero(was & ~now))
 
 
 def kerb_speed(speed_m_s: float, up: int, down: int) -> float:

@@ -201,10 +201,8 @@ class Vehicle:
     def model_matrix(self) -> np.ndarray:
         """(4, 4) float64 local→world transform (rotation about +Y by yaw, then translation to position)."""
         c, s = math.cos(self.yaw), math.sin(self.yaw)
-        m = np.eye(4)
-        m[:3, :3] = [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
-        m[:3, 3] = self.position
-        return m
+        x, y, z = (float(v) for v in self.position)
+        return np.array([[c, 0.0, s, x], [0.0, 1.0, 0.0, y], [-s, 0.0, c, z], [0.0, 0.0, 0.0, 1.0]])
 
     def to_world(self, points_local) -> np.ndarray:
         """Local-frame points (n, 3) m → world (n, 3) m."""
@@ -219,8 +217,9 @@ class Vehicle:
     # --- motion ---------------------------------------------------------------------------------------------
     def _point_velocity(self, points_world: np.ndarray) -> np.ndarray:
         # Rigid planar motion: v_p = v·forward + ω ŷ × (p − rear axle); ŷ × (a, 0, c) = (c, 0, −a).
-        rel = np.atleast_2d(points_world) - self.rear_axle()
-        v = np.outer(np.ones(len(rel)), self.forward() * self.speed_m_s)
+        rel = np.asarray(points_world, dtype=np.float64).reshape(-1, 3) - self.rear_axle()
+        v = np.empty_like(rel)
+        v[:] = self.forward() * self.speed_m_s  # every row the body's velocity along its heading
         v[:, 0] += self.yaw_rate_rad_s * rel[:, 2]
         v[:, 2] -= self.yaw_rate_rad_s * rel[:, 0]
         return v
@@ -244,7 +243,8 @@ class Vehicle:
         """(4,) ground speed of each contact point (m/s), order FL, FR, RL, RR; negative while reversing.
 
         In a turn the outer wheels are faster than the inner ones and the front wheels faster than the rear."""
-        speeds = np.linalg.norm(self._point_velocity(self.wheel_contacts()), axis=1)
+        v = self._point_velocity(self.wheel_contacts())
+        speeds = np.sqrt(np.add.reduce(v * v, axis=1))  # np.linalg.norm(v, axis=1)'s operations
         return speeds * (-1.0 if self.speed_m_s < 0 else 1.0)
 
     def wheel_widths(self) -> np.ndarray:
