@@ -140,6 +140,9 @@ def time_to_height_newton(y0, w0, uy, tau, level, tol_s: float = 1e-5, max_steps
     return np.where(below, 0.0, t)
 
 
+_LEVELS: dict[int, np.ndarray] = {}  # ground_time's two levels (road, kerb-top), shaped per tau.ndim
+
+
 def ground_time(p0, v0, u, tau, reference: bool = False) -> np.ndarray:
     """Age (s) at which a drop meets the ground: the road (y = 0), or the kerb-top (KERB_HEIGHT_M) where it is
     beyond the kerb (|x| ≥ ROAD_HALF_WIDTH_M). A drop crossing the kerb line below the kerb-top is stopped at
@@ -155,7 +158,9 @@ def ground_time(p0, v0, u, tau, reference: bool = False) -> np.ndarray:
         x_road = flight_position(p0, v0, u, tau, t_road)[..., 0]
     else:
         # Road and kerb-top crossings solved together (one pass over twice the rows), x from the closed form.
-        levels = np.array([0.0, layout.KERB_HEIGHT_M]).reshape((2,) + (1,) * tau.ndim)
+        levels = _LEVELS.get(tau.ndim)
+        if levels is None:
+            levels = _LEVELS[tau.ndim] = np.array([0.0, layout.KERB_HEIGHT_M]).reshape((2,) + (1,) * tau.ndim)
         t_both = time_to_height_newton(p0[..., 1], v0[..., 1], u[..., 1], tau, levels)
         t_road, t_kerb = t_both[0], t_both[1]
         x_both = p0[..., 0] + u[..., 0] * t_both - (v0[..., 0] - u[..., 0]) * tau * np.expm1(-t_both / tau)

@@ -176,17 +176,18 @@ def _road_landings(em, frame, fate_d, p0, v0, u, tau, life, birth, mass) -> None
     """The droplets that land on the road: (time, x, z, downward momentum) to the candidates whose water depth
     the next frame's film lookup decides (SprayEmitter.observe): flight_position / flight_velocity at landing,
     for the columns used."""
-    road = np.flatnonzero(fate_d == FATE_ROAD)
+    road = (fate_d == FATE_ROAD).nonzero()[0]
     if len(road) == 0 or not em._standing_water_possible(frame):
         return
     t, tau_r = life[road], tau[road]
     p, v, ur = p0[road], v0[road], u[road]
-    relax = -tau_r * np.expm1(-t / tau_r)
+    e = -t / tau_r
+    relax = -tau_r * np.expm1(e)
     rows = np.empty((len(road), 4))
     rows[:, 0] = birth[road] + t
-    rows[:, 1] = p[:, 0] + ur[:, 0] * t + (v[:, 0] - ur[:, 0]) * relax
-    rows[:, 2] = p[:, 2] + ur[:, 2] * t + (v[:, 2] - ur[:, 2]) * relax
-    vel_y = ur[:, 1] + (v[:, 1] - ur[:, 1]) * np.exp(-t / tau_r)
+    # x and z together (columns 0 and 2 of the flight): the same operations element by element.
+    rows[:, 1:3] = p[:, ::2] + ur[:, ::2] * t[:, None] + (v[:, ::2] - ur[:, ::2]) * relax[:, None]
+    vel_y = ur[:, 1] + (v[:, 1] - ur[:, 1]) * np.exp(e)
     rows[:, 3] = mass[road] * np.maximum(-vel_y, 0.0)
     em._candidates = np.concatenate([em._candidates, rows])
 
