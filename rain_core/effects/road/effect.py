@@ -18,7 +18,7 @@ from rain_core.gutter import frame_spread_coefficient
 from rain_core.settings import RoadSection
 from rain_core.water_film import (
     crack_level,
-    film_depth_mm,
+    film_depth_sampler,
     puddle_level,
     puddle_noise,
     shelter_map_for,
@@ -63,6 +63,7 @@ class RoadEffect(Effect):
         self._black = ctx.texture((1, 1), 4, np.zeros(4, np.float32).tobytes(), dtype="f4")
         self._reflection = None  # RenderTarget, created at the first reflection pass
         self._reflection_valid = False
+        self._sampler = None  # (key, world, film_depth_sampler) of the last frame
         self._mirror_pass = False  # True while the reflection pass draws: no reflection, ripples, rings, cabin
         self._ripple_explicit = False
         self._ripple: WaterNormals | None = None
@@ -168,12 +169,21 @@ class RoadEffect(Effect):
         amount, seed, world = float(road.puddle_amount), int(road.puddle_seed), self.world
         self._gutter_k = k = frame_spread_coefficient(frame)
 
-        def standing(x_m, z_m):
-            return film_depth_mm(x_m, z_m, c, p, amount, seed, world, gutter_k=k)
-
         # Everything the depths depend on besides (x, z): consumers may cache depths while the key is unchanged
         # (the ripples then ask only for cells that scrolled into their field).
-        standing.cache_key = ("film", c, p, amount, seed, id(world), k)
+        key = ("film", c, p, amount, seed, id(world), k)
+        if self._sampler is None or self._sampler[0] != key or self._sampler[1] is not world:
+            # film_depth_mm with these arguments checked once (the same values bit for bit), kept while they stay
+            self._sampler = (key, world, film_depth_sampler(c, p, amount, seed, world, gutter_k=k))
+        sampler = self._sampler[2]
+
+        def standing(x_m, z_m):
+            x, z = np.asarray(x_m, dtype=np.float64), np.asarray(z_m, dtype=np.float64)
+            if x.shape != z.shape:
+                x, z = np.broadcast_arrays(x, z)
+            return sampler(x, z)
+
+        standing.cache_key = key
         rc.shared.film_depth_fn = standing
         self._reflection_valid = False
 

@@ -117,3 +117,41 @@ def test_film_depth_glsl_matches_numpy(gl_ctx, shaders, world):
         np.testing.assert_allclose(gpu[..., 0], standing, atol=0.05)
         np.testing.assert_allclose(gpu[..., 1], film, atol=1e-3)
     effect.release()
+
+
+def test_the_frames_film_function_is_film_depth_mm_bit_for_bit(gl_ctx):
+    """rc.shared.film_depth_fn (what the ripples ask every frame) samples through a film_depth_sampler kept while
+    the levels stay: the same values, bit for bit, as film_depth_mm with the frame's arguments, for arrays of any
+    shape, broadcast scalars and off-road points; a change of level makes a new one."""
+    from types import SimpleNamespace
+
+    from rain_core.bench.frame import heavy_rain_settings
+    from rain_core.gfx.frame import SharedResources
+    from rain_core.gutter import frame_spread_coefficient
+    from rain_core.scene import Scene
+
+    scene = Scene(gl_ctx, (32, 18), settings=heavy_rain_settings(10_000), seed=1)
+    try:
+        for _ in range(3):
+            scene.step(1 / 30)
+        effect = next(e for e in scene.effects if e.name == "road")
+        rng = np.random.default_rng(4)
+        for puddles in (1.0, 0.4):
+            scene.weather.puddles = puddles
+            frame = scene.frame()
+            rc = SimpleNamespace(shared=SharedResources())
+            effect.update(frame, rc)
+            fn = rc.shared.film_depth_fn
+            _, cracks, level = effect.levels(frame)
+            road_s = effect._road_settings(frame)
+            args = (cracks, level, float(road_s.puddle_amount), int(road_s.puddle_seed), effect.world)
+            k = frame_spread_coefficient(frame)
+            for shape in ((5000,), (19, 512)):
+                x, z = rng.uniform(-12.0, 12.0, shape), rng.uniform(-500.0, 3000.0, shape)
+                got, want = fn(x, z), water_film.film_depth_mm(x, z, *args, gutter_k=k)
+                assert got.shape == want.shape and np.array_equal(got, want)
+                assert (want > 0).mean() > 0.05  # a real test: standing water among the points
+            x = np.array([0.5, 3.0, 9.0])
+            assert np.array_equal(fn(x, 100.0), water_film.film_depth_mm(x, 100.0, *args, gutter_k=k))
+    finally:
+        scene.release()
