@@ -11,7 +11,6 @@ import numpy as np
 from rain_core import checks, layout, physics
 from rain_core.effects.spray.body import body_hit_time, body_hit_time_fast
 from rain_core.effects.spray.flight import (
-    drag_time_constant_unchecked,
     flight_position,
     flight_velocity,
     ground_time,
@@ -19,8 +18,8 @@ from rain_core.effects.spray.flight import (
 from rain_core.effects.spray.launch import (
     MIST_LIFE_S,
     MIST_SIGMA_MAX,
-    WAKE_TAU_S,
     WheelGeometry,
+    carrier_air_and_tau,
     launch_droplets,
     launch_droplets_reference,
     launch_mist,
@@ -366,13 +365,7 @@ class SprayEmitter:
         vt = np.empty(n)
         vt[:nd] = physics.terminal_velocity(d_mm[:nd]) if nd else 0.0
         vt[nd:] = _MIST_VT_M_S
-        u = wind + air
-        u[:, 1] -= vt * (1.0 - updraught)
-        excess = v0 - u
-        speed = np.sqrt(np.einsum("nc,nc->n", excess, excess))
-        tau = np.empty(n)
-        tau[:nd] = drag_time_constant_unchecked(d_mm[:nd], speed[:nd], vt[:nd])
-        tau[nd:] = WAKE_TAU_S
+        u, speed, tau = carrier_air_and_tau(wind, air, updraught, v0, d_mm, vt, nd)
         t_ground = ground_time(p0, v0, u, tau, reference=ref)
         fate = np.full(n, FATE_ROAD)
         life = np.empty(n)

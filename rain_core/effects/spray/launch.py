@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rain_core.effects.spray.flight import drag_time_constant_unchecked
 from rain_core.effects.spray.water import MIST_D_MM, SPLASH_MIN_MM, SPRAY_MAX_MM
 from rain_core.effects.spray.wheels import WheelGeometry
 
@@ -298,3 +299,19 @@ def launch_mist(rng, geo: WheelGeometry, w, bucket, age_now, out=None):
     dst[0][:], dst[1][:], dst[2][:], dst[3][:], dst[4][:], dst[5][:], dst[6][:] = (
         p0, v0, MIST_D_MM, sigma0, 2.0 * diffusivity, 0.0, 0.0)
     return tuple(dst)
+
+
+def carrier_air_and_tau(wind, air, updraught, v0, d_mm, vt, nd: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(u, speed, τ) of freshly launched parcels, droplets first (``nd`` of them) then mist: u (n, 3) m/s the air
+    they move in (``wind`` plus each parcel's ``air``, minus the part ``1 − updraught`` of its terminal fall
+    ``vt`` m/s), speed (n,) m/s their launch speed relative to it, τ (n,) s the drag time constant (droplets by
+    their size ``d_mm`` and that speed; mist WAKE_TAU_S). One formula for the emitter's reference and fast
+    paths."""
+    u = wind + air
+    u[:, 1] -= vt * (1.0 - updraught)
+    excess = v0 - u
+    speed = np.sqrt(np.einsum("nc,nc->n", excess, excess))
+    tau = np.empty(len(u))
+    tau[:nd] = drag_time_constant_unchecked(d_mm[:nd], speed[:nd], vt[:nd])
+    tau[nd:] = WAKE_TAU_S
+    return u, speed, tau

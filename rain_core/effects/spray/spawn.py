@@ -10,8 +10,14 @@ from __future__ import annotations
 import numpy as np
 
 from rain_core import layout, physics
-from rain_core.effects.spray.flight import drag_time_constant_unchecked, ground_time
-from rain_core.effects.spray.launch import MIST_LIFE_S, MIST_SIGMA_MAX, WAKE_TAU_S, launch_droplets_sorted, launch_mist
+from rain_core.effects.spray.flight import ground_time
+from rain_core.effects.spray.launch import (
+    MIST_LIFE_S,
+    MIST_SIGMA_MAX,
+    carrier_air_and_tau,
+    launch_droplets_sorted,
+    launch_mist,
+)
 from rain_core.effects.spray.optics import extinction_area_m2
 from rain_core.effects.spray.parcels import (
     FATE_AIR,
@@ -108,13 +114,7 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     vt = np.empty(n)
     vt[:nd] = _terminal_velocity(d_mm[:nd])
     vt[nd:] = _MIST_VT_M_S
-    u = wind + air
-    u[:, 1] -= vt * (1.0 - updraught)
-    excess = v0 - u
-    speed = np.sqrt(np.einsum("nc,nc->n", excess, excess))
-    tau = np.empty(n)
-    tau[:nd] = drag_time_constant_unchecked(d_mm[:nd], speed[:nd], vt[:nd])
-    tau[nd:] = WAKE_TAU_S
+    u, speed, tau = carrier_air_and_tau(wind, air, updraught, v0, d_mm, vt, nd)
     t_ground = ground_time(p0, v0, u, tau)
     vi = w // 4
     life = np.empty(n)
