@@ -337,3 +337,15 @@ def test_scenes_share_one_read_only_street_per_seed():
     private = build_world(seed=1)  # still a fresh, writable one
     assert private is not a and private.vertices.flags.writeable
     assert private.vertices.tobytes() == a.vertices.tobytes()
+
+
+def test_occluder_height_at_one_point_is_the_array_lookup(world):
+    """occluder_height_at (Python scalars, asked every frame by the windshield) gives occluder_height's answer:
+    on the fine map, the coarse one, beyond both, at negative and far z (periodic)."""
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.uniform(-12.0, 12.0, 3000), rng.uniform(-160.0, 160.0, 1500)])
+    z = rng.uniform(-2500.0, 2500.0, len(x))
+    want = world.occluder_height(x, z)
+    got = np.array([world.occluder_height_at(float(a), float(b)) for a, b in zip(x, z, strict=True)])
+    assert np.array_equal(got, want)
+    assert np.isfinite(want).sum() > 100 and np.isneginf(want).sum() > 100

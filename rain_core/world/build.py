@@ -61,6 +61,14 @@ class World:
         coarse, _ = self.occluder_map_coarse.lookup(x, z)
         return np.where(inside, fine, coarse)
 
+    def occluder_height_at(self, x: float, z: float) -> float:
+        """``occluder_height`` at one point (x, z) m, in Python scalars (the same cells; m, ``-inf`` for none)."""
+        for grid in (self.occluder_map, self.occluder_map_coarse):
+            h = grid.height_at(x, z)
+            if h is not None:
+                return h
+        return -math.inf
+
     def road_height01(self, x, z) -> np.ndarray:
         """Bilinear sample of ``road_heightmap`` at x, z (m), exactly as a GL texture with LINEAR filtering,
         CLAMP_TO_EDGE across x and REPEAT along z, sampled at u = (x + ROAD_HALF_WIDTH_M) / size_x,

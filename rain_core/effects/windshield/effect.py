@@ -33,7 +33,6 @@ from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import float_target, fullscreen_triangle
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform, set_uniforms
-from rain_core.layout import PERIOD_M
 from rain_core.physics import RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
@@ -65,19 +64,10 @@ def _set_static(prog, key: tuple, make_values) -> None:
 
 
 def roof_height(world, x: float, z: float) -> float:
-    """``world.occluder_height`` at one point (x, z) m, in Python scalars (~50× cheaper than the array version
-    for one point): the same nearest cell (``OccluderMap.lookup``) of the fine map inside its x range, else of the
-    coarse map, else -inf. Worlds without the maps are asked through ``occluder_height``."""
-    maps = (getattr(world, "occluder_map", None), getattr(world, "occluder_map_coarse", None))
-    if maps[0] is None or maps[1] is None:
-        return float(np.asarray(world.occluder_height(x, z)))
-    for m in maps:
-        grid = m.grid
-        nz, nx = grid.shape
-        i = math.floor((x - m.x0_m) / m.cell_m)
-        if 0 <= i < nx:
-            return float(grid[math.floor((z % PERIOD_M) / m.cell_m) % nz, i])
-    return -math.inf
+    """The roof height (m) over one point (x, z) m: ``World.occluder_height_at`` (Python scalars); a world without
+    it (a test double) is asked through ``occluder_height``."""
+    at = getattr(world, "occluder_height_at", None)
+    return at(x, z) if at is not None else float(np.asarray(world.occluder_height(x, z)))
 
 
 class WindshieldEffect(Effect):
