@@ -45,11 +45,12 @@ class OwnedUniforms:
     program), skipping a write whose value equals the one this object wrote last: most of them do not change
     from frame to frame. Anything else writing the same names in the same program would make it skip wrongly."""
 
-    __slots__ = ("_program", "_last")
+    __slots__ = ("_program", "_last", "_keys")
 
     def __init__(self, program):
         self._program = weakref.ref(program)  # the cache below must not keep a program alive
         self._last: dict[str, object] = {}
+        self._keys: dict[str, object] = {}  # group → the key its values were last written for (update_for)
 
     @property
     def program(self):
@@ -67,6 +68,14 @@ class OwnedUniforms:
     def update(self, values: dict) -> None:
         for name, value in values.items():
             self.set(name, value)
+
+    def update_for(self, group: str, key, make_values) -> None:
+        """``update(make_values())`` unless this program last got ``group``'s values for an equal ``key``: uniforms
+        that change only with what ``key`` holds (the resolution, the camera's lens) are then not even made or
+        compared between its changes. ``key`` must hold everything the values are made of."""
+        if self._keys.get(group, _MISSING) != key:
+            self.update(make_values())
+            self._keys[group] = key
 
 
 # Program → its OwnedUniforms, held weakly: a dropped program leaves with its entry (a strong cache once kept

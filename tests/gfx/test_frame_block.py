@@ -221,6 +221,23 @@ def test_owned_uniforms_skip_only_equal_values():
     assert [w[0] for w in prog.writes] == ["u_a", "u_a", "u_b", "u_c", "u_c", "u_d", "u_d"]
 
 
+
+def test_owned_uniforms_update_for_makes_values_only_when_the_key_changes():
+    prog = _Counting()
+    owned = OwnedUniforms(prog)
+    made = []
+
+    def values(v):
+        made.append(v)
+        return {"u_a": v, "u_b": 2.0}
+
+    owned.update_for("static", (1,), lambda: values(1.0))
+    owned.update_for("static", (1,), lambda: values(9.0))  # same key: not even made
+    owned.update_for("other", (1,), lambda: values(1.0))  # another group: its own key (u_a, u_b unchanged)
+    owned.update_for("static", (2,), lambda: values(3.0))
+    assert made == [1.0, 1.0, 3.0]
+    assert [w[0] for w in prog.writes] == ["u_a", "u_b", "u_a"]
+
 def test_owned_uniforms_are_one_per_program_object(gl_ctx, shaders):
     prog = shaders.program("core/scene.vert", "core/scene.frag")
     assert owned_uniforms(prog) is owned_uniforms(prog)

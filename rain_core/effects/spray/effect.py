@@ -44,7 +44,6 @@ class SprayEffect(Effect):
         self._vaos: list[moderngl.VertexArray | None] = [None, None]
         self._capacity = [-1, -1]
         self._program = None
-        self._static_key = None  # what the rarely changing uniforms were made of (see _set_uniforms)
         self._color_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
                                           repeat_x=False, repeat_y=False)
@@ -156,15 +155,13 @@ class SprayEffect(Effect):
                       "u_camera_vel": (float(vel[0]), float(vel[1]), float(vel[2])),
                       "u_cam_forward": (float(fwd[0]), float(fwd[1]), float(fwd[2]))})
         exposure_s = getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)
-        key = (owned, exposure_s, rc.size[0], rc.size[1], camera.near_m, camera.far_m, camera.fov_y_deg)
-        if key != self._static_key:
-            self._static_key = key
-            owned.update({
-                "u_exposure_s": float(exposure_s), "u_depth": units.SPRAY_DEPTH,
-                "u_viewport": (float(rc.size[0]), float(rc.size[1])),
-                "u_near": float(camera.near_m), "u_far": float(camera.far_m),
-                "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
-            })
+        key = (exposure_s, rc.size[0], rc.size[1], camera.near_m, camera.far_m, camera.fov_y_deg)
+        owned.update_for("static", key, lambda: {
+            "u_exposure_s": float(exposure_s), "u_depth": units.SPRAY_DEPTH,
+            "u_viewport": (float(rc.size[0]), float(rc.size[1])),
+            "u_near": float(camera.near_m), "u_far": float(camera.far_m),
+            "u_pixel_angle": 2.0 * math.tan(math.radians(camera.fov_y_deg) / 2.0) / rc.size[1],
+        })
 
     def render(self, stage: str, rc) -> None:
         if stage != "transparent":

@@ -10,7 +10,6 @@ coarse level is the cell mean), so the picture never shows water the bookkeeping
 from __future__ import annotations
 
 import math
-import weakref
 
 import moderngl
 import numpy as np
@@ -49,18 +48,6 @@ DROP_RIM = 0.45  # darkening of a drop towards its outline, on top of the Fresne
 DROP_HIGHLIGHT = 6.0  # the sky focused by the cap: its highlight is brighter than the sky, × the zenith radiance
 _UNIT_A, _UNIT_B, _UNIT_C, _UNIT_D = units.WINDSHIELD  # each pass binds its (up to) four textures to these
 _DROP_FORMAT = "4f 4f2/i"  # splats.DROP_ROW: the segment as float32, the rest as float16
-
-
-# Program → the key of the rarely changing uniforms last written into it (by any windshield: a shader library may
-# serve several), so a frame writes them only when what they are made of changes. Held weakly, like owned_uniforms.
-_STATIC_KEYS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _set_static(prog, key: tuple, make_values) -> None:
-    """Write ``make_values()`` (a dict) through ``owned_uniforms`` unless ``prog`` last got them for ``key``."""
-    if _STATIC_KEYS.get(prog) != key:
-        owned_uniforms(prog).update(make_values())
-        _STATIC_KEYS[prog] = key
 
 
 def roof_height(world, x: float, z: float) -> float:
@@ -158,7 +145,7 @@ class WindshieldEffect(Effect):
         self._last_time: float | None = None
         self._inputs = GlassInputs()
         self._dt = 0.0
-        self._token = object()  # names this instance in the static uniform keys (_set_static)
+        self._token = object()  # names this instance in the static uniform keys (update_for)
 
     # --- resources ------------------------------------------------------------------------------------------
     @property
@@ -355,8 +342,8 @@ class WindshieldEffect(Effect):
                   for sweep in self.sim.frame_sweeps()]
         blades = self._blades_bytes()
         # Our programs' own uniforms go through owned_uniforms: a value that did not change is not written again;
-        # those that change only with the resolution are not even looked at in between (_set_static).
-        _set_static(self.film_prog, (self._token, n, blades), lambda: dict(
+        # those that change only with the resolution are not even looked at in between (update_for).
+        owned_uniforms(self.film_prog).update_for("static", (self._token, n, blades), lambda: dict(
             u_film=_UNIT_A,
             u_coarse=_UNIT_B,
             u_coarse_lod=lod,
@@ -387,7 +374,7 @@ class WindshieldEffect(Effect):
         self._drops.color.use(_UNIT_A)
         dst.color.use(_UNIT_B)
         self._coarse[cur].use(_UNIT_C)
-        _set_static(self.normals_prog, (self._token, n), lambda: dict(
+        owned_uniforms(self.normals_prog).update_for("static", (self._token, n), lambda: dict(
             u_drops=_UNIT_A,
             u_film=_UNIT_B,
             u_coarse=_UNIT_C,
@@ -452,7 +439,7 @@ class WindshieldEffect(Effect):
             )
             return values
 
-        _set_static(prog, view_key, glass_values)
+        owned_uniforms(prog).update_for("static", view_key, glass_values)
         owned = owned_uniforms(prog)
         owned.update(moving)
         owned.set("u_blade_angle", np.array(self.sim.blade_angles(), np.float32).tobytes())
@@ -480,7 +467,7 @@ class WindshieldEffect(Effect):
         lighting = frame.lighting
         sky = np.asarray(lighting.sky_zenith, np.float64) * lighting.exposure
         pixel_rad = math.radians(frame.camera.fov_y_deg) / rc.size[1]
-        _set_static(prog, view_key, lambda: {**view_values(), "u_pixel_rad": pixel_rad})
+        owned_uniforms(prog).update_for("static", view_key, lambda: {**view_values(), "u_pixel_rad": pixel_rad})
         owned = owned_uniforms(prog)
         owned.update(moving)
         owned.set("u_sky_light", tuple(float(c) for c in sky))

@@ -231,8 +231,8 @@ def test_half_bits_are_numpys_float16_to_the_last_bit():
 
 def test_rarely_changing_uniforms_follow_what_they_are_made_of(gl_ctx, shaders):
     # The uniforms that change only with the resolution, the view or the settings are written when those change
-    # (effect._set_static), not looked at every frame: a new refraction, resolution or window size must reach them,
-    # and two effects sharing one shader library must each see their own.
+    # (OwnedUniforms.update_for), not looked at every frame: a new refraction, resolution or window size must
+    # reach them, and two effects sharing one shader library must each see their own.
     s = Settings()
     s.rain.rate_mm_h = 8.0
     s.quality.windshield_resolution = 128
