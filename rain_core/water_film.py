@@ -238,60 +238,54 @@ def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
     return standing, shelter
 
 
+def _checked_levels(cracks, puddles, puddle_amount, wetness) -> tuple[float, float, float]:
+    """(crack level, puddle level, wet film mm) of the weather's levels, each checked in [0, 1]."""
+    cracks, puddles, puddle_amount, wetness = (
+        checks.number(name, v, 0.0, 1.0) for name, v in (("cracks", cracks), ("puddles", puddles),
+                                                        ("puddle_amount", puddle_amount), ("wetness", wetness)))
+    return (cracks * CRACK_LEVEL, PUDDLE_LEVEL_MAX * (puddles * puddle_amount) ** PUDDLE_LEVEL_EXPONENT,
+            WET_FILM_MM * wetness)
+
+
+def _depths(grids, x, z, crack_at: float, puddle_at: float, wet: float, gutter_k: float):
+    """(standing, film) mm at float64 x, z (m) of one shape. Only the asphalt holds water: the maps are sampled
+    there alone (callers such as the ripples ask for whole strips of cells, about half over the pavements)."""
+    on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
+    if on_road.all():  # e.g. the wheels' points: no gather and scatter
+        road, shelter = _road_depths(grids, x.reshape(-1), z.reshape(-1), crack_at, puddle_at, gutter_k)
+        return road.reshape(x.shape), (wet * (1.0 - shelter)).reshape(x.shape)
+    standing, film = np.zeros(x.shape), np.zeros(x.shape)
+    if on_road.any():
+        road, shelter = _road_depths(grids, x[on_road], z[on_road], crack_at, puddle_at, gutter_k)
+        standing[on_road] = road
+        film[on_road] = wet * (1.0 - shelter)
+    return standing, film
+
+
 def water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0, gutter_k=0.0):
     """(standing water, film) depths in mm at road points x, z (m; arrays broadcast): standing water in cracks,
     puddles and the kerb streams (``gutter_k``: the spread coefficient of rain_core.gutter, 0 without), and the
     wet film WET_FILM_MM·wetness. Both 0 off the asphalt (|x| > 7 m); cracks, puddles and film 0 under roofs
     (the gutter stream runs on under them)."""
-    cracks, puddles, puddle_amount, wetness = (
-        checks.number(name, v, 0.0, 1.0) for name, v in (("cracks", cracks), ("puddles", puddles),
-                                                        ("puddle_amount", puddle_amount), ("wetness", wetness)))
+    crack_at, puddle_at, wet = _checked_levels(cracks, puddles, puddle_amount, wetness)
     world = world if world is not None else default_world()
     x = np.asarray(x_m, dtype=np.float64)
     z = np.asarray(z_m, dtype=np.float64)
     if x.shape != z.shape:
         x, z = np.broadcast_arrays(x, z)
-    standing = np.zeros(x.shape)
-    film = np.zeros(x.shape)
-    # Only the asphalt holds water: sample the maps there alone (callers such as the ripples ask for whole strips
-    # of cells, about half of them over the pavements).
-    on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
-    everywhere = bool(on_road.all())  # e.g. the wheels' points: no gather and scatter
-    if not everywhere and not on_road.any():
-        return standing, film
-    if everywhere:
-        on_road = ...
-    xr, zr = x[on_road].reshape(-1), z[on_road].reshape(-1)
-    level = PUDDLE_LEVEL_MAX * (puddles * puddle_amount) ** PUDDLE_LEVEL_EXPONENT
-    road, shelter = _road_depths(_packed_grids(int(seed), world), xr, zr, cracks * CRACK_LEVEL, level, gutter_k)
-    standing[on_road] = road.reshape(standing[on_road].shape)
-    film[on_road] = (WET_FILM_MM * wetness * (1.0 - shelter)).reshape(standing[on_road].shape)
-    return standing, film
+    return _depths(_packed_grids(int(seed), world), x, z, crack_at, puddle_at, wet, float(gutter_k))
 
 
 def film_depth_sampler(cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0, gutter_k=0.0):
     """:func:`film_depth_mm` with these arguments fixed (checked here, once): returns ``depth(x, z)`` → mm for
     float64 arrays x, z (m) of one shape, the same values bit for bit, for a caller that asks every frame (the
-    spray's wheels and landings). Arguments and units as :func:`film_depth_mm`."""
-    cracks, puddles, puddle_amount, wetness = (
-        checks.number(name, v, 0.0, 1.0) for name, v in (("cracks", cracks), ("puddles", puddles),
-                                                        ("puddle_amount", puddle_amount), ("wetness", wetness)))
+    spray's wheels and landings, the road's film function). Arguments and units as :func:`film_depth_mm`."""
+    crack_at, puddle_at, wet = _checked_levels(cracks, puddles, puddle_amount, wetness)
     grids = _packed_grids(int(seed), world if world is not None else default_world())
-    crack_at = cracks * CRACK_LEVEL
-    puddle_at = PUDDLE_LEVEL_MAX * (puddles * puddle_amount) ** PUDDLE_LEVEL_EXPONENT
-    wet = WET_FILM_MM * wetness
     gutter_k = float(gutter_k)
 
     def depth(x, z):
-        on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
-        if on_road.all():
-            standing, shelter = _road_depths(grids, x.reshape(-1), z.reshape(-1), crack_at, puddle_at, gutter_k)
-            return np.maximum(standing, wet * (1.0 - shelter)).reshape(x.shape)
-        out = np.zeros(x.shape)
-        if on_road.any():
-            standing, shelter = _road_depths(grids, x[on_road], z[on_road], crack_at, puddle_at, gutter_k)
-            out[on_road] = np.maximum(standing, wet * (1.0 - shelter))
-        return out
+        return np.maximum(*_depths(grids, x, z, crack_at, puddle_at, wet, gutter_k))
 
     return depth
 
