@@ -9,6 +9,8 @@ view alternate within a frame, so a few buffers are kept and only a view whose b
 
 from __future__ import annotations
 
+import struct
+
 import numpy as np
 
 BINDING = 0  # the uniform-buffer binding point of FrameBlock
@@ -40,25 +42,39 @@ BLOCK_BYTES = 4 * BLOCK_WORDS  # 1824
 BLOCK_BYTES_OWN_LIGHTS = 4 * 68  # 272
 
 
+_FLOATS = {count: struct.Struct(f"={count}f") for count in {c for _, c, k in FRAME_BLOCK_LAYOUT.values() if k == "f"}}
+_INT = struct.Struct("=i")
+
+
 def pack(values: dict) -> bytes:
     """The std140 bytes of the frame block for ``values`` (uniform name → value, as ``set_uniform`` takes them;
     names outside the block are ignored, members without a value are 0)."""
-    words = np.zeros(BLOCK_WORDS, np.float32)
+    # struct into one bytearray: the same float32 bytes as NumPy's assignment (round to nearest), a few µs
+    # instead of ~25 small NumPy calls; anything struct refuses (an overflow, a numpy-only shape) takes NumPy's path.
+    out = bytearray(BLOCK_BYTES)
     for name, value in values.items():
         slot = FRAME_BLOCK_LAYOUT.get(name)
         if slot is None:
             continue
         offset, count, kind = slot
+        at = 4 * offset
         if kind == "b":
-            data = value if isinstance(value, bytes | bytearray) else np.ascontiguousarray(value, np.float32)
-            src = np.frombuffer(data, np.float32)
-            n = min(src.size, count)
-            words[offset:offset + n] = src[:n]
+            data = value if isinstance(value, bytes | bytearray) else np.ascontiguousarray(value, np.float32).tobytes()
+            if len(data) % 4:
+                raise ValueError(f"{name}: {len(data)} bytes is not a whole number of float32 words")
+            n = 4 * min(len(data) // 4, count)
+            out[at:at + n] = data[:n]
         elif kind == "i":
-            words[offset:offset + 1].view(np.int32)[0] = int(value)
+            _INT.pack_into(out, at, int(value))
         else:
-            words[offset:offset + count] = value
-    return words.tobytes()
+            try:
+                if hasattr(value, "__len__"):
+                    _FLOATS[count].pack_into(out, at, *value)
+                else:  # a number fills every word, as NumPy broadcasts it
+                    _FLOATS[count].pack_into(out, at, *((value,) * count))
+            except (struct.error, OverflowError, TypeError):
+                np.frombuffer(out, np.float32)[offset:offset + count] = value
+    return bytes(out)
 
 
 def unpack(data: bytes) -> dict:

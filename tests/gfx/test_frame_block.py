@@ -32,6 +32,43 @@ def _random_values(rng) -> dict:
     return values
 
 
+def _pack_numpy(values: dict) -> bytes:
+    """The frame block packed by NumPy assignments (what ``pack`` did before it used struct): the twin."""
+    words = np.zeros(BLOCK_WORDS, np.float32)
+    for name, value in values.items():
+        slot = FRAME_BLOCK_LAYOUT.get(name)
+        if slot is None:
+            continue
+        offset, count, kind = slot
+        if kind == "b":
+            src = np.frombuffer(value if isinstance(value, bytes) else np.ascontiguousarray(value, np.float32),
+                                np.float32)
+            words[offset:offset + min(src.size, count)] = src[:count]
+        elif kind == "i":
+            words[offset:offset + 1].view(np.int32)[0] = int(value)
+        else:
+            words[offset:offset + count] = value
+    return words.tobytes()
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered in cast")
+@pytest.mark.parametrize("seed", range(5))
+def test_pack_gives_numpy_float32_bytes(seed):
+    rng = np.random.default_rng(seed)
+    values = _random_values(rng)
+    # Values as the renderer passes them: float64 arrays, NumPy scalars, a number for a vec3, short light bytes,
+    # an overflow (inf in float32), a NaN, a name outside the block.
+    values["u_camera_pos"] = rng.normal(0.0, 1e3, 3)
+    values["u_exposure"] = np.float64(rng.uniform(0.0, 1e-3))
+    values["u_sun_illum"] = float(rng.uniform(0.0, 1e5))
+    values["u_light_pos"] = values["u_light_pos"][: 4 * 4 * 3]
+    values["u_view_proj"] = rng.normal(size=(4, 4)).T.copy()
+    values["u_night"] = 1e39
+    values["u_time"] = float("nan")
+    values["u_not_in_block"] = (1.0, 2.0)
+    assert frame_block.pack(values) == _pack_numpy(values)
+
+
 def _readback_shader() -> str:
     """A fragment shader writing word i of the block (read by member name) into pixel x = i."""
     branches = []
