@@ -102,13 +102,16 @@ def body_hit_time(p0, v0, u, tau, t_max, body_origin, body_velocity, right, forw
 
 
 
-def _inside(x, y, z, box):
-    """``BodyBox.contains`` for local coordinates (n, k) and per-row box fields ``box`` (8 arrays of (n, 1))."""
-    hw, hl, floor, height, hwb, well_hl, well_top, well_x = box
-    ax, az = np.abs(x), np.abs(z)
-    in_box = (ax < hw) & (y > floor) & (y < height) & (az < hl)
-    in_well = (np.abs(az - hwb) < well_hl) & (y < well_top) & (ax > well_x)
-    return in_box & ~in_well
+def _inside(local, faces, well):
+    """``BodyBox.contains`` for local coordinates ``local`` (3, m, k) (right, up, back) and per-drop box fields:
+    ``faces`` (2, 3, 1, k) the lower and upper face of each axis (−half width, floor, −half length; half width,
+    height, half length: −h < x < h is |x| < h exactly), ``well`` (4, k) half wheelbase, well half length, well
+    top and well inner x."""
+    hwb, well_hl, well_top, well_x = well
+    in_box = ((local > faces[0]) & (local < faces[1])).all(axis=0)
+    ax, az = np.abs(local[::2])
+    in_well = (np.abs(az - hwb) < well_hl) & (local[1] < well_top) & (ax > well_x)
+    return in_box > in_well  # in_box & ~in_well
 
 
 @lru_cache(maxsize=8)
@@ -133,24 +136,29 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     result = np.asarray(t_max, dtype=np.float64).copy()
     if n == 0:
         return result
-    # Local coordinates (right, up, back) of the start, the relative drift and the excess: (3, n) each. The
-    # bodies turn about +Y only, so right and forward lie in the x–z plane. (Written into one buffer: np.stack
-    # costs more than the arithmetic on a frame's few hundred drops.)
+    # Local coordinates (right, up, back) of the start, the relative drift and the excess, (vectors, axes, drops)
+    # in one array, so each step below is one NumPy call for all three (the calls, not the arithmetic on a
+    # frame's few hundred drops, are the cost). The bodies turn about +Y only: right and forward lie in the
+    # x–z plane, and x·r_x + z·r_z is the products' sum in that order.
     vecs = np.empty((3, n, 3))
     np.subtract(p0, body_origin, out=vecs[0])
     np.subtract(u, body_velocity, out=vecs[1])
     np.subtract(v0, u, out=vecs[2])
-    vx, vz = vecs[..., 0], vecs[..., 2]
-    local = np.empty((3, 3, n))  # (vectors, axes, drops)
-    np.add(vx * right[:, 0], vz * right[:, 2], out=local[:, 0])
+    flat = vecs[..., ::2]
+    local = np.empty((3, 3, n))
+    on_right = flat * right[:, ::2]
+    np.add(on_right[..., 0], on_right[..., 1], out=local[:, 0])
     local[:, 1] = vecs[..., 1]
-    np.add(vx * forward[:, 0], vz * forward[:, 2], out=local[:, 2])
+    on_fwd = flat * forward[:, ::2]
+    np.add(on_fwd[..., 0], on_fwd[..., 1], out=local[:, 2])
     np.negative(local[:, 2], out=local[:, 2])
     P, U, D = local
     box = box_params.T  # (8, n)
     # Per axis (x, y, z) the faces: |x| < half width, floor < y < height, |z| < half length.
-    upper = box[[0, 3, 1]]
-    lower = np.negative(upper)
+    faces = np.empty((2, 3, n))
+    lower, upper = faces
+    box.take([0, 3, 1], axis=0, out=upper)
+    np.negative(upper, out=lower)
     lower[1] = box[2]
     tau_ = np.asarray(tau, dtype=np.float64)
     # Beyond the body for good: past the face each coordinate moves away from, from t_out on, where the
@@ -160,8 +168,9 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     rising = U > 0.0
     exit_t = np.where(rising, upper, lower)
     exit_t -= np.where(rising, lo_b, hi_b)
-    np.divide(exit_t, U, out=exit_t, where=U != 0.0)
-    exit_t[U == 0.0] = np.inf
+    still = U == 0.0
+    np.divide(exit_t, U, out=exit_t, where=~still)
+    exit_t[still] = np.inf
     t_end = np.minimum(np.maximum(exit_t.min(axis=0), 0.0), t_max)
     # Never near: the whole flight's bounds miss the box.
     span_lo = lo_b + np.minimum(U, 0.0) * t_end
@@ -174,44 +183,58 @@ def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right,
     # Ages run along the first axis, drops along the second (m, k): each drop's constants are then (k,) rows that
     # broadcast over a contiguous inner loop of k drops. Laid out (k, m), the inner loop is the m ≤ 16 ages with
     # the constants at stride 0, which NumPy buffers and copies: most of this search's cost, for the same values.
-    P, U, D = (a[:, rows].astype(f32) for a in (P, U, D))
+    # (Negating, then rounding to float32, is rounding, then negating: the faces stay symmetric.)
+    local = local.take(rows, axis=-1).astype(f32)[:, :, None]  # (vectors, axes, 1, k), k contiguous
+    faces = faces.take(rows, axis=-1).astype(f32)[:, :, None]
+    well = box[4:8, rows].astype(f32)
     tau_r = tau_[rows].astype(f32)
     rate = -1.0 / tau_r
-    bx = box[:, rows].astype(f32)
 
     one = f32(1.0)
 
     def inside(t, coarse=False):  # (m, k) ages → (m, k) inside the body
+        # −τ(1 − e^(−t/τ)), the negated relaxation (negation is exact: the same bits as negating the result).
         if coarse:
-            # The first, coarse pass: 1 − e^(−t/τ) with exp, not expm1 (NumPy's float32 exp is vectorised, ~20×
-            # faster than its expm1, a scalar loop). The cancellation moves a point ≲ 1e-7·τ·|D| (≪ 1 mm): it
-            # only picks the interval the zoom then searches with expm1.
-            rel = tau_r * (one - np.exp(t * rate))
+            # The first, coarse pass: e^(−t/τ) − 1 with exp, not expm1 (cheaper on NumPy builds whose float32
+            # expm1 is a scalar loop). The cancellation moves a point ≲ 1e-7·τ·|D| (≪ 1 mm): it only picks the
+            # interval the zoom then searches with expm1.
+            rel = np.exp(t * rate)
+            rel -= one
         else:
-            rel = tau_r * -np.expm1(t * rate)
-        return _inside(P[0] + U[0] * t + D[0] * rel, P[1] + U[1] * t + D[1] * rel, P[2] + U[2] * t + D[2] * rel,
-                       bx)
+            rel = np.expm1(t * rate)
+        rel *= tau_r
+        # P + U·t + D·rel for the three axes at once, in that order (the same float32 operations per point):
+        # + D·rel is − D·(−rel), bit for bit.
+        pos = local[0] + local[1] * t
+        pos -= local[2] * rel
+        return _inside(pos, faces, well)
 
-    steps = _steps(samples)
-    end = t_end[rows].astype(f32)
-    ts = end * steps
-    hit = inside(ts, coarse=True)
+    # Row 0 age 0, rows 1… the samples (as in the zoom below: the first sample inside, at row j, leaves the
+    # window rows j − 1 to j).
+    ts = np.empty((samples + 1, len(rows)), dtype=f32)
+    ts[0] = 0.0
+    np.multiply(t_end[rows].astype(f32), _steps(samples), out=ts[1:])
+    hit = inside(ts[1:], coarse=True)
     any_hit = hit.any(axis=0)
     if not any_hit.any():
         return result
     keep = any_hit.nonzero()[0]
-    first = hit[:, keep].argmax(axis=0)
-    hi = ts[first, keep]
-    lo = np.where(first > 0, ts[np.maximum(first - 1, 0), keep], f32(0.0))
-    P, U, D, bx = (a[:, keep] for a in (P, U, D, bx))
+    first = hit.argmax(axis=0)[keep]
+    lo = ts[first, keep]
+    hi = ts[first + 1, keep]
+    local, faces, well = local.take(keep, axis=-1), faces.take(keep, axis=-1), well.take(keep, axis=-1)
     tau_r, rate = tau_r[keep], rate[keep]
     zsteps = _steps(zoom)
     idx = np.arange(len(keep))
+    # Row 0 the window's start ``lo``, rows 1… its ages: the first age inside, at row j, leaves the window
+    # rows j - 1 (outside, or ``lo``) to j.
+    ts = np.empty((zoom + 1, len(keep)), dtype=f32)
     for _ in range(rounds):
-        ts = lo + (hi - lo) * zsteps
+        ts[0] = lo
+        np.add(lo, (hi - lo) * zsteps, out=ts[1:])
         ts[-1] = hi  # exactly the previous ``hi``, known inside
-        first = inside(ts).argmax(axis=0)
-        hi = ts[first, idx]
-        lo = np.where(first > 0, ts[np.maximum(first - 1, 0), idx], lo)
+        first = inside(ts[1:]).argmax(axis=0)
+        lo = ts[first, idx]
+        hi = ts[first + 1, idx]
     result[rows[keep]] = lo
     return result
