@@ -189,16 +189,20 @@ class RainfallEffect(Effect):
         """Velocity (m/s, world) of the camera: the ego car's at the camera point (with its yaw rate) for the
         driver and chase cameras, else the finite difference of the camera's positions over time."""
         s = self._settings(frame)
-        pos = np.asarray(frame.camera.position, dtype=np.float64)
         ego = frame.ego
         if ego is not None and s.camera.mode in ("driver", "chase", "glass"):
-            rel = pos - np.asarray(ego.position, dtype=np.float64)
-            rel[2] = wrap_near(rel[2], 0.0)
-            v = np.asarray(ego.velocity(), dtype=np.float64).copy()
+            # In scalars: the camera's offset from the car (z wrapped as wrap_near does; Python's round, like
+            # np.round, rounds halves to even), then the yaw rate's share at that offset.
+            cam, car = frame.camera.position, ego.position
+            rel_x = float(cam[0]) - float(car[0])
+            rel_z = float(cam[2]) - float(car[2])
+            rel_z -= PERIOD_M * round(rel_z / PERIOD_M)
+            v = np.array(ego.velocity(), dtype=np.float64)
             omega = float(getattr(ego, "yaw_rate_rad_s", 0.0))
-            v[0] += omega * rel[2]
-            v[2] -= omega * rel[0]
+            v[0] += omega * rel_z
+            v[2] -= omega * rel_x
             return v
+        pos = np.asarray(frame.camera.position, dtype=np.float64)
         prev = self._prev_cam
         if prev is None or frame.time_s <= prev[1]:
             return self.camera_velocity_m_s if prev is not None else np.zeros(3)
@@ -213,12 +217,14 @@ class RainfallEffect(Effect):
         v_cam = self.camera_velocity(frame)
         weather = frame.weather
         wind = np.asarray(weather.wind.velocity_m_s if weather is not None else (0.0, 0.0, 0.0), dtype=np.float64)
-        inp = RainInput(time_s=frame.time_s, camera_position=np.asarray(frame.camera.position, dtype=np.float64),
-                        camera_forward=np.asarray(frame.camera.forward, dtype=np.float64), camera_velocity=v_cam,
-                        rate_mm_h=frame.rain_rate_mm_h, wind_m_s=wind, container_m=s.rainfall.container_m,
-                        density_scale=s.rainfall.density_scale, splashes=s.rainfall.splashes,
-                        wetness=getattr(weather, "wetness", 0.0), puddles=getattr(weather, "puddles", 0.0),
-                        vehicles=tuple(frame.vehicles))
+        # Every value here was checked where it entered (camera, weather, settings): no per-frame re-check.
+        inp = RainInput.unchecked(
+            time_s=float(frame.time_s), camera_position=np.asarray(frame.camera.position, dtype=np.float64),
+            camera_forward=np.asarray(frame.camera.forward, dtype=np.float64), camera_velocity=v_cam,
+            rate_mm_h=float(frame.rain_rate_mm_h), wind_m_s=wind, container_m=float(s.rainfall.container_m),
+            density_scale=float(s.rainfall.density_scale), splashes=bool(s.rainfall.splashes),
+            wetness=float(getattr(weather, "wetness", 0.0)), puddles=float(getattr(weather, "puddles", 0.0)),
+            vehicles=tuple(frame.vehicles))
         upd = self.sim.advance(inp)
         self._sync_table()
         self.camera_velocity_m_s = v_cam

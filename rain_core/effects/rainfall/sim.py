@@ -94,6 +94,20 @@ class RainInput:
         self.wetness = checks.number("wetness", self.wetness, 0.0, 1.0)
         self.puddles = checks.number("puddles", self.puddles, 0.0, 1.0)
 
+    @classmethod
+    def unchecked(cls, **fields) -> RainInput:
+        """A RainInput of values checked where they entered — the scene's camera, weather and settings — built
+        without the per-field checks: RainfallEffect makes one every frame (DESIGN: validate at the boundary, not
+        in per-frame loops). Every field must be given, arrays as float64 (3,)."""
+        if fields.keys() != _RAIN_INPUT_FIELDS:
+            raise TypeError(f"RainInput.unchecked needs exactly the fields {sorted(_RAIN_INPUT_FIELDS)}")
+        inp = cls.__new__(cls)
+        inp.__dict__.update(fields)
+        return inp
+
+
+_RAIN_INPUT_FIELDS = frozenset(RainInput.__dataclass_fields__)
+
 
 @dataclass
 class RainUpdate:
@@ -213,16 +227,17 @@ class RainfallSim:
         if key != self._thin_key:  # the rate settles after the ramp: then nothing here is recomputed
             a, b, c = thinning(self.rate_eff, scale, float(self.density.sum()))
             drawn = drawn_fraction_of_table(self.table, a, b, c) * self.capacity
-            self._thin = (a, b, c, drawn, *self.splash_rate_per_s(self.rate_eff, area, scale))
+            lam = float(physics.mp_slope_per_mm(self.rate_eff)) if self.rate_eff > 0 else 1e3
+            self._thin = (a, b, c, drawn, *self.splash_rate_per_s(self.rate_eff, area, scale), lam)
             self._thin_key = key
-        a, b, c, drawn, per_s, weight = self._thin
+        a, b, c, drawn, per_s, weight, lam = self._thin
         outer = 0.5 * inp.container_m
         near = cull_vehicles(inp.vehicles, inp.camera_position[[0, 2]], 2.0 * outer) if inp.vehicles else []
         upd = RainUpdate(
             time_s=t, boxes=boxes, rate_mm_h=self.rate_eff, wind_m_s=wind, wind_integral_m=self.wind_integral.copy(),
             thin_a=a, thin_b=b, thin_c=c, density=self.density, starts=self.starts, drawn_expected=drawn,
             splash_accept=min(1.0, per_s * SPLASH_PERIOD_S / self.splash_capacity), splash_weight=weight,
-            splash_lam=float(physics.mp_slope_per_mm(self.rate_eff)) if self.rate_eff > 0 else 1e3,
+            splash_lam=lam,
             wetness=inp.wetness, puddles=inp.puddles, splashes=bool(inp.splashes), vehicles=tuple(near))
         self.last = upd
         self.t_prev = t

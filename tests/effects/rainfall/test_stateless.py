@@ -151,3 +151,47 @@ def test_no_nan_drop_for_any_accepted_input(rain):
         for key in ("pos", "vel", "weight"):
             assert np.all(np.isfinite(d[key])), key
     assert isinstance(RainInput, type)
+
+
+def test_unchecked_input_is_the_checked_one():
+    """The effect's per-frame RainInput (built without re-checking values checked where they entered) holds the
+    same fields as the checked constructor makes; a missing field is a TypeError, not a half-made input."""
+    good = dict(time_s=2.0, camera_position=np.array([1.75, 1.2, 600.0]), camera_forward=np.array([0.0, 0.0, -1.0]),
+                camera_velocity=np.array([0.0, 0.0, -27.8]), rate_mm_h=8.0, wind_m_s=np.array([2.0, 0.0, -1.0]),
+                container_m=40.0, density_scale=1.0, splashes=True, wetness=0.5, puddles=0.25, vehicles=())
+    checked, unchecked = RainInput(**good), RainInput.unchecked(**good)
+    for name in good:
+        np.testing.assert_array_equal(getattr(unchecked, name), getattr(checked, name))
+    with pytest.raises(TypeError, match="unchecked"):
+        RainInput.unchecked(**{k: v for k, v in good.items() if k != "wind_m_s"})
+
+
+def test_camera_velocity_is_the_car_point_velocity(gl_ctx, shaders):
+    """The driver camera's velocity: the car's at the camera point, with its yaw rate; across the period seam
+    too (the camera and the car on either side of z = PERIOD_M). The vector formula it replaced is the twin."""
+    from types import SimpleNamespace
+
+    from rain_core.effects.rainfall import RainfallEffect
+    from rain_core.effects.rainfall.boxes import wrap_near
+    from rain_core.settings import Settings
+    from rain_core.vehicles import EgoCar
+
+    effect = RainfallEffect(gl_ctx, shaders=shaders, seed=5)
+    rng = np.random.default_rng(4)
+    try:
+        for _ in range(50):
+            z = rng.choice([rng.uniform(-500.0, 500.0), layout.PERIOD_M + rng.uniform(-1.0, 1.0)])
+            ego = EgoCar(position=np.array([rng.uniform(-6.0, 6.0), 0.0, z]), speed_m_s=rng.uniform(0.0, 40.0),
+                         yaw=rng.uniform(-np.pi, np.pi))
+            ego.yaw_rate_rad_s = rng.uniform(-0.5, 0.5)
+            eye = ego.position + rng.uniform(-1.5, 1.5, 3)
+            eye[2] = eye[2] + rng.choice([0.0, layout.PERIOD_M, -layout.PERIOD_M])
+            frame = SimpleNamespace(settings=Settings(), ego=ego, camera=SimpleNamespace(position=eye))
+            rel = eye - ego.position
+            rel[2] = wrap_near(rel[2], 0.0)
+            want = ego.velocity().copy()
+            want[0] += ego.yaw_rate_rad_s * rel[2]
+            want[2] -= ego.yaw_rate_rad_s * rel[0]
+            np.testing.assert_array_equal(effect.camera_velocity(frame), want)
+    finally:
+        effect.release()
