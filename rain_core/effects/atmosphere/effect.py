@@ -56,7 +56,9 @@ class AtmosphereEffect(Effect):
         self.glow_sigma_px = 0.0  # of the last frame, full-resolution pixels
         self._post_draws = False
         self._scatter_count = 0
-        self._state_of: tuple | None = None  # (frame, lighting, key, state): frame_uniforms and update share it
+        self._state_of: tuple | None = None  # (world, lighting, key, state): frame_uniforms and update share it
+        self._active_of: tuple | None = None  # ((rate, fog_scale, haze), whether there is a medium)
+        self._uniforms_of: tuple | None = None  # (state, its uniforms)
         self._inv_of: tuple | None = None  # (rc, view, projection, inverse view-projection bytes)
         self._glow_factor = 1
         self._programs: dict[str, moderngl.Program] = {}
@@ -72,17 +74,18 @@ class AtmosphereEffect(Effect):
         return settings.atmosphere if settings is not None else AtmosphereSection()
 
     def _state(self, frame) -> AtmosphereState:
-        # The renderer asks twice per frame (frame_uniforms, then update) with the same Frame: model it once
-        # (the key also holds what the model reads, so a frame whose settings were edited is modelled afresh).
+        # The model reads the rate, these settings, the lighting (an immutable object, the same one while the hour
+        # and the overcast stay) and whether the world has lamps: while they stay, frame after frame, it is the
+        # same state object (and its uniforms the same dict, so the frame block is not re-walked for them).
         sec = self._section(frame)
         key = (frame.rain_rate_mm_h, sec.enabled, sec.fog_scale, sec.haze_per_km, sec.sky_darkening, sec.glow,
                sec.light_scattering)
         cached = self._state_of
-        if cached is not None and cached[0] is frame and cached[1] is frame.lighting and cached[2] == key:
+        if cached is not None and cached[0] is frame.world and cached[1] is frame.lighting and cached[2] == key:
             return cached[3]
         state = atmosphere_state(sec, frame.rain_rate_mm_h, frame.lighting,
                                  lamp_lit=bool(getattr(frame.world, "lamps", None)))
-        self._state_of = (frame, frame.lighting, key, state)
+        self._state_of = (frame.world, frame.lighting, key, state)
         return state
 
     def observe(self, frame: Frame) -> None:
@@ -91,11 +94,19 @@ class AtmosphereEffect(Effect):
     def active(self, frame) -> bool:
         """Runs only while there is a medium: rain (with fog_scale > 0) or haze, and the effect enabled."""
         sec = self._section(frame)
-        return sec.enabled and medium_extinction_per_m(frame.rain_rate_mm_h, sec.fog_scale, sec.haze_per_km) > 0.0
+        if not sec.enabled:
+            return False
+        key = (frame.rain_rate_mm_h, sec.fog_scale, sec.haze_per_km)
+        if self._active_of is None or self._active_of[0] != key:
+            self._active_of = (key, medium_extinction_per_m(*key) > 0.0)
+        return self._active_of[1]
 
     def frame_uniforms(self, frame: Frame) -> dict:
         """β, the rain-grey airlight and the medium's sun airlight and phase (common/atmosphere.glsl)."""
-        return atmosphere_uniforms(self._state(frame))
+        state = self._state(frame)
+        if self._uniforms_of is None or self._uniforms_of[0] is not state:
+            self._uniforms_of = (state, atmosphere_uniforms(state))
+        return self._uniforms_of[1]
 
     def describe(self) -> str:
         if self.state is None:
