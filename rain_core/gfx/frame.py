@@ -170,7 +170,13 @@ class RenderContext:
 
     @property
     def view_proj(self) -> np.ndarray:
-        return self.projection @ self.view
+        """projection @ view, computed once per context (the frame block, the mirrors, the post passes ask)."""
+        cached = self.__dict__.get("_vp_cache")
+        if cached is None or cached[0] is not self.view or cached[1] is not self.projection:
+            product = self.projection @ self.view
+            product.flags.writeable = False  # shared by every asker
+            cached = self.__dict__["_vp_cache"] = (self.view, self.projection, product)
+        return cached[2]
 
     @property
     def camera_position(self) -> np.ndarray:

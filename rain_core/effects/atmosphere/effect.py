@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 
 import moderngl
-import numpy as np
 
 from rain_core.effects.atmosphere.glow import MAX_BLUR_RADIUS, blur_radius
 from rain_core.effects.atmosphere.model import (
@@ -144,10 +143,11 @@ class AtmosphereEffect(Effect):
         owned_uniforms(prog).set("u_inv_view_proj", self._inv_view_proj(rc))
 
     def _inv_view_proj(self, rc: RenderContext) -> bytes:
-        """mat4 bytes of inverse(projection·view), once per render context (both post programs need it)."""
+        """mat4 bytes of inverse(projection·view), once per render context (both post programs need it; the
+        inverse itself is the context's, which the sky pass already made)."""
         cached = self._inv_of
         if cached is None or cached[0] is not rc or cached[1] is not rc.view or cached[2] is not rc.projection:
-            cached = self._inv_of = (rc, rc.view, rc.projection, mat4_bytes(np.linalg.inv(rc.view_proj)))
+            cached = self._inv_of = (rc, rc.view, rc.projection, mat4_bytes(rc.inv_view_proj))
         return cached[3]
 
     def render(self, stage: str, rc: RenderContext) -> None:
