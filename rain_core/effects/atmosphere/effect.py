@@ -56,7 +56,6 @@ class AtmosphereEffect(Effect):
         self._post_draws = False
         self._scatter_count = 0
         self._state_of: tuple | None = None  # (world, lighting, key, state): frame_uniforms and update share it
-        self._active_of: tuple | None = None  # ((rate, fog_scale, haze), whether there is a medium)
         self._uniforms_of: tuple | None = None  # (state, its uniforms)
         self._inv_of: tuple | None = None  # (rc, view, projection, inverse view-projection bytes)
         self._glow_factor = 1
@@ -93,12 +92,7 @@ class AtmosphereEffect(Effect):
     def active(self, frame) -> bool:
         """Runs only while there is a medium: rain (with fog_scale > 0) or haze, and the effect enabled."""
         sec = self._section(frame)
-        if not sec.enabled:
-            return False
-        key = (frame.rain_rate_mm_h, sec.fog_scale, sec.haze_per_km)
-        if self._active_of is None or self._active_of[0] != key:
-            self._active_of = (key, medium_extinction_per_m(*key) > 0.0)
-        return self._active_of[1]
+        return sec.enabled and medium_extinction_per_m(frame.rain_rate_mm_h, sec.fog_scale, sec.haze_per_km) > 0.0
 
     def frame_uniforms(self, frame: Frame) -> dict:
         """β, the rain-grey airlight and the medium's sun airlight and phase (common/atmosphere.glsl)."""

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -70,7 +71,17 @@ def rain_extinction_per_m(rate_mm_h):
 
 def medium_extinction_per_m(rate_mm_h: float, fog_scale: float = 1.0, haze_per_km: float = 0.0) -> float:
     """β_m (1/m): the rain's extinction × fog_scale plus the haze (1/km) — everything except the clear air."""
+    try:  # asked every frame (the atmosphere's ``active``, the lightning's medium) with the same three numbers
+        return _medium_extinction_per_m(rate_mm_h, fog_scale, haze_per_km)
+    except TypeError:  # an argument that is not hashable (an array): no cache
+        return _medium_extinction(rate_mm_h, fog_scale, haze_per_km)
+
+
+def _medium_extinction(rate_mm_h, fog_scale, haze_per_km) -> float:
     return float(fog_scale * rain_extinction_per_m(rate_mm_h) + haze_per_km * 1e-3)
+
+
+_medium_extinction_per_m = lru_cache(maxsize=64)(_medium_extinction)
 
 
 def extinction_per_m(rate_mm_h: float, fog_scale: float = 1.0, haze_per_km: float = 0.0) -> float:
