@@ -118,20 +118,25 @@ def time_to_height_newton(y0, w0, uy, tau, level, tol_s: float = 1e-5, max_steps
     below = y0 <= level
     drop = np.maximum(y0 - level, 0.0)  # rows already at or below the level: f(0) = 0, and they answer 0
     t = np.where(a > 0.0, (drop + a * tau) / -uy, 0.0)
-    a_tau, rate = a * tau, -1.0 / tau
+    rate = -1.0 / tau
     # The loop runs on preallocated buffers (the arrays are small: NumPy's per-call cost dominates, and a new
-    # array per operation is most of it); the same operations in the same order, so the same bits.
-    em1, num, den = np.empty_like(t), np.empty_like(t), np.empty_like(t)
+    # array per operation is most of it); the same operations in the same order, so the same bits. f and its
+    # slope are made together: ``parts`` holds (drop + u_y·t, w0) and ``coef`` (a·τ, −a), so parts − coef·em1
+    # is (f, slope) in two calls (x + a·e is x − (−a)·e, bit for bit).
+    coef = np.empty((2,) + t.shape)
+    coef[0], coef[1] = a * tau, -a
+    parts = np.empty_like(coef)
+    parts[1] = w0
+    em1, step = np.empty_like(t), np.empty_like(coef)
+    f_part, num, den = parts[0, ...], step[0, ...], step[1, ...]  # views, also of 0-d t
     for i in range(max_steps):
         np.multiply(t, rate, out=em1)
         np.expm1(em1, out=em1)  # e^(−t/τ) − 1
         # f = height − level; its slope u_y + a·e^(−t/τ) = w0 + a·em1 is < 0 at every iterate (see above).
-        np.multiply(uy, t, out=num)
-        np.add(drop, num, out=num)
-        np.multiply(a_tau, em1, out=den)
-        np.subtract(num, den, out=num)
-        np.multiply(a, em1, out=den)
-        np.add(w0, den, out=den)
+        np.multiply(uy, t, out=f_part)
+        np.add(drop, f_part, out=f_part)
+        np.multiply(coef, em1, out=step)
+        np.subtract(parts, step, out=step)
         np.divide(num, den, out=num)  # the Newton step
         t -= num
         # Spray launches need 6–12 steps: testing for convergence before the sixth only costs time.

@@ -92,6 +92,11 @@ def test_newton_landing_times_equal_the_bisection():
     u = np.column_stack([rng.uniform(-5.0, 5.0, n), uy, rng.uniform(-5.0, 5.0, n)])
     fast = flight.ground_time(p0, v0, u, tau)
     assert np.abs(fast - flight.ground_time(p0, v0, u, tau, reference=True)).max() < 1e-7
+    # Scalars (0-d) and a broadcast level.
+    for level in (0.5, np.array([0.0, 0.5])):
+        fast = flight.time_to_height_newton(1.0, 2.0, -3.0, 0.1, level)
+        assert np.shape(fast) == np.shape(level)
+        assert np.abs(fast - flight.time_to_height(1.0, 2.0, -3.0, 0.1, level)).max() < 1e-7
 
 
 def _body_case(seed=3, n=3000):
