@@ -176,6 +176,12 @@ class _Fleet:
         self.boxes = [BodyBox.of(sp) for sp in unique]
         table = np.array([astuple(b) for b in self.boxes], dtype=np.float64).reshape(-1, 8)
         self.box_params = table[self.box_index]
+        # gather_wheels' tables before the frame's columns are written: the constant ones, and 0 in the rest.
+        self.vehicle_template = np.zeros((n, 20))
+        self.vehicle_template[:, 12:20] = self.box_params
+        self.wheel_template = np.zeros((4 * n, 15))
+        self.wheel_template[:, 12] = self.radius
+        self.wheel_template[:, 13] = self.widths
 
 
 _FLEETS: dict[tuple, tuple[list, _Fleet]] = {}
@@ -228,44 +234,53 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None) -> tuple[list[W
     geo = WheelGeometry()
     px, pz, yaw, speed, omega, py = state.T
     c, s = np.cos(yaw), np.sin(yaw)
-    zero = np.zeros(n)
-    # Forward (−sin, 0, −cos) and right (cos, 0, −sin) as rows of one array (column_stack costs more than this).
-    axes = np.zeros((n, 2, 3))
-    np.negative(s, out=axes[:, 0, 0])
-    np.negative(c, out=axes[:, 0, 2])
-    axes[:, 1, 0] = c
-    np.negative(s, out=axes[:, 1, 2])
-    geo.forward, geo.right = axes[:, 0], axes[:, 1]
-    geo.position = state[:, _XYZ]
+    # The launches' per-vehicle and per-wheel tables (spawn._vehicle_table, launch.wheel_table) are written here
+    # column by column, from the fleet's templates (its constant columns filled, the y components of the
+    # horizontal vectors 0), and the geometry's arrays are views of their columns: no column_stack per frame.
+    vt = fleet.vehicle_template.copy()  # (V, 20) position, velocity, right, forward, box params
+    wt = fleet.wheel_template.copy()  # (W, 15) velocity, contact, travel, outward, radius, width, speed
+    w3 = wt.reshape(n, 4, 15)
+    geo.position, geo.velocity, geo.right, geo.forward = vt[:, 0:3], vt[:, 3:6], vt[:, 6:9], vt[:, 9:12]
+    geo.box_params = vt[:, 12:20]
+    # Forward (−sin, 0, −cos) and right (cos, 0, −sin).
+    np.negative(s, out=vt[:, 9])
+    np.negative(c, out=vt[:, 11])
+    vt[:, 6] = c
+    vt[:, 8] = vt[:, 9]
+    vt[:, 0:3] = state[:, _XYZ]
     consts = fleet.consts
     geo.height, geo.half_length = consts[:, 0], consts[:, 1]
     local = fleet.local
     # Vehicle.to_world: rotation about +Y by yaw, then the translation.
-    contacts = np.empty((n, 4, 3))
+    contacts = w3[:, :, 3:6]
     contacts[..., 0] = c[:, None] * local[..., 0] + s[:, None] * local[..., 2] + px[:, None]
     contacts[..., 1] = local[..., 1] + py[:, None]
     contacts[..., 2] = c[:, None] * local[..., 2] - s[:, None] * local[..., 0] + pz[:, None]
-    contacts = contacts.reshape(-1, 3)
+    contacts = wt[:, 3:6]
     geo.contacts = contacts
     # Vehicle._point_velocity: v·forward + ω ŷ × (p − rear axle), the rear axle wheelbase/2 behind the centre;
-    # ŷ × (a, 0, c) = (c, 0, −a).
+    # ŷ × (a, 0, c) = (c, 0, −a). (Its y component, 0·v + 0, is +0: the template's.)
     ax = px + s * consts[:, 3]
     az = pz + c * consts[:, 3]
     base = geo.forward * speed[:, None]
-    geo.velocity = base + np.column_stack([omega * (pz - az), zero, omega * (ax - px)])
+    np.add(base[:, 0], omega * (pz - az), out=vt[:, 3])
+    np.add(base[:, 2], omega * (ax - px), out=vt[:, 5])
     wv = base.repeat(4, axis=0)  # (ndarray methods: np.repeat's Python wrapper costs more than the work)
     om4 = omega.repeat(4)
     wv[:, 0] += om4 * (contacts[:, 2] - az.repeat(4))
     wv[:, 2] -= om4 * (contacts[:, 0] - ax.repeat(4))
     backwards = np.where(speed < 0.0, -1.0, 1.0)
-    geo.speed = np.sqrt(np.einsum("wc,wc->w", wv, wv))
+    geo.speed = wt[:, 14]
+    np.sqrt(np.einsum("wc,wc->w", wv, wv), out=geo.speed)
     signed = geo.speed * backwards.repeat(4)
-    geo.travel = (geo.forward * backwards[:, None]).repeat(4, axis=0)
-    geo.outward = geo.right.repeat(4, axis=0) * fleet.outward_sign
-    geo.radius = fleet.radius
-    geo.width = fleet.widths
-    geo.wheel_velocity = geo.velocity.repeat(4, axis=0)
-    geo.boxes, geo.box_index, geo.box_params = fleet.boxes, fleet.box_index, fleet.box_params
+    # Per wheel: its vehicle's forward × the sign of travel, its right × the side, its velocity.
+    w3[:, :, 6:9] = (geo.forward * backwards[:, None])[:, None, :]
+    np.multiply(geo.right[:, None, :], fleet.outward_sign.reshape(n, 4, 1), out=w3[:, :, 9:12])
+    w3[:, :, 0:3] = geo.velocity[:, None, :]
+    geo.travel, geo.outward, geo.wheel_velocity = wt[:, 6:9], wt[:, 9:12], wt[:, 0:3]
+    geo.radius, geo.width = wt[:, 12], wt[:, 13]
+    geo._wheel_table, geo._vehicle_table = wt, vt
+    geo.boxes, geo.box_index = fleet.boxes, fleet.box_index
     extra = np.zeros((0, 2)) if extra_xz is None else np.asarray(extra_xz, dtype=np.float64).reshape(-1, 2)
     if n + len(extra):
         xs, zs = contacts[:, 0], contacts[:, 2]
