@@ -1,10 +1,10 @@
 #version 330 core
-// The drops (and the wiper's bead) as lenses on the glass: one instanced quad per splat row of the drop texture
-// (the layout of windshield/splat.vert), placed on the curved glass in the world and widened by the blur the
-// eye sees it with (its pupil when focused far, else the pixel's footprint). The drop's true contact radius is
-// recovered from the row (a sub-texel drop is splatted wider and lower with the same height × width).
+// The drops (and the wiper's bead) as lenses on the glass: one instanced quad per row of the drop buffer the drop
+// texture was splatted from (windshield/drop_row.glsl), placed on the curved glass in the world and widened by
+// the blur the eye sees it with (its pupil when focused far, else the pixel's footprint).
 #include "common/frame.glsl"
 #include "windshield/glass_common.glsl"
+#include "windshield/drop_row.glsl"
 uniform mat4 u_model;          // car local → wrapped world
 uniform vec3 u_glass_origin;   // car-local bottom centre of the glass (m)
 uniform vec3 u_glass_right;    // car-local +s
@@ -14,9 +14,8 @@ uniform float u_glass_sag;     // m: the bulge at the centre
 uniform float u_aperture_m;    // radius of the eye's pupil (m)
 uniform float u_focus_m;       // distance the eye is focused at (m)
 uniform float u_pixel_rad;     // angle of one pixel (rad)
-uniform float u_height_per_radius;  // a drop's cap height / contact radius
-in vec4 in_seg;    // s0, t0, s1, t1 (m)
-in vec4 in_info;   // radius as splatted (m), value (mm), kind, seed
+in vec4 in_seg;
+in float in_radius;
 out vec2 v_local;  // metres: x along p0→p1 from p0, y across
 out vec3 v_pos;
 flat out vec4 v_shape;  // true radius (m), tail length (m), blur radius (m), kind
@@ -30,14 +29,13 @@ vec3 glass_local(vec2 st) {
 }
 
 void main() {
-    vec2 p0 = in_seg.xy, p1 = in_seg.zw;
+    vec2 p0, p1;
+    float r;
+    int kind = drop_row(in_seg, in_radius, p0, p1, r);
     vec2 d = p1 - p0;
     float len = length(d);
     vec2 ax = len > 1e-7 ? d / len : vec2(1.0, 0.0);
     vec2 ay = vec2(-ax.y, ax.x);
-    int kind = int(in_info.z + 0.5);
-    float k = kind == 0 ? u_height_per_radius : 1.0;
-    float r = sqrt(max(in_info.y * 1e-3 * in_info.x / k, 0.0));  // value = 1e3·k·r·(r / r_splat)
     // The blur: from the drop's centre, the same for the whole quad.
     vec3 centre = (u_model * vec4(glass_local(p0), 1.0)).xyz;
     vec3 n_local = cross(glass_local(p0 + vec2(0.0, 0.01)) - glass_local(p0),

@@ -26,7 +26,7 @@ from rain_core.effects.windshield.constants import (
 )
 from rain_core.effects.windshield.inputs import GlassInputs
 from rain_core.effects.windshield.sim import WindshieldSim
-from rain_core.effects.windshield.splats import drop_splats, film_splats, half_bits
+from rain_core.effects.windshield.splats import DropRows, film_splats, half_bits
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
@@ -47,7 +47,7 @@ DROP_LENS = 0.5  # the lens's slopes × the contact angle's: seen at the raked g
 DROP_RIM = 0.45  # darkening of a drop towards its outline, on top of the Fresnel reflection of the cabin
 DROP_HIGHLIGHT = 6.0  # the sky focused by the cap: its highlight is brighter than the sky, × the zenith radiance
 _UNIT_A, _UNIT_B, _UNIT_C, _UNIT_D = units.WINDSHIELD  # each pass binds its (up to) four textures to these
-_DROP_FORMAT = "4f 4f2/i"  # splats.DROP_ROW: the segment as float32, the rest as float16
+_DROP_FORMAT = "4f 1f/i"  # splats.DROP_ROW: a drop's (s, t, vs, vt) or a bead's line, and the radius
 
 
 def roof_height(world, x: float, z: float) -> float:
@@ -87,16 +87,19 @@ class WindshieldEffect(Effect):
         self.film_prog = self.shaders.program("common/fullscreen.vert", "windshield/film.frag")
         self.normals_prog = self.shaders.program("common/fullscreen.vert", "windshield/normals.frag")
         self.splat_prog = self.shaders.program("windshield/splat.vert", "windshield/splat.frag")
+        self.drop_splat_prog = self.shaders.program("windshield/drop_splat.vert", "windshield/splat.frag")
         self.glass_prog = self.shaders.program("windshield/glass.vert", "windshield/glass.frag")
         self.drop_prog = self.shaders.program("windshield/drop.vert", "windshield/drop.frag")
-        for prog in (self.film_prog, self.normals_prog, self.splat_prog, self.glass_prog, self.drop_prog):
+        progs = (self.film_prog, self.normals_prog, self.splat_prog, self.drop_splat_prog, self.glass_prog,
+                 self.drop_prog)
+        for prog in progs:
             set_uniform(prog, "u_glass", (self.glass.width_bottom, self.glass.width_top, self.glass.height))
         self.splat_prog["u_cap_rn"].value = SPHERE_PER_RADIUS
+        set_uniforms(self.drop_splat_prog, u_cap_rn=SPHERE_PER_RADIUS, u_height_per_radius=HEIGHT_PER_RADIUS)
         g = self.glass
         set_uniforms(
             self.drop_prog,
             u_cap_rn=SPHERE_PER_RADIUS,
-            u_height_per_radius=HEIGHT_PER_RADIUS,
             u_glass_origin=tuple(g.bottom_center),
             u_glass_right=tuple(g.right),
             u_glass_up=tuple(g.up),
@@ -120,14 +123,16 @@ class WindshieldEffect(Effect):
         )
         # One instance buffer per water target (film deposits, drops), each written once a frame with only what
         # the frame draws, then drawn with one instanced call (so no buffer is rewritten while a draw may read it).
-        # The drop rows carry their radius, height and kind as half floats (splats.DROP_ROW).
+        # The drop rows are the drops' positions, velocities and radii as they are (splats.DROP_ROW): the shaders
+        # lay the tails and widen the sub-texel drops.
         self._splat_bufs = [ctx.buffer(reserve=32 * 1024) for _ in range(2)]
         self._splat_vaos = [
-            ctx.vertex_array(self.splat_prog, [(buf, fmt, "in_seg", "in_info")])
-            for buf, fmt in zip(self._splat_bufs, ("4f 4f/i", _DROP_FORMAT), strict=True)
+            ctx.vertex_array(self.splat_prog, [(self._splat_bufs[0], "4f 4f/i", "in_seg", "in_info")]),
+            ctx.vertex_array(self.drop_splat_prog, [(self._splat_bufs[1], _DROP_FORMAT, "in_seg", "in_radius")]),
         ]
         # The drop pass reads the drops' rows where the drop texture's splats left them: nothing more is uploaded.
-        self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], _DROP_FORMAT, "in_seg", "in_info")])
+        self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], _DROP_FORMAT, "in_seg", "in_radius")])
+        self._drop_builder = DropRows()
         self._drop_rows = 0  # rows in the drop buffer this frame
         self.upload_bytes = 0  # bytes written to the GPU by the last frame's water pass
         self.splat_draws = 0  # instanced splat draws in the last frame
@@ -367,7 +372,10 @@ class WindshieldEffect(Effect):
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()
         self._drops.fbo.clear(0.0, 0.0, 0.0, 0.0)
-        rows = drop_splats(self.sim, self._texel_m())
+        owned_uniforms(self.drop_splat_prog).update_for("static", (self._token, n), lambda: dict(
+            u_min_radius=0.75 * self._texel_m(),
+        ))
+        rows = self._drop_builder.rows(self.sim)
         self._drop_rows = len(rows)
         self._draw_splats(1, rows, moderngl.MAX)
         # 4. the water texture: thickness, film, slopes.

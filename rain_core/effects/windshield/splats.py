@@ -1,14 +1,14 @@
 """The instance rows the effect splats into its water textures, built from the simulation's state (NumPy only).
 
-Each row is 8 numbers, the layout of ``shaders/windshield/splat.vert``: a segment (s0, t0, s1, t1) m on the glass,
-a radius (m), an amount, a kind (0 a drop cap with its tail, 1 a line: bead or wet trail, 2 splash speckle) and
-a seed. ``texel_m`` is the size of one texel of the water texture: drops smaller than a texel are drawn wider and
-lower so they do not flicker between texels.
+The film rows are 8 numbers, the layout of ``shaders/windshield/splat.vert``: a segment (s0, t0, s1, t1) m on the
+glass, a radius (m), an amount, a kind (1 a line: wet trail, 2 splash speckle) and a seed. ``texel_m`` is the size
+of one texel of the water texture: lines and splashes smaller than a texel are drawn wider and thinner (or left
+out) so they do not flicker between texels.
 
-The drop rows (thousands a frame, the largest upload of the frame) are ``DROP_ROW``: the segment in float32 (a
-half float would move a drop by up to ~0.25 mm) and radius, height, kind and seed in float16 (relative 5e-4; the
-heights land in a half-float texture anyway): 24 bytes a row instead of 32. The film rows keep float32 (their
-seed counts to 65535).
+The drop rows (thousands a frame, the largest upload of the frame) are ``DROP_ROW``, five float32: for a drop its
+position and velocity (s, t, vs, vt) and contact radius, copied from the simulation's rows as they are; for a
+wiper bead a line (s0, t0, s1, t1) and its radius negated. The shaders lay a drop's tail behind it and widen the
+sub-texel ones (``shaders/windshield/drop_row.glsl``, ``drop_splat.vert``): per drop the CPU only copies.
 """
 
 from __future__ import annotations
@@ -17,21 +17,26 @@ import math
 
 import numpy as np
 
-from rain_core.effects.windshield.constants import BEAD_BINS, HEIGHT_PER_RADIUS, TRAIL_FILM_M, norm2
+from rain_core.effects.windshield.constants import BEAD_BINS, TRAIL_FILM_M
+from rain_core.effects.windshield.drop_rows import VS as _VS
+from rain_core.effects.windshield.drop_rows import VT as _VT
+from rain_core.effects.windshield.drop_rows import A as _A
+from rain_core.effects.windshield.drop_rows import S as _S
+from rain_core.effects.windshield.drop_rows import T as _T
 from rain_core.physics import RHO_WATER
 
-# A drop texture instance: the segment s0, t0, s1, t1 (m) as float32, radius (m), height (mm), kind, seed as float16
-# (the vertex formats "4f 4f2/i"; the shaders read both as vec4).
-DROP_ROW = np.dtype([("seg", "<f4", (4,)), ("info", "<f2", (4,))])
+# A drop buffer instance (the vertex format "4f 1f/i"): (s, t, vs, vt) m, m/s and the contact radius (m) of a
+# drop, or (s0, t0, s1, t1) m and minus the radius (m) of a bead's line.
+DROP_ROW = np.dtype([("seg", "<f4", (4,)), ("radius", "<f4")])
 _HALF_BIAS = (127 - 15) << 10  # float32's exponent bias over float16's, in a float16's bit positions
-_HALF_ONE = 0x3C00  # 1.0 as a float16
 
 
-def half_bits(x: np.ndarray) -> np.ndarray:
+def half_bits(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """The float16 bit patterns (as uint32) of non-negative float32 ``x``: rounded to nearest (ties up), values
     below the smallest normal half (6.1e-5) as 0 or that smallest one; ``x`` must stay below 65504. NumPy's
-    float16 cast costs ~10 ns a value (no SIMD); this is a few integer operations on float32's bits."""
-    bits = x.view(np.uint32) + np.uint32(1 << 12)  # half of the 13 mantissa bits dropped: rounds to nearest
+    float16 cast costs ~10 ns a value (no SIMD); this is a few integer operations on float32's bits. ``out``: a
+    uint32 array of x's shape to write them to (may be ``x.view(np.uint32)`` itself)."""
+    bits = np.add(x.view(np.uint32), np.uint32(1 << 12), out=out)  # half of the 13 dropped bits: rounds to nearest
     bits >>= 13
     signed = bits.view(np.int32)
     signed -= _HALF_BIAS
@@ -39,66 +44,70 @@ def half_bits(x: np.ndarray) -> np.ndarray:
     return bits
 
 
-def drop_splats(sim, texel_m: float) -> np.ndarray:
-    """Instances (n,) of ``DROP_ROW`` for the drop-height texture: drops as caps with tails, beads as lines (mm)."""
-    n = sim.count
-    beads = []
-    direction = 1.0 if (sim.wipers.phase or 0.0) < 0.5 else -1.0
-    for b, blade in enumerate(sim.blades):
-        bead = sim.beads[b]
-        if bead.any():
-            bin_len = (blade.r_outer_m - blade.r_inner_m) / BEAD_BINS
-            w = np.minimum(np.sqrt(2.0 * bead / (RHO_WATER * bin_len) / math.pi), 0.01)
-            keep = (w > 0).nonzero()[0]
-            if len(keep):
-                beads.append((blade, w, keep))
-    # Written column by column into the rows the GPU reads (one array for drops and beads: one upload, no float64
-    # (n, 8) copy, no concatenation): 6 words a row, the segment's four float32 and two pairs of float16 (radius
-    # and height, from float32 through ``half_bits``; kind and seed).
-    total = n + sum(len(k) for *_, k in beads)
-    rows = np.zeros((total, 6), np.uint32)
-    seg = rows[:, :4].view(np.float32)
-    size = np.empty((total, 2), np.float32)  # radius as splatted (m), height (mm)
-    if n:
-        # Only the few moving drops have a tail, the others' segment ends where it starts.
-        pos, vel = sim.pos, sim.vel
-        a = sim.radius()
-        # Column by column: a cast into an (n, 2) block loops over its rows (~5× slower than four columns).
-        s, t = pos[:, 0], pos[:, 1]
-        seg[:n, 0] = s
-        seg[:n, 1] = t
-        seg[:n, 2] = seg[:n, 0]
-        seg[:n, 3] = seg[:n, 1]
-        a_vis = np.maximum(a, 0.75 * texel_m)
-        size[:n, 0] = a_vis
-        height = a * (1e3 * HEIGHT_PER_RADIUS)
-        height *= a
-        height /= a_vis
-        size[:n, 1] = height  # a sub-texel drop: wider, lower lens
-        # (vs, vt) as one complex number: one comparison a drop (the columns are strided rows of the drop array).
-        moving = (vel.view(np.complex128)[:, 0] != 0.0 if vel.strides[1] == 8 else vel.any(axis=1)).nonzero()[0]
-        if len(moving):
-            v = vel[moving]
-            speed = norm2(v)
-            tail = a[moving] * np.minimum(speed / 0.25, 1.5)
-            seg[moving, 2:4] = pos[moving] - v / np.maximum(speed, 1e-9)[:, None] * tail[:, None]
-    row = n
-    for blade, w, keep in beads:
-        angle = float(blade.angle(sim.wipers.progress))
-        bin_len = (blade.r_outer_m - blade.r_inner_m) / BEAD_BINS
-        centres = sim.bead_bin_centres(blade, angle, ahead=direction * 0.004)[keep]
-        d = np.array([math.cos(angle), math.sin(angle)]) * 0.5 * bin_len
-        w = w[keep]
-        w_vis = np.maximum(w, 0.75 * texel_m)
-        end = row + len(keep)
-        seg[row:end, 0:2] = centres - d
-        seg[row:end, 2:4] = centres + d
-        size[row:end, 0] = w_vis
-        size[row:end, 1] = 1e3 * w * (w / w_vis)
-        rows[row:end, 5] = _HALF_ONE  # kind 1, seed 0
-        row = end
-    rows[:, 4] = half_bits(size).astype(np.uint16).view(np.uint32)[:, 0]  # the two halves, in memory order
-    return rows.view(DROP_ROW)[:, 0]
+class DropRows:
+    """Builds the drop buffer's rows (``DROP_ROW``) of a simulation frame after frame into one array it keeps
+    (grown when the drops outnumber it): each call's rows are valid until the next call."""
+
+    def __init__(self):
+        self._out = np.zeros((0, 5), np.float32)
+        self._blades = None  # the blades the tables below are for
+        self._w_scale = self._ends = None
+
+    def _bead_tables(self, blades) -> None:
+        """Per blade and bead bin: 2 / (ρ·π·bin length) (the bin's kg → its half-cylinder radius²) and the radii
+        (m) of the bin's ends along the blade, (blades, BEAD_BINS, 1, 2). A blade's bins do not change."""
+        self._blades = blades
+        lengths = np.array([(b.r_outer_m - b.r_inner_m) / BEAD_BINS for b in blades])[:, None]
+        self._w_scale = 2.0 / (RHO_WATER * lengths) / math.pi
+        inner = np.array([b.r_inner_m for b in blades])[:, None]
+        centre = inner + (np.arange(BEAD_BINS) + 0.5) * lengths
+        self._ends = np.stack([centre - 0.5 * lengths, centre + 0.5 * lengths], axis=-1)[:, :, :, None]
+        self._pivots = np.array([b.pivot for b in blades], np.float64)[:, None, None, :]
+
+    def rows(self, sim) -> np.ndarray:
+        """The rows (n,) ``DROP_ROW`` of ``sim``'s drops, then its beads' lines (the bins with water)."""
+        n = sim.count
+        beads = sim.beads
+        lines = None
+        if beads.any():
+            if self._blades is not sim.blades:
+                self._bead_tables(sim.blades)
+            # The bead's cross-section as a half cylinder (m) of its bin's water, at most 1 cm.
+            w = np.minimum(np.sqrt(beads * self._w_scale), 0.01).ravel()
+            lines = (w > 0).nonzero()[0]
+        total = n + (len(lines) if lines is not None else 0)
+        if total > len(self._out):
+            self._out = np.zeros((max(total, 2 * len(self._out), 1024), 5), np.float32)
+        out = self._out
+        if n:
+            block = getattr(sim, "_buf", None)  # the fast path's drop array (drop_rows' columns): no copies
+            if block is not None:
+                # Column by column: a cast of a strided (n, 4) block loops over its short rows (slower).
+                for c, col in enumerate((_S, _T, _VS, _VT)):
+                    out[:n, c] = block[:n, col]
+                out[:n, 4] = block[:n, _A]
+            else:
+                out[:n, 0:2] = sim.pos
+                out[:n, 2:4] = sim.vel
+                out[:n, 4] = sim.radius()
+        if lines is not None and len(lines):
+            # WindshieldSimReference.bead_bin_centres ± half a bin along the blade, 4 mm ahead of it (towards the
+            # stroke's direction): pivot + ahead·normal + r·direction for each bin's two ends.
+            ahead = 0.004 if (sim.wipers.phase or 0.0) < 0.5 else -0.004
+            progress = sim.wipers.progress
+            cs = np.array([(math.cos(a), math.sin(a)) for a in (float(b.angle(progress)) for b in sim.blades)])
+            base = self._pivots + ahead * np.stack([-cs[:, 1], cs[:, 0]], axis=-1)[:, None, None, :]
+            ends = (self._ends * cs[:, None, None, :] + base).reshape(-1, 4)  # (s0, t0, s1, t1) a bin
+            out[n:total, 0:4] = ends[lines]
+            np.negative(w[lines], out=out[n:total, 4])
+        return out[:total].view(DROP_ROW)[:, 0]
+
+
+def drop_splats(sim, texel_m: float | None = None) -> np.ndarray:
+    """Instances (n,) of ``DROP_ROW`` for the drop-height texture and the drop lenses: drops, then beads as lines.
+    A new array each call (the effect keeps a ``DropRows``). ``texel_m`` is not needed: the shaders widen the
+    sub-texel drops."""
+    return DropRows().rows(sim).copy()
 
 
 def film_splats(sim, texel_m: float) -> np.ndarray:
