@@ -11,13 +11,11 @@ from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
 from rain_core.effects.windshield.drop_rows import KEY as _KEY
 from rain_core.effects.windshield.drop_rows import RB as _RB
 from rain_core.effects.windshield.drop_rows import TRAIL as _TRAIL
-from rain_core.effects.windshield.drop_rows import VS as _VS
-from rain_core.effects.windshield.drop_rows import VT as _VT
 from rain_core.effects.windshield.drop_rows import A as _A
 from rain_core.effects.windshield.drop_rows import M as _M
 from rain_core.effects.windshield.drop_rows import S as _S
 from rain_core.effects.windshield.drop_rows import T as _T
-from rain_core.effects.windshield.grid import components
+from rain_core.effects.windshield.grid import small_components
 
 
 class FastMerging:
@@ -39,17 +37,18 @@ class FastMerging:
             keep[gone] = False
             self._keep(keep)
 
-    def _merge_moves(self, n_moved: int, go, s_g, t_g, ds_g, dt_g) -> None:
+    def _merge_moves(self, n_moved: int, go, s_g, t_g, ds_g, dt_g, step_len=None) -> None:
         """``_merge`` with the step's motion as columns (``_move``): of the first ``n_moved`` drops, those in
-        ``go`` started at (s_g, t_g) and moved by (ds_g, dt_g) m; the others stayed where they are. Candidate
-        pairs come from ``grid.PairFinder``; the groups are formed on the drops that touch only."""
+        ``go`` started at (s_g, t_g) and moved by (ds_g, dt_g) m (``step_len``: its length, if the caller has
+        it); the others stayed where they are. Candidate pairs come from ``grid.PairFinder``; the groups are
+        formed on the drops that touch only."""
         n = self._n
         fresh = self._fresh_buf[:n]
         if n < 2:
             fresh[:] = False
             return
         d = self._buf[:n]
-        a = d[:, _A]
+        a = d[:, _A].copy()  # contiguous: gathered per pair below
         # Dense columns of the motion (trail droplets born during the step, from n_moved on, rest this time
         # and are tested from the next sub-step on). What did not move keeps its own position and reach.
         s0, t0, reach = d[:, _S].copy(), d[:, _T].copy(), a.copy()
@@ -62,12 +61,14 @@ class FastMerging:
         if len(go):
             s0[go], t0[go], ds[go], dt_[go] = s_g, t_g, ds_g, dt_g
             active[go[(ds_g != 0.0) | (dt_g != 0.0)]] = True
-            reach[go] = a[go] + 0.5 * np.sqrt(ds_g * ds_g + dt_g * dt_g)
+            if step_len is None:
+                step_len = np.sqrt(ds_g * ds_g + dt_g * dt_g)
+            reach[go] = a.take(go) + 0.5 * step_len
             mid_s[go] = s_g + 0.5 * ds_g
             mid_t[go] = t_g + 0.5 * dt_g
-        if not active.any():
+        if not np.count_nonzero(active):
             return
-        i, j, deferred = self._pairs.pairs(mid_s, mid_t, reach, active, d[:, _S], d[:, _T], a)
+        i, j, deferred = self._pairs.pairs(mid_s, mid_t, reach, active, d[:, _S], d[:, _T], d[:, _A])
         if deferred is not None:  # over the work budget: those drops are tested again next sub-step
             deferred[n_moved:] = False
             fresh |= deferred
@@ -76,36 +77,58 @@ class FastMerging:
             i, j = i[keep], j[keep]
         if len(i) == 0:
             return
-        # Closest approach of the two straight motions within the step.
-        ps, pt = s0.take(i) - s0.take(j), t0.take(i) - t0.take(j)  # (take: a faster gather than a[i])
-        qs, qt = ds.take(i) - ds.take(j), dt_.take(i) - dt_.take(j)
-        dd = qs * qs + qt * qt
-        tau = np.minimum(np.maximum(-(ps * qs + pt * qt) / np.maximum(dd, 1e-300), 0.0), 1.0)
+        # Closest approach of the two straight motions within the step. (take: a faster gather than a[i].)
+        ps = s0.take(i)
+        ps -= s0.take(j)
+        pt = t0.take(i)
+        pt -= t0.take(j)
+        qs = ds.take(i)
+        qs -= ds.take(j)
+        qt = dt_.take(i)
+        qt -= dt_.take(j)
+        dd = qs * qs
+        dd += qt * qt
+        np.maximum(dd, 1e-300, out=dd)
+        tau = ps * qs
+        tau += pt * qt
+        np.negative(tau, out=tau)
+        tau /= dd
+        np.maximum(tau, 0.0, out=tau)
+        np.minimum(tau, 1.0, out=tau)
         ps += tau * qs
         pt += tau * qt
-        rr = a[i] + a[j]
-        touch = (ps * ps + pt * pt <= rr * rr).nonzero()[0]
+        ps *= ps
+        pt *= pt
+        ps += pt
+        rr = a.take(i)
+        rr += a.take(j)
+        rr *= rr
+        touch = (ps <= rr).nonzero()[0]
         if len(touch) == 0:
             return
-        i, j = i[touch], j[touch]
+        i, j = i.take(touch), j.take(touch)
         # Groups among the touching drops only, each labelled by its smallest member (grid.components).
-        both = np.concatenate([i, j])
-        both.sort()
-        nodes = both[np.concatenate(([True], both[1:] != both[:-1]))]
         k = len(i)
-        ij = nodes.searchsorted(np.concatenate([i, j]))
-        slot = components(len(nodes), ij[:k], ij[k:])  # the root's place in ``nodes``
+        ij = np.concatenate([i, j])
+        both = np.sort(ij)
+        nodes = both[np.concatenate(([True], both[1:] != both[:-1]))]
+        ij = nodes.searchsorted(ij)
+        slot = small_components(len(nodes), ij[:k], ij[k:])  # the root's place in ``nodes``
         grown = (np.bincount(slot, minlength=len(nodes)) > 1).nonzero()[0]
         if len(grown) == 0:
             return
-        # Sums over each group in index order, as the reference's bincount adds them.
+        # Mass-weighted means over each group in index order, as the reference's bincount adds them (np.add.at
+        # adds the rows in the same order, all the columns S … TRAIL at once; M's own column is overwritten).
         rows = d[nodes]
         wm = rows[:, _M]
         g_mass = np.bincount(slot, weights=wm, minlength=len(nodes))[grown]
+        sums = np.zeros((len(nodes), _TRAIL + 1))
+        np.add.at(sums, slot, rows[:, : _TRAIL + 1] * wm[:, None])
         r = nodes[grown]
-        for c in (_S, _T, _VS, _VT, _TRAIL):
-            d[r, c] = np.bincount(slot, weights=wm * rows[:, c], minlength=len(nodes))[grown] / g_mass
-        d[r, _M] = g_mass
+        mean = sums[grown]
+        mean /= g_mass[:, None]
+        mean[:, _M] = g_mass
+        d[r, : _TRAIL + 1] = mean
         d[r, _A] = drop_radius(g_mass)
         d[r, _KEY] = _DIRTY  # the position's columns are written before they are read (sim._flush_placed)
         d[r, _RB] = np.inf

@@ -88,8 +88,8 @@ class FastMotion:
     # --- motion (dynamics.DropDynamics._move) ---------------------------------------------------------------
     def _move(self, h: float, air_local: np.ndarray, inputs) -> tuple:
         """Forces, pinning, viscous sliding; returns for the merge test (``_merge_moves``) the drop count before
-        the step's trail droplets, the drops that slid (``go``), their start (s, t) and displacement (m), as
-        columns: the others did not move.
+        the step's trail droplets, the drops that slid (``go``), their start (s, t), displacement and its length
+        (m), as columns: the others did not move.
 
         Only the drops that may slide are tested (``cand``): those whose RB column (drop_rows) is at least
         _REST_TEST. A drop at rest gets RB = max(|G + D|, |G|, |D|) / pin from the forces of its test (G gravity,
@@ -106,7 +106,7 @@ class FastMotion:
         every drop is tested. The drops' EV column follows the air of every step."""
         n = self._n
         if n == 0:
-            return 0, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
+            return 0, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
         if self._dirty:
             self._flush_placed()
         d = self._buf[:n]
@@ -128,7 +128,7 @@ class FastMotion:
         grow = (2.0 * slack + slack * slack) * (1.0 + slack) + slack
         c = d if cand is None else d.take(cand, axis=0)
         k = len(c)
-        s_g = t_g = ds = dt_ = _EMPTY1
+        s_g = t_g = ds = dt_ = step_len = _EMPTY1
         go = _EMPTY_I
         whole = cand is None or new_air  # the air over every drop (for EV), the tested ones' taken from it
         if whole or k:
@@ -230,7 +230,7 @@ class FastMotion:
             run = (step_len > 0.0).nonzero()[0]
             if len(run):
                 self._run(go[run], s_g[run], t_g[run], ds[run], dt_[run], step_len[run], a_g[run])
-        return n, go, s_g, t_g, ds, dt_
+        return n, go, s_g, t_g, ds, dt_, step_len
 
     def _run(self, idx, s0, t0, ds, dt, step_len, a) -> None:
         """Running drops take up the film in their path, lay a thin wet line and drop trail droplets

@@ -10,8 +10,8 @@ Two implementations of the same candidate search:
 * ``PairFinder`` (the fast path): occupied cells written into tables that live as long as the simulation, so a
   lookup is one gather instead of a binary search, and a work budget per call (``MERGE_CELLS_MAX`` cells of
   swept boxes, ``MERGE_PAIRS_MAX`` pairs) so that no input, however fast or dense, can ask for unbounded work.
-  Up to ``FAR_DIRECT_MAX`` far-reaching drops (ordinary rain has a few dozen at most) look up the near table
-  over their boxes and each other by distance, instead of every drop looking in a far grid.
+  When some drops reach far (a car at speed), every drop sits in the near cells its box touches and the drops
+  sharing a cell are the candidates, instead of every drop looking in a far grid.
 """
 
 from __future__ import annotations
@@ -122,16 +122,35 @@ def components(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     return labels
 
 
+def small_components(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """``components`` for the few edges of one merge test (tens a step): a union-find in Python, ~5× faster than
+    the NumPy rounds at that size (their ufunc.at and per-round calls dominate). Each root is its component's
+    smallest member (a larger root always joins a smaller one, so a parent is never larger than its child), the
+    labels ``components`` gives. Many edges go to ``components``."""
+    if len(i) > SMALL_COMPONENTS_EDGES:
+        return components(n, i, j)
+    parent = list(range(n))
+    for a, b in zip(i.tolist(), j.tolist(), strict=True):
+        while parent[a] != a:
+            parent[a] = a = parent[parent[a]]  # path halving: keeps parent ≤ child
+        while parent[b] != b:
+            parent[b] = b = parent[parent[b]]
+        if a < b:
+            parent[b] = a
+        elif b < a:
+            parent[a] = b
+    for x in range(n):  # a parent is smaller, so already points at its root
+        parent[x] = parent[parent[x]]
+    return np.array(parent)
+
+
+SMALL_COMPONENTS_EDGES = 512  # up to this many edges small_components loops in Python
 _EMPTY_I = np.zeros(0, np.int64)
 NEAR_CELL_M = 1.6e-2  # PairFinder's grid: drops reaching ≤ half of this are found by their centres
 FAR_CELL_M = 6.4e-2  # PairFinder's grid for the few drops that reach further (fast or very large)
-# Up to this many far-reaching drops, whose boxes cover at most FAR_DIRECT_CELLS near cells in all, look up the
-# near table over their boxes instead (and each other directly): the far grid would have every drop look there.
-FAR_DIRECT_MAX = 64
-FAR_DIRECT_CELLS = 8192
-# Every pair (a, b), a < b < FAR_DIRECT_MAX, ordered by b: the pairs of the first f drops are its first f(f-1)/2
-# (np.triu_indices costs ~50 µs a call, and f changes from step to step).
-_PAIR_B, _PAIR_A = np.tril_indices(FAR_DIRECT_MAX, -1)
+# PairFinder._box_pairs: a box's cells are widened by this (in cells, 16 nm) so that rounding in their bounds
+# never leaves out a cell the exact box touches.
+_BOX_MARGIN_CELLS = 1e-6
 
 
 def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, members: np.ndarray):
@@ -162,9 +181,11 @@ class PairFinder:
 
     Drops that reach ≤ NEAR_CELL_M / 2 (nearly all) sit in a grid of NEAR_CELL_M cells by their centres, in a
     table of occupied cells (16-bit keys, so the sort is a radix sort, and a lookup is a gather); an active one
-    looks in the 3 × 3 cells around its own. The rest sit in a FAR_CELL_M grid in every cell of their swept box
-    widened by NEAR_CELL_M / 2; every drop looks there by its centre's cell, a far-reaching one by its box
-    (unless they are few: ``_far_in_near_table``).
+    looks in the 3 × 3 cells around its own. When some drops reach further (fast or very large), every drop
+    sits in each near cell its box touches instead and drops sharing a cell are the candidates
+    (``_box_pairs``); past the work budget, the far-reaching ones sit in a FAR_CELL_M grid in every cell of
+    their swept box widened by NEAR_CELL_M / 2, and every drop looks there by its centre's cell, a far-reaching
+    one by its box.
 
     ``pairs(s, t, reach, active, end_s, end_t, radius)`` (1-D columns, m) returns (i, j, deferred): candidate
     pairs i ≠ j, at least one of them active, that include every such pair with |p_i − p_j| ≤ reach_i + reach_j,
@@ -183,56 +204,89 @@ class PairFinder:
         p1 = self._p1
         self._around = np.array([di * p1 + dj for di in (-1, 0, 1) for dj in (-1, 0, 1)], np.int16)
         self._f0, self._f1 = _grid_shape(FAR_CELL_M)
+        self._box_top = np.array([[self._n0 - 1], [self._n1 - 1], [self._n0 - 1], [self._n1 - 1]], float)
+        self._ar = np.arange(4096)
 
-    def _far_in_near_table(self, far_ids, s, t, reach, active, members, budget):
-        """Pairs of the few far-reaching drops ``far_ids`` (at most FAR_DIRECT_MAX, their boxes at most
-        FAR_DIRECT_CELLS cells of the near table) with the near drops, looked up in the near table over each one's
-        box widened by NEAR_CELL_M / 2, and among themselves by their distance; None when there are too many for that
-        (the far grid then does it). Returns (i, j, deferred far ids or None); pairs neither of which is active
-        are left out, the work budget as ``pairs``."""
-        f = len(far_ids)
-        if f > FAR_DIRECT_MAX:
-            return None
-        fs, ft = s[far_ids], t[far_ids]
-        half = reach[far_ids] + 0.5 * NEAR_CELL_M
+    def _box_pairs(self, s, t, reach, active):
+        """Candidate pairs when some drops reach far (fast or large): every drop sits in each cell of the near
+        grid that its box (s, t) ± reach touches, and two drops whose boxes share a cell are a candidate — boxes
+        of drops within reach of each other overlap, so they share the cells of the overlap. One table for near
+        and far drops (no far grid, no lookups around each drop), and far fewer candidates than the 3 × 3
+        lookups give. Returns (i, j) (i ≠ j, at least one active; a pair may repeat), or None when the boxes'
+        cells or the pairs would pass the work budget (``pairs`` then defers work)."""
+        n = len(s)
         inv = 1.0 / NEAR_CELL_M
-        o0, o1 = float(_GRID_ORIGIN[0]), float(_GRID_ORIGIN[1])
-        top0, top1 = self._n0 - 1, self._n1 - 1
-        lo0 = np.minimum(np.maximum(np.floor((fs - half - o0) * inv), 0), top0).astype(np.int64)
-        hi0 = np.minimum(np.maximum(np.floor((fs + half - o0) * inv), 0), top0).astype(np.int64)
-        lo1 = np.minimum(np.maximum(np.floor((ft - half - o1) * inv), 0), top1).astype(np.int64)
-        hi1 = np.minimum(np.maximum(np.floor((ft + half - o1) * inv), 0), top1).astype(np.int64)
-        if int(((hi0 - lo0 + 1) * (hi1 - lo1 + 1)).sum()) > FAR_DIRECT_CELLS:
+        bounds = np.empty((4, n))  # lo0, lo1, hi0, hi1 in cells
+        cs = s - float(_GRID_ORIGIN[0])
+        cs *= inv
+        ct = t - float(_GRID_ORIGIN[1])
+        ct *= inv
+        rc = reach * inv
+        rc += _BOX_MARGIN_CELLS
+        np.subtract(cs, rc, out=bounds[0])
+        np.subtract(ct, rc, out=bounds[1])
+        np.add(cs, rc, out=bounds[2])
+        np.add(ct, rc, out=bounds[3])
+        np.maximum(bounds, 0.0, out=bounds)
+        np.minimum(bounds, self._box_top, out=bounds)  # clipped to the grid first: truncation is then floor
+        lo0, lo1, hi0, hi1 = bounds.astype(np.int64)
+        w1 = hi1 - lo1
+        w1 += 1
+        count = hi0 - lo0
+        count += 1
+        count *= w1
+        key = lo0 * self._n1
+        key += lo1
+        total = int(count.sum())
+        if total > MERGE_CELLS_MAX:
             return None
-        p1 = self._p1
-        keys, owner = _box_cells(lo0, lo1, hi0, hi1, far_ids, p1)
-        keys = keys + (p1 + 1)  # the near table's border offset (see pairs)
-        c = self._count[keys]
-        hit = c.nonzero()[0]
-        out_i, out_j = [], []
-        deferred = None
-        if len(hit):
-            c, qid = c[hit], owner[hit]
-            if int(c.sum()) > budget:
-                over = c.cumsum() > budget
-                deferred = qid[over]
-                keep = ~over
-                hit, c, qid = hit[keep], c[keep], qid[keep]
-            i, j = _expand(qid, c, self._head[keys[hit]], members)
-            keep = active[i] | active[j]
-            out_i.append(i[keep])
-            out_j.append(j[keep])
-        if f > 1:
-            k = f * (f - 1) // 2
-            a, b = _PAIR_A[:k], _PAIR_B[:k]
-            ds, dt, rr = fs[a] - fs[b], ft[a] - ft[b], reach[far_ids[a]] + reach[far_ids[b]]
-            i, j = far_ids[a], far_ids[b]
-            keep = (active[i] | active[j]) & (ds * ds + dt * dt <= rr * rr)
-            out_i.append(i[keep])
-            out_j.append(j[keep])
-        if not out_i:
-            return _EMPTY_I, _EMPTY_I, deferred
-        return np.concatenate(out_i), np.concatenate(out_j), deferred
+        ar = self._arange(max(total, n))
+        if total == n:
+            owner = ar[:n]
+        else:
+            owner = ar[:n].repeat(count)
+            first = count.cumsum()
+            first -= count
+            within = ar[:total] - first.repeat(count)
+            d0, d1 = np.divmod(within, w1.repeat(count))
+            d0 *= self._n1
+            d0 += d1
+            key = key.repeat(count)
+            key += d0
+        key = key.astype(np.int16)
+        order = key.argsort(kind="stable")  # 16-bit keys: a radix sort
+        key = key[order]
+        owner = owner[order]
+        # Each entry pairs with the entries after it in its cell's run.
+        ends = (key[1:] != key[:-1]).nonzero()[0]
+        ends += 1
+        ends = np.append(ends, total)
+        runs = np.diff(ends, prepend=0)
+        after = ends.repeat(runs)
+        after -= ar[:total]
+        after -= 1
+        n_pairs = int(after.sum())
+        if n_pairs > MERGE_PAIRS_MAX:
+            return None
+        if n_pairs == 0:
+            return _EMPTY_I, _EMPTY_I
+        ar = self._arange(n_pairs)
+        pi = ar[:total].repeat(after)
+        first = after.cumsum()
+        first -= after
+        pj = ar[:n_pairs] - first.repeat(after)
+        pj += pi
+        pj += 1
+        i = owner.take(pi)
+        j = owner.take(pj)
+        keep = (active.take(i) | active.take(j)).nonzero()[0]
+        return i.take(keep), j.take(keep)
+
+    def _arange(self, n: int) -> np.ndarray:
+        """0, 1, … at least n long (kept: most steps need the same few thousand)."""
+        if len(self._ar) < n:
+            self._ar = np.arange(max(n, 2 * len(self._ar)))
+        return self._ar
 
     def pairs(self, s, t, reach, active, end_s, end_t, radius):
         n = len(s)
@@ -240,9 +294,12 @@ class PairFinder:
         budget = MERGE_PAIRS_MAX
         near = reach <= 0.5 * NEAR_CELL_M
         out_i, out_j = [], []
-        all_far_done = False
         near_ids = near.nonzero()[0]
         all_near = len(near_ids) == n
+        if not all_near:
+            boxed = self._box_pairs(s, t, reach, active)
+            if boxed is not None:
+                return boxed[0], boxed[1], None
         if len(near_ids):
             ns, nt = (s, t) if all_near else (s[near_ids], t[near_ids])
             inv = 1.0 / NEAR_CELL_M
@@ -263,18 +320,6 @@ class PairFinder:
             run_cells = sorted_keys[starts]
             self._head[run_cells] = starts
             self._count[run_cells] = ends - starts
-            if not all_near:
-                far_ids = (~near).nonzero()[0]
-                direct = self._far_in_near_table(far_ids, s, t, reach, active, members, budget)
-                if direct is not None:  # the few far-reaching drops were looked up here: no far grid needed
-                    fi, fj, f_deferred = direct
-                    out_i.append(fi)
-                    out_j.append(fj)
-                    budget -= len(fi)
-                    if f_deferred is not None:
-                        deferred = np.zeros(n, bool)
-                        deferred[f_deferred] = True
-                    all_far_done = True
             if all_near:
                 q = active.nonzero()[0]
                 qk = keys[q]
@@ -302,7 +347,7 @@ class PairFinder:
                 out_i.append(i)
                 out_j.append(j)
 
-        if not all_near and not all_far_done:
+        if not all_near:
             far_ids = (~near).nonzero()[0]
             fs, ft, fr = s[far_ids], t[far_ids], reach[far_ids]
             c0, c1 = self._f0, self._f1

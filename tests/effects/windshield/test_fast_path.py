@@ -139,28 +139,29 @@ def test_a_copy_runs_on_like_the_original():
     _assert_same(fast, ref)
 
 
-def test_pair_finder_looks_up_a_few_far_reaching_drops_in_the_near_table():
-    # Fast drops are few in ordinary rain: up to grid.FAR_DIRECT_MAX of them look up the near table over their
-    # boxes (and each other by distance). Every touching pair must still be found, also at the grid's borders.
-    from rain_core.effects.windshield.grid import FAR_DIRECT_MAX, NEAR_CELL_M
+def test_pair_finder_puts_far_reaching_drops_in_the_cells_of_their_boxes():
+    # Fast drops are few in ordinary rain: with some of them, every drop sits in the near cells its box touches
+    # (PairFinder._box_pairs), without the far grid. Every touching pair must still be found, also at the grid's
+    # borders and beyond them.
+    from rain_core.effects.windshield.grid import NEAR_CELL_M
 
     rng = np.random.default_rng(5)
     finder = PairFinder()
-    direct = 0
-    original = finder._far_in_near_table
+    boxed = 0
+    original = finder._box_pairs
 
     def counted(*args):
-        nonlocal direct
+        nonlocal boxed
         result = original(*args)
-        direct += result is not None
+        boxed += result is not None
         return result
 
-    finder._far_in_near_table = counted
+    finder._box_pairs = counted
     for trial in range(10):
         n = int(rng.integers(300, 1500))
         p = rng.uniform([-1.05, -0.25], [1.05, 1.45], (n, 2))  # a little beyond the grid on every side
         reach = rng.uniform(0.0005, 0.5 * NEAR_CELL_M, n)
-        far = rng.choice(n, int(rng.integers(1, FAR_DIRECT_MAX + 1)), replace=False)
+        far = rng.choice(n, int(rng.integers(1, 200)), replace=False)
         reach[far] = rng.uniform(0.5 * NEAR_CELL_M, 0.06, len(far))
         active = rng.random(n) < 0.3
         i, j, deferred = finder.pairs(p[:, 0], p[:, 1], reach, active, p[:, 0], p[:, 1], reach)
@@ -170,8 +171,8 @@ def test_pair_finder_looks_up_a_few_far_reaching_drops_in_the_near_table():
         ii, jj = np.nonzero((dist <= reach[:, None] + reach[None]) & np.triu(np.ones((n, n), bool), 1))
         want = {(a, b) for a, b in zip(ii.tolist(), jj.tolist(), strict=True) if active[a] or active[b]}
         assert want <= found, trial
-        assert all(active[a] or active[b] for a, b in found)
-    assert direct == 10  # the direct path did the far drops each time
+        assert all(active[a] or active[b] for a, b in found) and not (i == j).any()
+    assert boxed == 10  # the box table did the far drops each time
 
 
 def test_arrival_sampling_by_search_and_by_buckets_agree_with_interp():
