@@ -190,10 +190,13 @@ class _PackedGrids:
         self.nx = col([s[1] for s in shapes])
         self.nz = col([s[0] for s in shapes])
         self.top_col = col([s[1] - 1 for s in shapes])
-        self.row_len = col([s[1] + 1 for s in shapes])
+        self.nz_int = self.nz.astype(np.int64)
+        self.row_len_int = col([s[1] + 1 for s in shapes]).astype(np.int64)
         # Row of cell (i = −1, j = 0) of each grid in the one table.
         self.offset = col([1.0, 1.0 + len(tables[0])])
         self.table = np.concatenate(tables)
+        self._maps = (*grids[0], grids[1][0], extents[0])  # for dry_floors, built on first use
+        self._floors = None
 
     def sample(self, x, z):
         """(2, 2, k): [grid][map] bilinear samples at x, z (float64 (k,) m), each bit for bit what
@@ -204,10 +207,11 @@ class _PackedGrids:
         j0 = np.floor(fz)
         tx = fx - i0
         tz = fz - j0
-        # Clamping the column to −1 … nx − 1 picks the texels sample_heightmap's clamped taps pick; the row wraps.
-        # Small integers: exact in float64.
-        cell = np.mod(j0, self.nz) * self.row_len + np.minimum(np.maximum(i0, -1.0), self.top_col) + self.offset
-        texels = self.table.take(cell.astype(np.int64), axis=0)  # (2, k, 8): 4 taps of 2 maps
+        # Clamping the column to −1 … nx − 1 picks the texels sample_heightmap's clamped taps pick (small integers:
+        # exact in float64); the row wraps as there, in int64 (a float64 np.mod costs several times more).
+        column = (np.minimum(np.maximum(i0, -1.0), self.top_col) + self.offset).astype(np.int64)
+        cell = j0.astype(np.int64) % self.nz_int * self.row_len_int + column
+        texels = self.table.take(cell, axis=0)  # (2, k, 8): 4 taps of 2 maps
         # As float64 (exact), tap-major and contiguous: the products below then run on plain rows (float32 rows
         # 32 bytes apart made NumPy buffer and cast every operand).
         texels = texels.transpose(0, 2, 1).astype(np.float64, order="C").reshape(2, 2, 4, -1)  # (grid, map, tap, k)
@@ -216,6 +220,76 @@ class _PackedGrids:
         top = texels[:, :, 0] * ux + texels[:, :, 1] * tx
         bot = texels[:, :, 2] * ux + texels[:, :, 3] * tx
         return top * uz + bot * tz
+
+    def dry_floors(self) -> np.ndarray | None:
+        """(2, nz·nx) float64 on the puddle-map grid (row-major, cell (j, i) covers z ∈ [j, j + 1)·cell,
+        x + ROAD_HALF_WIDTH_M ∈ [i, i + 1)·cell): lower bounds of the sampled height h and of the puddle ground g
+        at every point of each cell (see ``_standing_where_wet``). Built on first use; None when the heightmap's
+        texels do not tile the puddle-map cells (then nothing is ruled out)."""
+        if self._floors is None:
+            self._floors = _dry_floors(self._maps) if self._maps is not None else False
+            self._maps = None
+        return self._floors if self._floors is not False else None
+
+
+# Lower bounds of the dry-cell table sit this far (height01 and ground units, both O(1)) below the texels' minima:
+# a bilinear sample is never below its taps' minimum by more than a few ulps (~1e-15).
+DRY_FLOOR_MARGIN = 1e-9
+# The dry-cell test trusts its cell only within this many cells of z = 0, where the samplers' row arithmetic is
+# exact to far below a texel (here 2.5e8 m: their coordinates' rounding stays below 1e-5 texel).
+DRY_TEST_MAX_ROWS = 1e9
+# Queries smaller than this skip the dry-cell test (its dozen NumPy calls cost more than they save).
+DRY_TEST_MIN_POINTS = 512
+# Queries smaller than this compute the kerb streams everywhere rather than in their band alone.
+KERB_BAND_MIN_POINTS = 256
+
+
+def _window_min(a: np.ndarray, lo: int, hi: int, axis: int, wrap: bool) -> np.ndarray:
+    """Minimum over offsets lo … hi along ``axis`` (wrapped, or clamped to the edge)."""
+    size = a.shape[axis]
+    out = None
+    for o in range(lo, hi + 1):
+        index = np.mod(np.arange(size) + o, size) if wrap else np.clip(np.arange(size) + o, 0, size - 1)
+        shifted = a.take(index, axis=axis)
+        out = shifted if out is None else np.minimum(out, shifted)
+    return out
+
+
+def _dry_floors(maps) -> np.ndarray | None:
+    """The table of ``_PackedGrids.dry_floors`` from (h, h_smooth, noise): per puddle-map cell, the minima of
+    every texel a bilinear sample of a point in it can read — one texel more on each side than the exact footprint,
+    for the rounding of the cell's and the samplers' coordinates — less DRY_FLOOR_MARGIN."""
+    h, h_smooth, noise = (np.asarray(m, dtype=np.float64) for m in maps[:3])
+    extent_x, extent_z = maps[3]
+    nz, nx = noise.shape
+    hz, hx = h.shape
+    # Heightmap texels per puddle-map cell across (rx) and along (rz) the road, and heightmap periods per PERIOD_M.
+    periods = layout.PERIOD_M / extent_z
+    rx, rz = hx // nx, hz * round(periods) // nz
+    if extent_x != 2 * ROAD_HALF_WIDTH_M or periods != round(periods) or rx * nx != hx or rz * nz != hz * periods \
+            or hz % rz:
+        return None
+
+    def heightmap_floor(m):
+        # A cell's points read texels r·c − 1 … r·c + r (bilinear taps); one more either side for rounding.
+        # Rows wrap with the heightmap's own period, tiled over the puddle map's.
+        m = _window_min(m, -2, rx + 1, 1, wrap=False)[:, ::rx]
+        m = _window_min(m, -2, rz + 1, 0, wrap=True)[::rz]
+        return np.tile(m, (nz // len(m), 1))
+
+    # The puddle map's points read texels c − 1 … c + 1; one more either side.
+    n_floor = _window_min(_window_min(noise, -2, 2, 1, wrap=False), -2, 2, 0, wrap=True)
+    ground = (1.0 - PUDDLE_NOISE_WEIGHT) * heightmap_floor(h_smooth) + PUDDLE_NOISE_WEIGHT * n_floor
+    return np.stack([heightmap_floor(h), ground]).reshape(2, -1) - DRY_FLOOR_MARGIN
+
+
+def _kerb_band_start(gutter_k: float) -> float:
+    """|x| (m) beyond which the kerb streams may hold water for spread coefficient gutter_k (> 0): the spread
+    k·L^(3/8) is largest at the full inlet spacing L = 50 m (with a margin for the rounding of the power)."""
+    from rain_core.gutter import INLET_SPACING_M
+
+    widest = gutter_k * INLET_SPACING_M ** 0.375 * (1.0 + 1e-9) + 1e-12
+    return ROAD_HALF_WIDTH_M - widest
 
 
 @lru_cache(maxsize=2)
@@ -234,7 +308,13 @@ def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
     puddle = PUDDLE_MAX_MM * np.minimum(np.maximum((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0), 1.0)
     standing = np.maximum(crack, puddle) * (1.0 - shelter)
     if gutter_k > 0.0:
-        standing = np.maximum(standing, gutter_depth_mm(x, z, gutter_k))
+        if x.size < KERB_BAND_MIN_POINTS:
+            return np.maximum(standing, gutter_depth_mm(x, z, gutter_k)), shelter
+        # The stream is +0 short of its widest spread from the kerb, and max(standing, +0) is standing (≥ +0, as
+        # the shelter ≤ 1): it is computed in the kerb band alone.
+        near = (np.abs(x) > _kerb_band_start(gutter_k)).nonzero()[0]
+        if near.size:
+            standing[near] = np.maximum(standing.take(near), gutter_depth_mm(x.take(near), z.take(near), gutter_k))
     return standing, shelter
 
 
@@ -283,11 +363,54 @@ def film_depth_sampler(cracks, puddles, puddle_amount=0.5, seed=0, world=None, w
     crack_at, puddle_at, wet = _checked_levels(cracks, puddles, puddle_amount, wetness)
     grids = _packed_grids(int(seed), world if world is not None else default_world())
     gutter_k = float(gutter_k)
+    floors = grids.dry_floors() if wet == 0.0 else None
 
     def depth(x, z):
         return np.maximum(*_depths(grids, x, z, crack_at, puddle_at, wet, gutter_k))
 
-    return depth
+    if floors is None:
+        return depth
+    # Without the wet film the depth is the standing water alone (max(s, ±0) is s, bit for bit), and that is +0
+    # wherever the dry-cell table rules out cracks, puddles and kerb streams: only the other points are sampled.
+    levels = np.array([[crack_at], [puddle_at]])
+    kerb = _kerb_band_start(gutter_k) if gutter_k > 0.0 else math.inf
+    nz, nx = _road_map_shape()
+    # Puddle-map cells per m along z and across x, its columns, its cells.
+    scale = (nz / layout.PERIOD_M, nx / (2 * ROAD_HALF_WIDTH_M), float(nx), nz * nx)
+
+    def standing_depth(x, z):
+        if x.size < DRY_TEST_MIN_POINTS:
+            return depth(x, z)
+        return _standing_where_wet(grids, floors, levels, kerb, scale, x, z, crack_at, puddle_at, gutter_k, depth)
+
+    return standing_depth
+
+
+def _standing_where_wet(grids, floors, levels, kerb, scale, x, z, crack_at, puddle_at, gutter_k, fallback):
+    """Standing water (mm) at float64 x, z (m) of one shape, sampled only on the asphalt where the dry-cell table
+    (``_PackedGrids.dry_floors``) allows a crack or a puddle (h or g below its level) or near the kerbs where the
+    gutter may run (|x| > kerb); +0 elsewhere, which is what sampling gives there (the maps' bilinear samples stay
+    within their taps' range to a few ulps, so the clamps give +0 crack and puddle, and the gutter is +0)."""
+    flat_x, flat_z = x.reshape(-1), z.reshape(-1)
+    ax = np.abs(flat_x)
+    on = (ax <= ROAD_HALF_WIDTH_M).nonzero()[0]
+    xs, zs = flat_x.take(on), flat_z.take(on)
+    rows = zs * scale[0]
+    if rows.size and not (-DRY_TEST_MAX_ROWS < rows.min() and rows.max() < DRY_TEST_MAX_ROWS):
+        return fallback(x, z)  # far or non-finite z: sample everything, as before
+    # Puddle-map cell (row wrapped, column clamped; x + 7 ≥ 0 on the road): small integers, exact.
+    cols = np.minimum(np.floor((xs + ROAD_HALF_WIDTH_M) * scale[1]), scale[2] - 1.0)
+    cell = (np.floor(rows) * scale[2] + cols).astype(np.int64) % scale[3]
+    maybe = np.less(floors.take(cell, axis=1), levels)
+    maybe = maybe[0] | maybe[1]
+    if kerb < ROAD_HALF_WIDTH_M:
+        maybe |= ax.take(on) > kerb
+    index = maybe.nonzero()[0]
+    out = np.zeros(x.shape)
+    if index.size:
+        out.reshape(-1)[on.take(index)] = _road_depths(grids, xs.take(index), zs.take(index), crack_at, puddle_at,
+                                                       gutter_k)[0]
+    return out
 
 
 def film_depth_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0,

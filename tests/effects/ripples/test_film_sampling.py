@@ -8,11 +8,15 @@ import numpy as np
 import pytest
 
 from rain_core import layout
+from rain_core.gutter import gutter_depth_mm
 from rain_core.water_film import (
+    PUDDLE_NOISE_WEIGHT,
     ROAD_HALF_WIDTH_M,
     WET_FILM_MM,
+    _packed_grids,
     _standing_water_mm,
     default_world,
+    film_depth_sampler,
     puddle_noise,
     shelter_map_for,
     smooth_heightmap_for,
@@ -109,3 +113,71 @@ def test_water_depths_on_the_asphalt_only_and_in_any_shape():
         for g, w in zip(got, want, strict=True):
             assert np.shape(g) == np.shape(w)
             np.testing.assert_array_equal(g, w)
+
+
+def reference_film_depth(x, z, cracks, puddles, amount, seed, world, gutter_k):
+    """film_depth_mm without the wet film, each map sampled alone: max(standing, +0 film), the sign of zero kept."""
+    standing, film = reference_depths(x, z, cracks, puddles, amount, seed, world, 0.0)
+    if gutter_k > 0.0:
+        on = np.abs(x) <= ROAD_HALF_WIDTH_M
+        standing[on] = np.maximum(standing[on], gutter_depth_mm(x[on], z[on], gutter_k))
+    return np.maximum(standing, film)
+
+
+def edge_points(rng, count):
+    """Points on and a few ulps either side of the heightmap's texel edges (which include the puddle map's), across
+    the road, its kerbs and beyond."""
+    x, z = points(rng, count)
+    x[:count // 2] = np.round(x[:count // 2] / 0.05) * 0.05
+    z[:count // 2] = np.round(z[:count // 2] / 0.05) * 0.05
+    x[: count // 4] = x[: count // 4] + rng.integers(-3, 4, count // 4) * 2e-15
+    z[: count // 4] = z[: count // 4] * (1.0 + rng.integers(-3, 4, count // 4) * 2.3e-16)
+    x[-40:] = np.repeat([-7.0, 7.0, np.nextafter(7.0, 0.0), -np.nextafter(7.0, 0.0)], 10)
+    return x, z
+
+
+@pytest.mark.parametrize("levels", [(1.0, 1.0, 0.5, 0, 0.17), (0.4, 0.7, 0.9, 3, 0.0), (0.0, 0.3, 0.3, 1, 0.4),
+                                    (1.0, 0.0, 0.5, 0, 0.0), (0.0, 0.0, 0.5, 2, 0.05)])
+def test_the_sampler_without_film_skips_only_dry_cells(levels):
+    """Without the wet film (the road's film function) the sampler samples only where the dry-cell table allows
+    standing water or a kerb stream: the same bits as sampling every map at every point (zeros' signs too), for
+    flat points, the ripples' strips (rows × columns, with the wheels' few points), texel edges and far z."""
+    cracks, puddles, amount, seed, gutter_k = levels
+    world = default_world()
+    sampler = film_depth_sampler(cracks, puddles, amount, seed, world, 0.0, gutter_k)
+    x, z = edge_points(np.random.default_rng(seed + 21), 20_000)
+    want = reference_film_depth(x, z, cracks, puddles, amount, seed, world, gutter_k)
+    got = sampler(x, z)
+    assert got.tobytes() == want.tobytes()
+    assert sampler(x.reshape(100, 200), z.reshape(100, 200)).tobytes() == want.tobytes()
+    if cracks or puddles:
+        assert (want > 0).mean() > 0.01  # a real test: water among the points
+    cols, rows = np.arange(-256, 256) * 0.049, 1234.5 + np.arange(19) * 0.049
+    xs, zs = np.meshgrid(cols, rows)
+    xs = np.concatenate([xs.reshape(-1), [1.2, -1.2, 6.9]])
+    zs = np.concatenate([zs.reshape(-1), [1235.0, 1236.0, 1237.0]])
+    assert sampler(xs, zs).tobytes() == reference_film_depth(xs, zs, cracks, puddles, amount, seed, world,
+                                                             gutter_k).tobytes()
+    far = z + 3e8  # beyond the dry-cell test's rows: every point sampled
+    assert sampler(x, far).tobytes() == reference_film_depth(x, far, cracks, puddles, amount, seed, world,
+                                                             gutter_k).tobytes()
+
+
+def test_the_dry_cell_floors_lie_below_every_sample_in_their_cell():
+    """The dry-cell table's floors bound the sampled height and puddle ground from below at any point of the
+    cell, texel edges and the clamped columns included (what makes skipping a cell exact)."""
+    world = default_world()
+    floors = _packed_grids(0, world).dry_floors()
+    x, z = edge_points(np.random.default_rng(5), 200_000)
+    on = np.abs(x) <= ROAD_HALF_WIDTH_M
+    x, z = x[on], z[on]
+    h = sample_heightmap(world.road_heightmap, world.heightmap_extent_m, x, z)
+    hs = sample_heightmap(smooth_heightmap_for(world), world.heightmap_extent_m, x, z)
+    n = reference_sample(puddle_noise(0), (2 * ROAD_HALF_WIDTH_M, layout.PERIOD_M), x, z)
+    ground = (1.0 - PUDDLE_NOISE_WEIGHT) * hs + PUDDLE_NOISE_WEIGHT * n
+    nz, nx = puddle_noise(0).shape
+    cell = (np.mod(np.floor(z / layout.PERIOD_M * nz), nz) * nx
+            + np.minimum(np.floor((x + ROAD_HALF_WIDTH_M) / (2 * ROAD_HALF_WIDTH_M) * nx), nx - 1)).astype(int)
+    assert (h >= floors[0][cell]).all() and (ground >= floors[1][cell]).all()
+    # Tight enough to matter: most of the road is ruled out at full flood.
+    assert (floors[1] > 0.5).mean() > 0.3
