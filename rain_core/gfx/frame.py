@@ -143,6 +143,26 @@ class FrameUniforms(dict):
         super().clear()
 
 
+
+_LIGHTING_VALUES: list = [None, None]  # [the last Lighting asked about, its uniforms]
+
+
+def _lighting_values(lighting) -> dict:
+    """The sun, sky and exposure uniforms of ``lighting`` (an immutable object, the same one every frame while the
+    hour and the overcast stay): made once per lighting, not for every view of every frame."""
+    if _LIGHTING_VALUES[0] is not lighting:
+        _LIGHTING_VALUES[:] = [lighting, {
+            "u_exposure": lighting.exposure,
+            "u_night": lighting.night_factor,
+            "u_sun_dir": tuple(float(v) for v in lighting.sun_direction),
+            "u_sun_illum": tuple(float(v) for v in lighting.sun_illuminance),
+            "u_sky_zenith": tuple(float(v) for v in lighting.sky_zenith),
+            "u_sky_horizon": tuple(float(v) for v in lighting.sky_horizon),
+            "u_ground_albedo": lighting.ground_albedo,
+        }]
+    return _LIGHTING_VALUES[1]
+
+
 @dataclass
 class RenderContext:
     """What a pass needs to draw: GL objects, the frame, camera matrices in the wrapped frame, the shared value,
@@ -198,18 +218,11 @@ class RenderContext:
             if k[0] is self.view and k[1] is self.projection and k[2] is self.frame and k[3] is self.lights:
                 return cached[1]
         key = (self.view, self.projection, self.frame, self.lights)
-        lighting = self.frame.lighting
         values = {
             "u_view_proj": mat4_bytes(self.view_proj),
-            "u_camera_pos": tuple(float(v) for v in self.camera_position),
-            "u_exposure": lighting.exposure,
+            "u_camera_pos": tuple(self.camera_position.tolist()),
             "u_time": self.frame.time_s,
-            "u_night": lighting.night_factor,
-            "u_sun_dir": tuple(float(v) for v in lighting.sun_direction),
-            "u_sun_illum": tuple(float(v) for v in lighting.sun_illuminance),
-            "u_sky_zenith": tuple(float(v) for v in lighting.sky_zenith),
-            "u_sky_horizon": tuple(float(v) for v in lighting.sky_horizon),
-            "u_ground_albedo": lighting.ground_albedo,
+            **_lighting_values(self.frame.lighting),
             "u_light_count": self.lights[3],
             "u_light_pos": self.lights[0],
             "u_light_dir": self.lights[1],
