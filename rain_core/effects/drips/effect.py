@@ -16,7 +16,13 @@ import numpy as np
 
 from rain_core import layout, physics
 from rain_core.effects.drips.edges import DripSites, find_drip_sites
-from rain_core.effects.drips.flow import MAX_PERIOD_S, RoofReservoirs, drop_diameters_mm, landings
+from rain_core.effects.drips.flow import (
+    MAX_PERIOD_S,
+    RoofReservoirs,
+    drop_diameters_mm,
+    landing_counts,
+    landing_terms,
+)
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
@@ -58,6 +64,7 @@ class DripsEffect(Effect):
         self.roofs: RoofReservoirs | None = None
         self._world = None
         self._diam: np.ndarray | None = None
+        self._drop_m3 = self._t_fall = self._momentum = self._ground = None  # per site, made with the sites
         self._tex: dict[str, moderngl.Texture] = {}
         self._prog: moderngl.Program | None = None
         self._vao: moderngl.VertexArray | None = None
@@ -78,6 +85,10 @@ class DripsEffect(Effect):
             self._world = frame.world
             self.sites = drip_sites_of(frame.world, self.seed)
             self._diam = drop_diameters_mm(self.sites.phase)
+            # What the landings need per site besides the clock and the roof's flux: fixed with the sites.
+            self._drop_m3 = math.pi / 6.0 * (self._diam * 1e-3) ** 3
+            self._t_fall, self._momentum = landing_terms(self.sites.edge_y - self.sites.land_y, self._diam)
+            self._ground = self.sites.land_y < 0.5
             self.roofs = RoofReservoirs(self.sites.area_m2, self.sites.drain_s)
             self.roofs.settle(rate)  # a scene that starts in rain starts dripping
             self._release_textures()
@@ -119,13 +130,12 @@ class DripsEffect(Effect):
         s = self.sites
         for first, count, z_base in self._ranges:
             sl = slice(first, first + count)
-            ground = s.land_y[sl] < 0.5
+            ground = self._ground[sl]
             if not ground.any():
                 continue
-            period = np.minimum(math.pi / 6.0 * (self._diam[sl] * 1e-3) ** 3 / np.maximum(flux[s.roof[sl]], 1e-300),
-                                MAX_PERIOD_S)
-            n, momentum = landings(frame.time_s - frame.dt_s, frame.time_s, period, s.phase[sl],
-                                   s.edge_y[sl] - s.land_y[sl], self._diam[sl])
+            period = np.minimum(self._drop_m3[sl] / np.maximum(flux[s.roof[sl]], 1e-300), MAX_PERIOD_S)
+            n = landing_counts(frame.time_s - frame.dt_s, frame.time_s, period, s.phase[sl], self._t_fall[sl])
+            momentum = self._momentum[sl]
             hit = ground & (n > 0)
             if hit.any():
                 impacts.append(np.stack([s.x[sl][hit], s.z[sl][hit] + z_base, momentum[hit] * n[hit]], axis=1))

@@ -87,15 +87,28 @@ def fall_speed_m_s(t_s, v_terminal_m_s):
     return vt * np.tanh(G_M_S2 * np.maximum(np.asarray(t_s, dtype=np.float64), 0.0) / vt)
 
 
+def landing_terms(height_m, diam_mm) -> tuple[np.ndarray, np.ndarray]:
+    """(fall time s, momentum kg·m/s of one landing drop) of drops of diam_mm (mm) let go height_m (m) above the
+    ground: what ``landings`` needs besides the clock and the period, fixed per site (callers keep them)."""
+    vt = physics.terminal_velocity(diam_mm)
+    t_fall = fall_time_s(height_m, vt)
+    mass = RHO_WATER * math.pi / 6.0 * (np.asarray(diam_mm) * 1e-3) ** 3
+    return t_fall, mass * fall_speed_m_s(t_fall, vt)
+
+
+def landing_counts(t0_s: float, t1_s: float, period_s, phase, t_fall_s) -> np.ndarray:
+    """Per site, how many drops land in (t0, t1] (s), int64: drop j lets go at (j + phase)·period (s) and lands
+    t_fall_s later; none at an unsteady period (≥ MAX_PERIOD_S)."""
+    period = np.asarray(period_s, dtype=np.float64)
+    live = period < MAX_PERIOD_S
+    released0 = np.floor((t0_s - t_fall_s) / period - phase)
+    released1 = np.floor((t1_s - t_fall_s) / period - phase)
+    count = np.where(live, np.maximum(released1 - released0, 0.0), 0.0)
+    return count.astype(np.int64)
+
+
 def landings(t0_s: float, t1_s: float, period_s, phase, height_m, diam_mm):
     """Per site, the drops that land in (t0, t1] (s): (count, momentum kg·m/s of one landing drop). A site's
     drop j lets go at (j + phase)·period and lands fall_time later. Only whole drops at a steady period count."""
-    period = np.asarray(period_s, dtype=np.float64)
-    vt = physics.terminal_velocity(diam_mm)
-    t_fall = fall_time_s(height_m, vt)
-    live = period < MAX_PERIOD_S
-    released0 = np.floor((t0_s - t_fall) / period - phase)
-    released1 = np.floor((t1_s - t_fall) / period - phase)
-    count = np.where(live, np.maximum(released1 - released0, 0.0), 0.0)
-    mass = RHO_WATER * math.pi / 6.0 * (np.asarray(diam_mm) * 1e-3) ** 3
-    return count.astype(np.int64), mass * fall_speed_m_s(t_fall, vt)
+    t_fall, momentum = landing_terms(height_m, diam_mm)
+    return landing_counts(t0_s, t1_s, period_s, phase, t_fall), momentum
