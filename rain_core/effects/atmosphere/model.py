@@ -101,6 +101,8 @@ def transmittance(beta_per_m, distance_m):
 
 def rain_overcast(rate_mm_h) -> np.ndarray | float:
     """How rain-grey the sky is, in [0, 1), at rate R (mm/h): R / (R + 1.5). 0 when dry; smooth in R."""
+    if type(rate_mm_h) is float and 0.0 <= rate_mm_h <= physics.R_MAX_MM_H:  # the scene's every-frame ask, no NumPy
+        return rate_mm_h / (rate_mm_h + OVERCAST_HALF_RATE_MM_H)
     r = checks.array("rate_mm_h", rate_mm_h, 0.0, physics.R_MAX_MM_H, "mm/h")
     out = r / (r + OVERCAST_HALF_RATE_MM_H)
     return float(out) if out.ndim == 0 else out
