@@ -193,11 +193,14 @@ def hydroplaning_risk(speed_m_s, film_depth_m, tyre_pressure_kpa=TYRE_PRESSURE_K
     return hydroplaning_risk_unchecked(v, h, p)
 
 
-def hydroplaning_risk_unchecked(speed_m_s, film_depth_m, tyre_pressure_kpa) -> np.ndarray:
+def hydroplaning_risk_unchecked(speed_m_s, film_depth_m, tyre_pressure_kpa, planing_speed_m_s=None) -> np.ndarray:
     """:func:`hydroplaning_risk` without the argument checks (the emitter's per-frame path; its inputs are
-    checked once at the frame's boundary)."""
+    checked once at the frame's boundary). ``planing_speed_m_s``: ``hydroplaning_speed_m_s(tyre_pressure_kpa)``
+    (m/s) if the caller keeps it (the pressures of a fleet do not change)."""
     v = np.abs(np.asarray(speed_m_s, dtype=np.float64))
-    lift = (v / hydroplaning_speed_m_s(tyre_pressure_kpa)) ** 2
+    if planing_speed_m_s is None:
+        planing_speed_m_s = hydroplaning_speed_m_s(tyre_pressure_kpa)
+    lift = (v / planing_speed_m_s) ** 2
     # np.clip's (and _ramp's) values from two ufuncs, without the wrapper.
     speed_part = np.minimum(np.maximum((lift - HYDRO_LIFT_ONSET) / (1.0 - HYDRO_LIFT_ONSET), 0.0), 1.0)
     lo, hi = HYDRO_DEPTH_MM

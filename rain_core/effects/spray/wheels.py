@@ -15,6 +15,7 @@ from rain_core.effects.spray.water import (
     allocate_water_unchecked,
     hydroplaning_risk,
     hydroplaning_risk_unchecked,
+    hydroplaning_speed_m_s,
 )
 from rain_core.gutter import frame_spread_coefficient
 from rain_core.water_film import film_depth_sampler
@@ -163,6 +164,7 @@ class _Fleet:
         widths[:, 2:] *= np.array([2.0 if k == "truck" else 1.0 for k in kinds])[:, None]  # lorries: twin rears
         self.widths = widths.reshape(-1)
         self.pressure = np.repeat([TYRE_PRESSURE_KPA.get(k, TYRE_PRESSURE_KPA["car"]) for k in kinds], 4)
+        self.planing_speed = hydroplaning_speed_m_s(self.pressure)  # m/s, per wheel
         self.consts = np.array([(sp.height_m, sp.length_m / 2.0, sp.wheel_radius_m, sp.wheelbase_m / 2.0)
                                 for sp in specs], dtype=np.float64).reshape(n, 4)
         self.radius = np.repeat(self.consts[:, 2], 4)
@@ -292,8 +294,9 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None) -> tuple[list[W
     depth, geo.extra_depth_mm = depth[:4 * n], depth[4 * n:]
     # NaN → 0 (fmax drops it), below 0 → 0, +inf and beyond → MAX_FILM_DEPTH_MM.
     depth = np.minimum(np.fmax(depth, 0.0), MAX_FILM_DEPTH_MM)
-    budget = allocate_water_unchecked(signed, geo.width, depth * 1e-3)
-    risk = hydroplaning_risk_unchecked(signed, depth * 1e-3, fleet.pressure)
+    depth_m = depth * 1e-3
+    budget = allocate_water_unchecked(signed, geo.width, depth_m)
+    risk = hydroplaning_risk_unchecked(signed, depth_m, fleet.pressure, fleet.planing_speed)
     geo.buckets, geo.available = budget.buckets, budget.available
     geo.throwing = bool((budget.thrown > 0.0).any())  # thrown ≥ 0: any wheel's total > 0
     wheels = []
