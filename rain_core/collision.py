@@ -164,6 +164,11 @@ class StreetCollider:
         circles = self._nearby_circles(pz)
         if len(circles):
             dx, dz = circles[:, 0] - px, circles[:, 1] - pz
+            # No circle reaches the footprint's bounding circle (radius hypot(half_l, half_w), with a margin for
+            # rounding): no contact, without the footprint's nearest points (most sub-steps, far from posts).
+            reach = circles[:, 2] + (math.hypot(half_l, half_w) + 1e-6)
+            if not (dx * dx + dz * dz < reach * reach).any():
+                return best
             lf = np.minimum(np.maximum(dx * fx + dz * fz, -half_l), half_l)  # np.clip, without its wrapper
             lr = np.minimum(np.maximum(dx * rx + dz * rz, -half_w), half_w)
             qx, qz = px + fx * lf + rx * lr, pz + fz * lf + rz * lr
@@ -205,8 +210,13 @@ class StreetCollider:
 def kerb_crossings(before: np.ndarray, after: np.ndarray) -> tuple[int, int]:
     """(up, down): wheels that climbed onto / came off the kerb between two sets of contacts (4, 3) m."""
     edge = layout.ROAD_HALF_WIDTH_M
-    was, now = np.abs(before[:, 0]) > edge, np.abs(after[:, 0]) > edge
-    return int(np.count_nonzero(now & ~was)), int(np.count_nonzero(was & ~now))
+    # Four wheels, asked every sub-step: compared as Python floats (the same comparisons, no NumPy calls).
+    up = down = 0
+    for x0, x1 in zip(before[:, 0].tolist(), after[:, 0].tolist(), strict=True):
+        was, now = abs(x0) > edge, abs(x1) > edge
+        up += now and not was
+        down += was and not now
+    return up, down
 
 
 def kerb_speed(speed_m_s: float, up: int, down: int) -> float:

@@ -181,3 +181,57 @@ def test_sign_posts_are_solid(collider):
     circles = collider.solids.circles
     for x, z, r in posts[:3]:
         assert np.any(np.all(np.isclose(circles, (x, z, r)), axis=1))
+
+
+def _deepest_by_nearest_points(collider, car, half_l, half_w):
+    """The contact by the footprint's nearest point to every nearby circle (no early-out): the twin of _deepest."""
+    fx, fz = -math.sin(car.yaw), -math.cos(car.yaw)
+    rx, rz = math.cos(car.yaw), -math.sin(car.yaw)
+    px, pz = float(car.position[0]), float(car.position[2])
+    best = collider._wall_contact(car, half_l, half_w)
+    circles = collider._nearby_circles(pz)
+    if len(circles):
+        dx, dz = circles[:, 0] - px, circles[:, 1] - pz
+        lf = np.clip(dx * fx + dz * fz, -half_l, half_l)
+        lr = np.clip(dx * rx + dz * rz, -half_w, half_w)
+        ox, oz = px + fx * lf + rx * lr - circles[:, 0], pz + fz * lf + rz * lr - circles[:, 1]
+        dist = np.hypot(ox, oz)
+        depth = circles[:, 2] - dist
+        i = int(depth.argmax())
+        if depth[i] > 0.0 and (best is None or depth[i] > best[0]):
+            if dist[i] > 1e-9:
+                best = (float(depth[i]), (ox[i] / dist[i], oz[i] / dist[i]))
+            else:
+                sign = math.copysign(1.0, car.speed_m_s or 1.0)
+                best = (float(circles[i, 2] + half_w), (-fx * sign, -fz * sign))
+    return best
+
+
+def test_contacts_with_the_bounding_circle_early_out_are_the_full_tests(collider):
+    """_deepest skips the nearest-point test when no circle reaches the footprint's bounding circle: over random
+    poses around the street's posts, trunks and parked cars (touching, grazing and clear), the same contacts."""
+    rng = np.random.default_rng(0)
+    car = EgoCar()
+    half_l, half_w = car.spec.length_m / 2.0, car.spec.width_m / 2.0
+    touching = 0
+    for _ in range(3000):
+        c = collider._circles[rng.integers(len(collider._circles))]
+        car.position = np.array([c[0] + rng.uniform(-4.0, 4.0), 0.0, c[1] + rng.uniform(-4.0, 4.0)])
+        car.yaw, car.speed_m_s = rng.uniform(-math.pi, math.pi), rng.uniform(-5.0, 30.0)
+        want = _deepest_by_nearest_points(collider, car, half_l, half_w)
+        assert collider._deepest(car, half_l, half_w) == want
+        touching += want is not None
+    assert 300 < touching < 2900  # both outcomes are exercised
+
+
+def test_kerb_crossings_count_wheels_that_changed_side():
+    from rain_core.collision import kerb_crossings
+
+    edge = layout.ROAD_HALF_WIDTH_M
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        before, after = np.zeros((4, 3)), np.zeros((4, 3))
+        before[:, 0] = rng.choice([-edge - 0.1, -edge, edge, edge + 0.1, 0.0], 4) + rng.normal(0.0, 0.05, 4)
+        after[:, 0] = rng.choice([-edge - 0.1, -edge, edge, edge + 0.1, 0.0], 4) + rng.normal(0.0, 0.05, 4)
+        was, now = np.abs(before[:, 0]) > edge, np.abs(after[:, 0]) > edge
+        assert kerb_crossings(before, after) == (int((now & ~was).sum()), int((was & ~now).sum()))
