@@ -146,11 +146,15 @@ class WindshieldEffect(Effect):
             tex.repeat_x = tex.repeat_y = False
             tex.write(np.zeros((FILM_CELLS, FILM_CELLS), np.float16).tobytes())
         self._coarse_index = 0
+        self._coarse_scratch = None  # (cell areas, ρ × them, float64, float32 and uint16 arrays) of _coarse_bits
         self._frame_copy = None
         self._last_time: float | None = None
         self._inputs = GlassInputs()
         self._dt = 0.0
         self._token = object()  # names this instance in the static uniform keys (update_for)
+        self._blades_memo = None  # (sim.blades, their u_blade bytes)
+        self._inputs_memo = None  # (what the last GlassInputs was made of, it): inputs_for
+        self._head_memo = (None, 0.0)  # (inputs, the head wind over the glass that dries the film, m/s)
 
     # --- resources ------------------------------------------------------------------------------------------
     @property
@@ -225,7 +229,9 @@ class WindshieldEffect(Effect):
         return frame.rain_rate_mm_h > 0.0 and scale > 0.0 and not self._sheltered(frame)
 
     def inputs_for(self, frame) -> GlassInputs:
-        """The GlassInputs of a frame (weather, ego motion, roof, settings)."""
+        """The GlassInputs of a frame (weather, ego motion, roof, settings). The last one is given again while
+        everything it is made of is the same (a parked car): not checked again, and the simulation's per-inputs
+        work is skipped for the same object."""
         settings = self._settings(frame)
         ego = frame.ego
         wind = np.zeros(3)
@@ -244,14 +250,25 @@ class WindshieldEffect(Effect):
                 wiper_sensitivity=w.auto_sensitivity,
                 blade_wear=w.blade_wear,
             )
-        return GlassInputs(
+        velocity = ego.velocity()
+        rotation = ego.model_matrix()[:3, :3]
+        sheltered = self._sheltered(frame)
+        # Compared as bytes: the same bits give the same checked inputs.
+        key = (frame.rain_rate_mm_h, velocity.tobytes(), wind.tobytes(), rotation.tobytes(), sheltered,
+               *kw.values())
+        memo = self._inputs_memo
+        if memo is not None and memo[0] == key:
+            return memo[1]
+        inputs = GlassInputs(
             rate_mm_h=frame.rain_rate_mm_h,
-            car_velocity_m_s=ego.velocity(),
+            car_velocity_m_s=velocity,
             wind_m_s=wind,
-            car_rotation=ego.model_matrix()[:3, :3],
-            sheltered=self._sheltered(frame),
+            car_rotation=rotation,
+            sheltered=sheltered,
             **kw,
         )
+        self._inputs_memo = (key, inputs)
+        return inputs
 
     def catch_up(self, frame, dt_s: float) -> None:
         """Step the simulation alone by ``dt_s`` (s) with the inputs of ``frame`` and count the time up to
@@ -300,9 +317,27 @@ class WindshieldEffect(Effect):
     def _texel_m(self) -> float:
         return max(self.glass.width_bottom, self.glass.height) / self.resolution
 
-    def _draw_splats(self, which: int, splats: np.ndarray, equation) -> None:
-        """Blend splats into the bound target with one instanced draw: FUNC_ADD accumulates water, MAX keeps the
-        tallest drop. ``which``: 0 the film deposits, 1 the drops and beads (each has its own buffer)."""
+    def _coarse_bits(self) -> np.ndarray:
+        """The CPU film's mean thickness per cell (µm, at most 6e4: half floats end at 65504) as float16 bits
+        (NumPy's float16 cast is slow), (FILM_CELLS, FILM_CELLS) uint16: ``film_thickness_m`` × 1e6 with the
+        same operations, in arrays kept from frame to frame."""
+        film = self.sim.film
+        if self._coarse_scratch is None or self._coarse_scratch[0] is not self.sim.cell_areas:
+            areas = self.sim.cell_areas
+            self._coarse_scratch = (areas, RHO_WATER * areas, np.empty(film.shape), np.empty(film.shape, np.float32),
+                                    np.empty(film.shape, np.uint16))
+        _, mass_per_m, f64, f32, bits16 = self._coarse_scratch
+        np.divide(film, mass_per_m, out=f64)
+        f64 *= 1e6
+        np.minimum(f64, 6e4, out=f64)
+        f32[...] = f64
+        bits = half_bits(f32, out=f32.view(np.uint32))
+        np.copyto(bits16, bits, casting="unsafe")
+        return bits16
+
+    def _draw_splats(self, which: int, splats: np.ndarray) -> None:
+        """Splats into the bound target with one instanced draw, blended as set by the caller. ``which``: 0 the
+        film deposits, 1 the drops and beads (each has its own buffer)."""
         if not len(splats):
             return
         data = splats if which else np.ascontiguousarray(splats, dtype=np.float32)  # drops: splats.DROP_ROW
@@ -312,13 +347,7 @@ class WindshieldEffect(Effect):
         buf.write(data)
         self.upload_bytes += data.nbytes
         self.splat_draws += 1
-        ctx = self.ctx
-        ctx.enable(moderngl.BLEND)
-        ctx.blend_func = (moderngl.ONE, moderngl.ONE)
-        ctx.blend_equation = equation
         self._splat_vaos[which].render(moderngl.TRIANGLES, vertices=6, instances=len(data))
-        ctx.blend_equation = moderngl.FUNC_ADD
-        ctx.disable(moderngl.BLEND)
 
     def _draw_water(self, rc) -> None:
         ctx = self.ctx
@@ -326,12 +355,11 @@ class WindshieldEffect(Effect):
         self._ensure_textures(int(settings.quality.windshield_resolution) if settings is not None else 512)
         n = self.resolution
         lod = math.log2(n / FILM_CELLS)
-        ctx.disable(moderngl.DEPTH_TEST)
-        ctx.disable(moderngl.CULL_FACE)
+        ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)  # one call: each costs
         # The CPU film now, as mean thickness (µm) per cell.
         cur = 1 - self._coarse_index
         # As float16 bits (half floats end at 65504; NumPy's float16 cast is slow).
-        coarse = half_bits(np.minimum(self.sim.film_thickness_m() * 1e6, 6e4).astype(np.float32)).astype(np.uint16)
+        coarse = self._coarse_bits()
         self._coarse[cur].write(coarse)
         self.upload_bytes = coarse.nbytes
         self.splat_draws = 0
@@ -341,7 +369,9 @@ class WindshieldEffect(Effect):
         src.color.use(_UNIT_A)
         prev.use(_UNIT_B)
         dt = self._dt
-        head = max(float(self._inputs.relative_air_local()[2]), 0.0) * 0.65
+        if self._head_memo[0] is not self._inputs:  # the same inputs while parked (inputs_for)
+            self._head_memo = (self._inputs, max(float(self._inputs.relative_air_local()[2]), 0.0) * 0.65)
+        head = self._head_memo[1]
         residue_um = RESIDUE_M * (1.0 + 4.0 * self._inputs.blade_wear) * 1e6
         sweeps = [(sweep[0], sweep[1], 1.0, residue_um) if sweep else (0.0, 0.0, 0.0, 0.0)
                   for sweep in self.sim.frame_sweeps()]
@@ -364,10 +394,12 @@ class WindshieldEffect(Effect):
             u_bead_dry=dt / BEAD_LIFE_S,
         ))
         dst.fbo.use()
-        ctx.disable(moderngl.BLEND)
         self._film_vao.render(moderngl.TRIANGLES, vertices=3)
-        # 2. deposits: wet trails and splash speckle, added.
-        self._draw_splats(0, film_splats(self.sim, self._texel_m()), moderngl.FUNC_ADD)
+        # 2. deposits: wet trails and splash speckle, added (the blending the splats of 2 and 3 share, set once).
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = (moderngl.ONE, moderngl.ONE)
+        ctx.blend_equation = moderngl.FUNC_ADD
+        self._draw_splats(0, film_splats(self.sim, self._texel_m()))
         dst.color.build_mipmaps()
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()
@@ -377,7 +409,10 @@ class WindshieldEffect(Effect):
         ))
         rows = self._drop_builder.rows(self.sim)
         self._drop_rows = len(rows)
-        self._draw_splats(1, rows, moderngl.MAX)
+        ctx.blend_equation = moderngl.MAX
+        self._draw_splats(1, rows)
+        ctx.blend_equation = moderngl.FUNC_ADD
+        ctx.disable(moderngl.BLEND)
         # 4. the water texture: thickness, film, slopes.
         self._drops.color.use(_UNIT_A)
         dst.color.use(_UNIT_B)
@@ -456,9 +491,8 @@ class WindshieldEffect(Effect):
         copy.depth.use(_UNIT_C)
         self._film[self._film_index].color.use(_UNIT_D)
         rc.hdr.fbo.use()
-        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
         rc.hdr.fbo.depth_mask = False
-        ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         self._glass_vao.render(moderngl.TRIANGLES)
         if self._drop_rows:
@@ -482,8 +516,13 @@ class WindshieldEffect(Effect):
         self._drop_vao.render(moderngl.TRIANGLES, vertices=6, instances=self._drop_rows)
 
     def _blades_bytes(self) -> bytes:
-        """The blades' pivots and radii (m) as the shaders' u_blade (vec4 each)."""
-        return np.array([(*b.pivot, b.r_inner_m, b.r_outer_m) for b in self.sim.blades], np.float32).tobytes()
+        """The blades' pivots and radii (m) as the shaders' u_blade (vec4 each); kept while the blades are the same
+        objects (they are frozen)."""
+        blades = self.sim.blades
+        if self._blades_memo is None or self._blades_memo[0] is not blades:
+            values = [(*b.pivot, b.r_inner_m, b.r_outer_m) for b in blades]
+            self._blades_memo = (blades, np.array(values, np.float32).tobytes())
+        return self._blades_memo[1]
 
     def release(self) -> None:
         """Free the textures, buffers and vertex arrays, and the programs when the shader library is our own."""

@@ -62,7 +62,6 @@ class DropRows:
         inner = np.array([b.r_inner_m for b in blades])[:, None]
         centre = inner + (np.arange(BEAD_BINS) + 0.5) * lengths
         self._ends = np.stack([centre - 0.5 * lengths, centre + 0.5 * lengths], axis=-1)[:, :, :, None]
-        self._pivots = np.array([b.pivot for b in blades], np.float64)[:, None, None, :]
 
     def rows(self, sim) -> np.ndarray:
         """The rows (n,) ``DROP_ROW`` of ``sim``'s drops, then its beads' lines (the bins with water)."""
@@ -95,9 +94,13 @@ class DropRows:
             # stroke's direction): pivot + ahead·normal + r·direction for each bin's two ends.
             ahead = 0.004 if (sim.wipers.phase or 0.0) < 0.5 else -0.004
             progress = sim.wipers.progress
-            cs = np.array([(math.cos(a), math.sin(a)) for a in (float(b.angle(progress)) for b in sim.blades)])
-            base = self._pivots + ahead * np.stack([-cs[:, 1], cs[:, 0]], axis=-1)[:, None, None, :]
-            ends = (self._ends * cs[:, None, None, :] + base).reshape(-1, 4)  # (s0, t0, s1, t1) a bin
+            frames = []  # per blade: its direction, and its pivot moved ahead along its normal
+            for blade in sim.blades:
+                angle = float(blade.angle(progress))
+                c, s = math.cos(angle), math.sin(angle)
+                frames.append(((c, s), (blade.pivot[0] - ahead * s, blade.pivot[1] + ahead * c)))
+            frames = np.array(frames)[:, None, None]  # (blades, 1, 1, 2, 2)
+            ends = (self._ends * frames[..., 0, :] + frames[..., 1, :]).reshape(-1, 4)  # (s0, t0, s1, t1) a bin
             out[n:total, 0:4] = ends[lines]
             np.negative(w[lines], out=out[n:total, 4])
         return out[:total].view(DROP_ROW)[:, 0]
@@ -116,7 +119,7 @@ def film_splats(sim, texel_m: float) -> np.ndarray:
     trails = sim.frame_trails()
     impacts = sim.frame_impacts()
     if len(impacts):
-        impacts = impacts[impacts[:, 2] >= 0.5 * texel_m][:4096]
+        impacts = impacts.compress(impacts[:, 2] >= 0.5 * texel_m, axis=0)[:4096]  # (a boolean index is slower)
     k = len(trails)
     out = np.zeros((k + len(impacts), 8), np.float32)  # written in place: the rows the GPU reads
     if k:

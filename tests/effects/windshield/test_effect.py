@@ -253,6 +253,7 @@ def test_rarely_changing_uniforms_follow_what_they_are_made_of(gl_ctx, shaders):
     frame()
     assert effect.normals_prog["u_texel"].value == pytest.approx((1 / 256, 1 / 256))
     assert effect.film_prog["u_texel"].value == pytest.approx((1 / 256, 1 / 256))
+    assert effect.drop_splat_prog["u_min_radius"].value == pytest.approx(0.75 * effect._texel_m(), rel=1e-6)
     assert effect.glass_prog["u_drop_lod"].value == pytest.approx(0.5)  # the eye's blur under a texel
     pixel = effect.drop_prog["u_pixel_rad"].value
     scene.renderer.resize((320, 540))
@@ -271,3 +272,82 @@ def test_rarely_changing_uniforms_follow_what_they_are_made_of(gl_ctx, shaders):
         assert effect.film_prog["u_seed"].value == 3 and effect.drop_prog["u_pixel_rad"].value == pytest.approx(pixel)
         scene2.release()
     scene.release()
+
+
+def test_inputs_are_made_again_only_when_what_they_are_made_of_changes(gl_ctx, shaders):
+    # inputs_for gives the last GlassInputs again while the frame's weather, motion, roof and settings are the
+    # same (a parked car): the very object, so the simulation skips its per-inputs work. Any change makes new ones,
+    # equal to inputs made from scratch.
+    from dataclasses import fields
+    from types import SimpleNamespace
+
+    s = Settings()
+    s.rain.rate_mm_h = 8.0
+    effect = WindshieldEffect(gl_ctx, s, seed=2, shaders=shaders)
+    scene = _scene(gl_ctx, s, effect)
+    scene.step(1 / 30, _Brake)
+    first = effect.inputs_for(scene.frame())
+    assert effect.inputs_for(scene.frame()) is first
+
+    def fresh(frame):
+        effect._inputs_memo = None
+        return effect.inputs_for(frame)
+
+    def same(a, b):
+        return all(np.array_equal(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
+
+    def heavier(frame):
+        frame.weather = SimpleNamespace(rate_mm_h=20.0, wind=frame.weather.wind)
+
+    changes = (lambda f: set_value(s, "wipers.mode", "high"), heavier,
+               lambda f: setattr(scene.ego, "speed_m_s", 5.0), lambda f: setattr(scene.ego, "yaw", 0.3))
+    frame = scene.frame()
+    for change in changes:
+        before = effect.inputs_for(frame)
+        change(frame)
+        now = effect.inputs_for(frame)
+        assert now is not before and not same(now, before)
+        assert same(now, fresh(frame))
+    scene.release()
+
+
+def test_drop_rows_are_the_drops_as_they_are_and_the_beads_along_the_blades():
+    # The drop buffer's rows (splats.DropRows): a drop's (s, t, vs, vt) and radius as float32, read from the fast
+    # path's drop array or through the public arrays alike; a bead bin with water is a line from one end of its
+    # bin to the other, 4 mm ahead of the blade (WindshieldSimReference.bead_bin_centres), of minus its radius.
+    from rain_core.effects.windshield.constants import BEAD_BINS
+    from rain_core.effects.windshield.inputs import GlassInputs
+    from rain_core.effects.windshield.reference import WindshieldSimReference
+    from rain_core.effects.windshield.sim import WindshieldSim
+    from rain_core.effects.windshield.splats import DROP_ROW, DropRows
+
+    sim = WindshieldSim(seed=4)
+    inputs = GlassInputs.for_speed(60.0, 20.0, wiper_mode="high")
+    for _ in range(40):
+        sim.step(1 / 30, inputs)
+    assert sim.beads.any() and (sim.vel != 0).any()
+    builder = DropRows()
+    rows = builder.rows(sim).copy()
+    assert rows.dtype == DROP_ROW and len(rows) == sim.count + int((sim.beads > 0).sum())
+    n = sim.count
+    assert np.array_equal(rows["seg"][:n], np.hstack([sim.pos, sim.vel]).astype(np.float32))
+    assert np.array_equal(rows["radius"][:n], sim.radius().astype(np.float32))
+    ref = WindshieldSimReference(seed=4)
+    ref.pos, ref.vel, ref.mass = sim.pos.copy(), sim.vel.copy(), sim.mass.copy()
+    ref.beads, ref.wipers, ref.blades = sim.beads, sim.wipers, sim.blades
+    public = DropRows().rows(ref)  # the public arrays give the same rows (the radius made anew from the mass)
+    assert np.array_equal(public["seg"], rows["seg"])
+    np.testing.assert_allclose(public["radius"], rows["radius"], rtol=1e-6)
+    ahead = 0.004 if (sim.wipers.phase or 0.0) < 0.5 else -0.004
+    row = n
+    for b, blade in enumerate(sim.blades):
+        angle = float(blade.angle(sim.wipers.progress))
+        centres = sim.bead_bin_centres(blade, angle, ahead=ahead)
+        half = np.array([math.cos(angle), math.sin(angle)]) * 0.5 * (blade.r_outer_m - blade.r_inner_m) / BEAD_BINS
+        keep = (sim.beads[b] > 0).nonzero()[0]
+        lines = rows[row : row + len(keep)]
+        np.testing.assert_allclose(lines["seg"][:, 0:2], centres[keep] - half, atol=1e-6)
+        np.testing.assert_allclose(lines["seg"][:, 2:4], centres[keep] + half, atol=1e-6)
+        assert np.all(lines["radius"] < 0)
+        row += len(keep)
+    assert len(builder.rows(sim)) == len(rows)  # the kept array, rewritten
