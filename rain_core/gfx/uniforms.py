@@ -45,20 +45,29 @@ class OwnedUniforms:
     program), skipping a write whose value equals the one this object wrote last: most of them do not change
     from frame to frame. Anything else writing the same names in the same program would make it skip wrongly."""
 
-    __slots__ = ("_program", "_last", "_keys")
+    __slots__ = ("_program", "_last", "_keys", "_frozen")
 
     def __init__(self, program):
         self._program = weakref.ref(program)  # the cache below must not keep a program alive
         self._last: dict[str, object] = {}
         self._keys: dict[str, object] = {}  # group → the key its values were last written for (update_for)
+        self._frozen: dict[str, np.ndarray | None] = {}  # name → the read-only array its last value came from
 
     @property
     def program(self):
         return self._program()
 
     def set(self, name: str, value) -> None:
+        """Write ``name`` unless its value equals the last one written; an ndarray is compared as its float32
+        bytes, and the same read-only array object as last time is known equal without converting it."""
+        frozen = None
         if isinstance(value, np.ndarray):
+            if not value.flags.writeable:
+                if self._frozen.get(name) is value:
+                    return
+                frozen = value
             value = np.ascontiguousarray(value, dtype=np.float32).tobytes()
+        self._frozen[name] = frozen
         last = self._last.get(name, _MISSING)
         if type(last) is type(value) and last == value:
             return

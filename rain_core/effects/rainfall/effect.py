@@ -6,9 +6,7 @@ and the road's height map for the splash kinds (``units.RAINFALL_ROAD_HEIGHT``).
 
 from __future__ import annotations
 
-import itertools
 import math
-import weakref
 
 import moderngl
 import numpy as np
@@ -37,7 +35,7 @@ from rain_core.effects.rainfall.vehicle_fate import vehicle_uniforms
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import set_uniforms
+from rain_core.gfx.uniforms import owned_uniforms, set_uniform, set_uniforms
 
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
@@ -48,10 +46,7 @@ _OWN_UNIFORMS = ("u_box_", "u_veh_", "u_occ_", "u_splash_", "u_shape_", "u_thin"
                  "u_drop_table", "u_road_", "u_time_", "u_epoch", "u_wind", "u_turb_eps", "u_period_world",
                  "u_ground_y", "u_width_", "u_alpha_max", "u_alpha_spread", "u_stretch_max", "u_crown_per_d",
                  "u_cam_vel", "u_exposure_s", "u_near", "u_rain_env", "u_brightness", "u_focal_px")
-# Per program (programs may be shared by effects through a ShaderLibrary): (the effect that wrote last, the
-# program (weakly), its last written values, name → (the program's uniform or None, whether it is one of ours)).
-_WRITTEN: dict[int, tuple] = {}
-_TOKENS = itertools.count()  # a unique token per effect (an id() can be reused once an effect is collected)
+_IS_OWN: dict[str, bool] = {}  # uniform name → whether it starts with one of _OWN_UNIFORMS
 
 
 class RainfallEffect(Effect):
@@ -96,7 +91,6 @@ class RainfallEffect(Effect):
         self._occ_geom: dict[str, tuple] = {}
         self._road_extent = (1.0, 1.0)
         self._probe = None
-        self._token = next(_TOKENS)
         self._prev_cam: tuple[np.ndarray, float] | None = None
         self.camera_velocity_m_s = np.zeros(3)
         self.last_update: RainUpdate | None = None
@@ -319,34 +313,18 @@ class RainfallEffect(Effect):
         }
 
     def _set(self, prog, values: dict) -> None:
-        """set_uniforms, skipping own uniforms whose value is the one last written to this program."""
-        owner, ref, cache, slots = _WRITTEN.get(id(prog), (None, None, None, None))
-        if owner != self._token or ref() is not prog:  # another writer, or a new program under a reused id
-            cache, slots = {}, {}
-            _WRITTEN[id(prog)] = (self._token, weakref.ref(prog), cache, slots)
+        """set_uniforms, skipping own uniforms whose value is the one last written to this program (the program's
+        OwnedUniforms: shared by every effect drawing with it); others (lights, wetness, …) may also be written by
+        rc.set_frame_uniforms, so they are always written."""
+        owned = owned_uniforms(prog)
         for name, value in values.items():
-            slot = slots.get(name)
-            if slot is None:  # resolved once per program: its uniform (None: not declared) and whether it is ours
-                slot = slots[name] = (prog.get(name, None), name.startswith(_OWN_UNIFORMS))
-            uniform, own = slot
-            if uniform is None:  # the program does not declare it: nothing to convert or write
-                continue
+            own = _IS_OWN.get(name)
+            if own is None:
+                own = _IS_OWN[name] = name.startswith(_OWN_UNIFORMS)
             if own:
-                # The same read-only array as last time (the vehicles' pieces) is the same value: no conversion.
-                frozen = isinstance(value, np.ndarray) and not value.flags.writeable
-                if frozen and cache.get(name + "#array") is value:
-                    continue
-                cache[name + "#array"] = value if frozen else None
-            if isinstance(value, np.ndarray):
-                value = np.ascontiguousarray(value, dtype=np.float32).tobytes()
-            if own:
-                if cache.get(name) == value:
-                    continue
-                cache[name] = value
-            if isinstance(value, bytes):
-                uniform.write(value)
+                owned.set(name, value)
             else:
-                uniform.value = value
+                set_uniform(prog, name, value)
 
     def render(self, stage: str, rc) -> None:
         upd = self.last_update
@@ -427,8 +405,6 @@ class RainfallEffect(Effect):
     def release(self) -> None:
         """Free the textures and vertex arrays, and the programs when the shader library is our own (a shared
         library's owner releases it: its programs serve every effect that asks for them)."""
-        for prog in (self.streak_prog, self.splash_prog):
-            _WRITTEN.pop(id(prog), None)
         for obj in (self._table_tex, *self._static_tex.values()):
             if obj is not None:
                 obj.release()

@@ -105,6 +105,9 @@ class _Uniform:
 
 
 class _Program(dict):
+    __hash__ = object.__hash__  # a program is its own key in owned_uniforms' weak table
+    __eq__ = object.__eq__
+
     def __init__(self, names):
         self.log = []
         super().__init__({n: _Uniform(self.log, n) for n in names})
@@ -114,8 +117,7 @@ def test_set_skips_only_values_equal_to_the_last_written():
     """The effect's uniform cache: an unchanged value (or the same read-only array) is not written again; a
     changed value, a writeable array edited in place, or another value in between is."""
     effect = RainfallEffect.__new__(RainfallEffect)
-    effect._token = object()
-    prog = _Program(["u_box_lo", "u_veh_lo"])
+    prog = _Program(["u_box_lo", "u_veh_lo", "u_light_count"])
     frozen = np.arange(8.0)
     frozen.flags.writeable = False
     live = np.arange(3.0)
@@ -130,3 +132,9 @@ def test_set_skips_only_values_equal_to_the_last_written():
     effect._set(prog, {"u_veh_lo": frozen})  # back to the frozen array after another value: written
     assert [n for n, _ in prog.log] == ["u_veh_lo", "u_box_lo", "u_box_lo", "u_veh_lo", "u_veh_lo"]
     assert prog.log[-1][1] == frozen.astype(np.float32).tobytes()
+    # Another effect drawing with the same program shares its cache; a name others may also write (the frame's
+    # light count) is written every time.
+    second = RainfallEffect.__new__(RainfallEffect)
+    second._set(prog, {"u_veh_lo": frozen, "u_light_count": 3})
+    effect._set(prog, {"u_light_count": 3})
+    assert [n for n, _ in prog.log[5:]] == ["u_light_count", "u_light_count"]
