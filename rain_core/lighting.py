@@ -130,22 +130,41 @@ class LightSet:
     ``position`` (L, 3) m, ``direction`` (L, 3), ``intensity_cd`` (L,), ``color`` (L, 3), ``cos_outer``,
     ``cos_inner``, ``range_m`` (L,), ``low_beam`` (L,) bool."""
 
-    __slots__ = ("position", "direction", "intensity_cd", "color", "cos_outer", "cos_inner", "range_m", "low_beam")
+    __slots__ = ("position", "direction", "intensity_cd", "color", "cos_outer", "cos_inner", "range_m", "low_beam",
+                 "_rows")
 
     def __init__(self, position, direction, intensity_cd, color, cos_outer, cos_inner, range_m, low_beam):
         self.position, self.direction, self.intensity_cd, self.color = position, direction, intensity_cd, color
         self.cos_outer, self.cos_inner, self.range_m, self.low_beam = cos_outer, cos_inner, range_m, low_beam
+        self._rows = None
+
+    def packed_rows(self) -> np.ndarray:
+        """(3, L, 4) float32: every light as ``pack_lights`` writes it (pos + range, dir + cos_outer, colour·cd +
+        cos_inner), made once (the arrays are not edited after construction)."""
+        if self._rows is None:
+            rows = np.empty((3, len(self), 4), np.float32)
+            rows[0, :, :3] = self.position
+            rows[0, :, 3] = np.where(self.low_beam, -self.range_m, self.range_m)
+            rows[1, :, :3] = self.direction
+            rows[1, :, 3] = self.cos_outer
+            rows[2, :, :3] = self.color * self.intensity_cd[:, None]
+            rows[2, :, 3] = self.cos_inner
+            self._rows = rows
+        return self._rows
 
     def __len__(self) -> int:
         return len(self.intensity_cd)
 
     def take(self, index: np.ndarray) -> LightSet:
-        return LightSet(*(getattr(self, name)[index] for name in LightSet.__slots__))
+        return LightSet(*(getattr(self, name)[index] for name in _FIELDS))
 
     def to_lights(self) -> list[Light]:
         return [Light(self.position[i].copy(), self.direction[i].copy(), float(self.intensity_cd[i]),
                       self.color[i].copy(), float(self.cos_outer[i]), float(self.cos_inner[i]),
                       float(self.range_m[i]), bool(self.low_beam[i])) for i in range(len(self))]
+
+
+_FIELDS = LightSet.__slots__[:-1]  # the per-light arrays, in the constructor's order
 
 
 def _kind(position, direction, cd, color, cone, low_beam: bool) -> LightSet:
@@ -244,7 +263,7 @@ def light_candidates(lamps, vehicles, camera_z_m: float, lighting: Lighting, shi
     if not parts:
         return _kind(np.zeros((0, 3)), np.zeros((0, 3)), 0.0, (0.0, 0.0, 0.0), (-1.0, -1.0, 0.0), False)
     return parts[0] if len(parts) == 1 else LightSet(
-        *(np.concatenate([getattr(part, name) for part in parts]) for name in LightSet.__slots__))
+        *(np.concatenate([getattr(part, name) for part in parts]) for name in _FIELDS))
 
 
 def concat_lights(sets) -> LightSet:
@@ -252,7 +271,7 @@ def concat_lights(sets) -> LightSet:
     sets = list(sets)
     if len(sets) == 1:
         return sets[0]
-    return LightSet(*(np.concatenate([getattr(s, name) for s in sets]) for name in LightSet.__slots__))
+    return LightSet(*(np.concatenate([getattr(s, name) for s in sets]) for name in _FIELDS))
 
 
 def wrap_lights(lights: LightSet, shift_z: float) -> LightSet:
@@ -261,7 +280,7 @@ def wrap_lights(lights: LightSet, shift_z: float) -> LightSet:
         return lights
     position = np.array(lights.position, dtype=np.float64)
     position[:, 2] -= shift_z
-    return LightSet(position, *(getattr(lights, name) for name in LightSet.__slots__[1:]))
+    return LightSet(position, *(getattr(lights, name) for name in _FIELDS[1:]))
 
 
 def nearest_lights(lights: LightSet, camera_position_wrapped, max_lights: int = MAX_LIGHTS) -> LightSet:
@@ -269,6 +288,17 @@ def nearest_lights(lights: LightSet, camera_position_wrapped, max_lights: int = 
     cam = np.asarray(camera_position_wrapped, dtype=np.float64)
     order = np.argsort(np.sum((lights.position - cam) ** 2, axis=1), kind="stable")[:max_lights]
     return lights.take(order)
+
+
+def pack_nearest(lights: LightSet, camera_position_wrapped, max_lights: int = MAX_LIGHTS) -> tuple:
+    """``pack_lights(nearest_lights(lights, camera, max_lights), max_lights)``, the same bytes, gathered from the
+    set's rows packed once (``packed_rows``): the renderer packs each view's lights every frame (main and road
+    mirror) from one candidate set."""
+    cam = np.asarray(camera_position_wrapped, dtype=np.float64)
+    order = np.argsort(np.sum((lights.position - cam) ** 2, axis=1), kind="stable")[:max_lights]
+    packed = np.zeros((3, max_lights, 4), np.float32)
+    packed[:, : len(order)] = lights.packed_rows()[:, order]
+    return packed[0].tobytes(), packed[1].tobytes(), packed[2].tobytes(), len(order)
 
 
 def light_set_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift_z: float, period_m: float,

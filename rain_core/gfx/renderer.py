@@ -29,7 +29,14 @@ from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
 from rain_core.gfx.targets import RenderTarget, float_target
 from rain_core.gfx.timing import PassTimer
-from rain_core.lighting import concat_lights, light_candidates, nearest_lights, pack_lights, wrap_lights
+from rain_core.lighting import (
+    concat_lights,
+    light_candidates,
+    nearest_lights,
+    pack_lights,
+    pack_nearest,
+    wrap_lights,
+)
 from rain_core.physics import CLEAR_AIR_EXTINCTION_PER_M
 
 
@@ -135,13 +142,16 @@ class Renderer:
         if projection is None:
             projection = self._projection(camera)
         cam = np.asarray(camera.position, dtype=np.float64) - np.array([0.0, 0.0, shift_z])
-        lights = nearest_lights(self._light_candidates(frame, shift_z, float(cam[2])), cam)
+        candidates = self._light_candidates(frame, shift_z, float(cam[2]))
         if self._effect_lights is not None:  # the active effects' own lights (a flash) lead the list
-            lights = concat_lights([wrap_lights(self._effect_lights, shift_z), lights])
+            packed = pack_lights(concat_lights([wrap_lights(self._effect_lights, shift_z),
+                                                nearest_lights(candidates, cam)]))
+        else:
+            packed = pack_nearest(candidates, cam)  # pack_lights(nearest_lights(…)) from rows packed once
         if "uniforms" not in fields:
             fields["uniforms"] = self._default_uniforms(frame.lighting)
         return RenderContext(self.ctx, self.shaders, frame, fbo_target or self.hdr, self.size, shift_z, view,
-                             projection, pack_lights(lights), self, frame_blocks=self.frame_blocks, **fields)
+                             projection, packed, self, frame_blocks=self.frame_blocks, **fields)
 
     def _projection(self, camera) -> np.ndarray:
         """camera.projection_matrix at this frame's aspect, kept while the lens and the size stay (read-only)."""

@@ -16,6 +16,7 @@ from rain_core.lighting import (
     lights_for_frame,
     nearest_lights,
     pack_lights,
+    pack_nearest,
 )
 from rain_core.scene import Scene
 from rain_core.settings import Settings, set_value
@@ -76,6 +77,13 @@ def test_nearest_of_the_candidates_are_the_lights_of_the_frame(gl_ctx):
                                                      shift, layout.PERIOD_M, True))
             assert packed == pack_lights(lights_for_frame(scene.world.lamps, frame.vehicles, cam, frame.lighting,
                                                           shift, layout.PERIOD_M, True))
+            # The renderer's path: the nearest gathered from rows packed once per candidate set, asked twice
+            # (main and mirror view): the same bytes; also with fewer candidates than slots and with none.
+            assert pack_nearest(cand, wrapped) == pack_nearest(cand, wrapped) == pack_lights(chosen)
+            few = cand.take(np.arange(5))
+            assert pack_nearest(few, wrapped) == pack_lights(nearest_lights(few, wrapped))
+            none = cand.take(np.arange(0))
+            assert pack_nearest(none, wrapped) == pack_lights(none)
     finally:
         scene.release()
 
