@@ -84,7 +84,7 @@ class SprayEffect(Effect):
     def observe(self, frame) -> None:
         """The water model (and so the hydroplaning risk) is evaluated every frame, running or not; switched off,
         the parcels in flight are dropped and the emitter forgets the last time it saw."""
-        self.emitter.observe(frame)
+        self.emitter.observe_only(frame)
         if not self._switched_on(self._section(frame)):
             self.emitter.pause()
 

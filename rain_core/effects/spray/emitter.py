@@ -44,6 +44,7 @@ from rain_core.effects.spray.wheels import (
     check_vehicles,
     gather_wheels,
     road_film_depth_fn,
+    wheel_list,
     wheel_water,
 )
 from rain_core.water_film import WET_FILM_MM
@@ -114,7 +115,8 @@ class SprayEmitter:
         # lookup (with the wheels', in observe) decides.
         self._candidates = np.zeros((0, 4))
         self._landed = np.zeros((0, 3))
-        self.wheels: list[WheelWater] = []
+        self._wheels: list[WheelWater] | None = []  # None: made from the geometry when asked (wheels)
+        self._vehicles: list = []  # the last observed frame's
         self.geometry: WheelGeometry | None = None
         self._wheels_time: float | None = None
         self.stats = SpawnStats()
@@ -179,29 +181,43 @@ class SprayEmitter:
 
         return depth
 
+    @property
+    def wheels(self) -> list[WheelWater]:
+        """The last observed frame's WheelWater per vehicle (the fast path makes them on first use: the emitter
+        itself reads the geometry's arrays)."""
+        if self._wheels is None:
+            self._wheels = wheel_list(self.geometry)
+        return self._wheels
+
     def observe(self, frame) -> list[WheelWater]:
         """Evaluate the water model at every vehicle's wheels (cached per frame time). The vehicles' state is
         checked here, the frame's boundary: ValueError naming the vehicle and field if it is not finite."""
-        if self._wheels_time != frame.time_s or len(self.wheels) != len(frame.vehicles):
+        self.observe_only(frame)
+        return self.wheels
+
+    def observe_only(self, frame) -> None:
+        """:meth:`observe` without making the per-vehicle list (the effect's per-frame call)."""
+        if self._wheels_time != frame.time_s or len(self._vehicles) != len(frame.vehicles):
             fn = self.depth_function(frame)
             vehicles = list(frame.vehicles)
             state = check_vehicles(vehicles)
             if self.reference:
-                self.wheels = [wheel_water(v, fn) for v in vehicles]
-                self.geometry = WheelGeometry(self.wheels) if vehicles else None
+                self._wheels = [wheel_water(v, fn) for v in vehicles]
+                self.geometry = WheelGeometry(self._wheels) if vehicles else None
             else:
                 # One film lookup for the wheels and the last frame's road landings (see _spawn_parcels).
                 cand, self._candidates = self._candidates, np.zeros((0, 4))
-                self.wheels, self.geometry = gather_wheels(vehicles, fn, state, extra_xz=cand[:, 1:3])
+                self._wheels, self.geometry = gather_wheels(vehicles, fn, state, extra_xz=cand[:, 1:3],
+                                                            build_wheels=False)
                 wet = self.geometry.extra_depth_mm >= STANDING_WATER_MM
                 if wet.any():
                     self._pending = np.concatenate([self._pending, cand[wet]])
+            self._vehicles = vehicles
             self._wheels_time = frame.time_s
-        return self.wheels
 
     def throwing(self) -> bool:
         """Whether any wheel of the last observed frame throws water."""
-        flag = getattr(self.geometry, "throwing", None) if self.wheels else False  # gather_wheels' answer
+        flag = getattr(self.geometry, "throwing", None) if self._vehicles else False  # gather_wheels' answer
         if flag is not None:
             return flag
         return any(float(w.budget.thrown.sum()) > 0.0 for w in self.wheels)
@@ -245,16 +261,17 @@ class SprayEmitter:
             self._rebase(t)
         now = self.clock(t)
         self._landed = np.zeros((0, 3))
-        wheels = self.observe(frame)
-        live_ids = {id(w.vehicle) for w in wheels}
+        self.observe_only(frame)
+        vehicles = self._vehicles
+        live_ids = {id(v) for v in vehicles}
         if len(self._acc) != len(live_ids) or not live_ids.issuperset(self._acc):
             self._acc = {k: a for k, a in self._acc.items() if k in live_ids}
             st = self.stats  # vehicles gone: their wheels' totals go too (ids are reused)
             st.wheel_thrown_kg = {k: a for k, a in st.wheel_thrown_kg.items() if k in live_ids}
             st.wheel_emitted_kg = {k: a for k, a in st.wheel_emitted_kg.items() if k in live_ids}
         self.stats.last_parcels = self.stats.last_mist = 0
-        if elapsed > 0.0 and self.budget > 0 and wheels:
-            self._spawn(frame, wheels, elapsed, now, wind)
+        if elapsed > 0.0 and self.budget > 0 and vehicles:
+            self._spawn(frame, vehicles, elapsed, now, wind)
         self._pop_landings(now)
 
     def _rebase(self, t: float) -> None:
@@ -284,14 +301,14 @@ class SprayEmitter:
             self._pending = self._pending[~done]
 
     # --- spawning -----------------------------------------------------------------------------------------
-    def _spawn(self, frame, wheels: list[WheelWater], elapsed: float, now: float, wind: np.ndarray) -> None:
+    def _spawn(self, frame, vehicles: list, elapsed: float, now: float, wind: np.ndarray) -> None:
         rng = self.rng
         geo = self.geometry
         st = self.stats
-        rates = geo.buckets.reshape(len(wheels), 4, len(BUCKETS)) * self.strength  # (V, 4, 6) kg/s
+        rates = geo.buckets.reshape(len(vehicles), 4, len(BUCKETS)) * self.strength  # (V, 4, 6) kg/s
         st.available_kg += float(geo.available.sum()) * elapsed
         st.thrown_kg += float(rates.sum()) * elapsed
-        acc, wheel_thrown_kg, wheel_emitted_kg = self._book(wheels)
+        acc, wheel_thrown_kg, wheel_emitted_kg = self._book(vehicles)
         acc += rates * elapsed
         counts = np.zeros(acc.shape, dtype=np.int64)
         for ring, buckets in ((0, slice(0, 5)), (1, slice(5, 6))):
@@ -330,11 +347,11 @@ class SprayEmitter:
             spawn_parcels_fast(self, frame, geo, int(bounds[5]), (vi * 4 + wi).repeat(reps), bounds, mass,
                                now - age_now, age_now, now, wind, body_hit_time_fast)
 
-    def _book(self, wheels: list[WheelWater]):
+    def _book(self, vehicles: list):
         """The per-wheel accounts of this frame's vehicles, (V, 4, 6) kg not yet emitted and (V, 4) kg thrown and
         emitted in total, as arrays updated in place: ``_acc`` and the stats' per-vehicle dicts hold views of
         their rows. Rebuilt from those dicts only when the vehicles (or the stats object) change."""
-        keys = tuple(id(w.vehicle) for w in wheels)
+        keys = tuple(id(v) for v in vehicles)
         st = self.stats
         if (self._book_key is None or self._book_key[0] != keys or self._book_key[1] is not st
                 or self._book_key[2] is not st.wheel_thrown_kg or self._book_key[3] is not st.wheel_emitted_kg

@@ -118,6 +118,7 @@ class WheelGeometry:
     wheel_velocity: np.ndarray  # (W, 3) m/s, the body centre's velocity per wheel
     extra_depth_mm: np.ndarray  # film depth (mm) at the extra points looked up with the wheels (gather_wheels)
     buckets: np.ndarray  # (W, 6) kg/s, the water budget's buckets of every wheel
+    wheel_parts: tuple  # what wheel_list makes the per-vehicle WheelWater of (gather_wheels)
     available: np.ndarray  # (W,) kg/s, M_w of every wheel
     throwing: bool  # whether any wheel throws water (gather_wheels)
 
@@ -210,10 +211,9 @@ def check_vehicles(vehicles) -> np.ndarray:
     beyond ±MAX_VEHICLE_SPEED_M_S."""
     state = np.array([(v.position[0], v.position[2], v.yaw, v.speed_m_s, getattr(v, "yaw_rate_rad_s", 0.0),
                        v.position[1]) for v in vehicles], dtype=np.float64).reshape(-1, 6)
-    with np.errstate(invalid="ignore"):
-        bad = ~(np.abs(state) <= _STATE_LIMITS)  # NaN compares False: caught here too
-    if bad.any():
-        i, j = (int(k) for k in np.argwhere(bad)[0])
+    ok = np.abs(state) <= _STATE_LIMITS  # NaN compares False (without a warning): caught here too
+    if not ok.all():
+        i, j = (int(k) for k in np.argwhere(~ok)[0])
         name = ("position[0]", "position[2]", "yaw", "speed_m_s", "yaw_rate_rad_s", "position[1]")[j]
         limit = {0: f"within ±{MAX_POSITION_M:g} m", 1: f"within ±{MAX_POSITION_M:g} m",
                  3: f"within ±{MAX_VEHICLE_SPEED_M_S:g} m/s", 4: f"within ±{MAX_VEHICLE_SPEED_M_S / 10:g} rad/s",
@@ -223,13 +223,16 @@ def check_vehicles(vehicles) -> np.ndarray:
     return state
 
 
-def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None) -> tuple[list[WheelWater], WheelGeometry]:
+def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None,
+                  build_wheels: bool = True) -> tuple[list[WheelWater] | None, WheelGeometry]:
     """The water model at every wheel of every vehicle in one pass (one film lookup for all wheels), and the
     launch geometry: what :func:`wheel_water` and ``WheelGeometry(wheels)`` give vehicle by vehicle (the
     reference; tests compare them). The rigid-body kinematics are ``Vehicle``'s (position, yaw, speed, yaw rate
     about the rear axle), evaluated for all vehicles at once. ``state``: :func:`check_vehicles`' array, if
     already made. depth_fn(x, z) → mm; a NaN depth counts as dry, a negative one as 0. ``extra_xz`` (k, 2) m:
-    more points looked up in the same call, their depths (mm, unsanitised) in ``geo.extra_depth_mm``."""
+    more points looked up in the same call, their depths (mm, unsanitised) in ``geo.extra_depth_mm``.
+    ``build_wheels=False``: the per-vehicle list is not made (None in its place); :func:`wheel_list` makes it from
+    the geometry when it is asked for."""
     n = len(vehicles)
     state = check_vehicles(vehicles) if state is None else state
     fleet = _fleet(vehicles)
@@ -299,9 +302,16 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None) -> tuple[list[W
     risk = hydroplaning_risk_unchecked(signed, depth_m, fleet.pressure, fleet.planing_speed)
     geo.buckets, geo.available = budget.buckets, budget.available
     geo.throwing = bool((budget.thrown > 0.0).any())  # thrown ≥ 0: any wheel's total > 0
+    geo.wheel_parts = (list(vehicles), signed, depth, budget, risk)
+    return (wheel_list(geo) if build_wheels else None), geo
+
+
+def wheel_list(geo: WheelGeometry) -> list[WheelWater]:
+    """The per-vehicle ``WheelWater`` of a geometry made by :func:`gather_wheels` (views of its arrays)."""
+    vehicles, signed, depth, budget, risk = geo.wheel_parts
     wheels = []
     for i, v in enumerate(vehicles):
         k = slice(4 * i, 4 * i + 4)
         b = WaterBudget(budget.available[k], budget.allocated[k], budget.thrown[k], budget.buckets[k])
-        wheels.append(WheelWater(v, contacts[k], signed[k], geo.width[k], depth[k], b, risk[k]))
-    return wheels, geo
+        wheels.append(WheelWater(v, geo.contacts[k], signed[k], geo.width[k], depth[k], b, risk[k]))
+    return wheels
