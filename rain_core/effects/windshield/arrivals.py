@@ -27,6 +27,8 @@ class ArrivalTable:
             self.d_slope = np.diff(_D_GRID_MM) / np.diff(cdf)  # inf on flat stretches: never selected
         self.c_slope = np.diff(closing) / np.diff(_D_GRID_MM)
         self.closing = closing
+        # What _interpolate reads of interval j, as one row: one gather instead of six.
+        self._coef = np.stack([self.d_slope, cdf[:-1], _D_GRID_MM[:-1], self.c_slope, closing[:-1]], axis=1)
         self.first = None
         self._searched = False  # a sample searched already: the next one builds the table
 
@@ -57,12 +59,18 @@ class ArrivalTable:
         for _ in range(self.steps):
             j += x >= self.cdf_next[j]
         wide = self.span[k] > self.steps
-        if wide.any():  # the far tail of the law, where one bucket spans many grid intervals
+        if np.count_nonzero(wide):  # the far tail of the law, where one bucket spans many grid intervals
             j[wide] = self.cdf.searchsorted(x[wide], "right") - 1
         return self._interpolate(j, x)
 
     def _interpolate(self, j: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        j = np.minimum(j, len(self.cdf) - 2)
-        d = self.d_slope[j] * (x - self.cdf[j]) + _D_GRID_MM[j]
-        closing = self.c_slope[j] * (d - _D_GRID_MM[j]) + self.closing[j]
+        np.minimum(j, len(self.cdf) - 2, out=j)
+        r = self._coef.take(j, axis=0)  # d_slope, cdf, D, c_slope, closing of each sample's interval
+        d_j = r[:, 2]
+        d = x - r[:, 1]
+        d *= r[:, 0]
+        d += d_j
+        closing = d - d_j
+        closing *= r[:, 3]
+        closing += r[:, 4]
         return d, closing

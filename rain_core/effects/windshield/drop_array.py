@@ -174,7 +174,7 @@ class DropArray:
         if n < 2:
             return
         keys = self._buf[:n, _KEY]
-        if not (keys[1:] < keys[:-1]).any():
+        if not np.count_nonzero(keys[1:] < keys[:-1]):
             return
         order = keys.argsort(kind="stable")
         # Only the span of rows that change places is rewritten.

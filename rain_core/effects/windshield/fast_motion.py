@@ -221,7 +221,7 @@ class FastMotion:
         loss *= h
         np.minimum(loss, m, out=loss)
         m -= loss
-        self.evaporated += float(loss.sum())
+        self.evaporated += float(np.add.reduce(loss))
         # The radius follows the mass: one Newton step from the last radius (see the module docstring).
         ra2 = a * a
         a -= (ra2 * a - m * (1.0 / _MASS_PER_A3)) / (3.0 * ra2)
@@ -238,7 +238,7 @@ class FastMotion:
         displacement (ds, dt) m, its length (m) and their radius (m), as 1-D columns)."""
         ms, mt = s0 + 0.5 * ds, t0 + 0.5 * dt
         inside = self._inside(ms, mt)
-        if not inside.all():
+        if np.count_nonzero(inside) < len(inside):
             sel = inside.nonzero()[0]
             if len(sel) == 0:
                 return
@@ -267,7 +267,7 @@ class FastMotion:
         k[mass < TRAIL_PARENT_MIN] = 0
         run -= k * spacing
         d[idx, _TRAIL] = np.minimum(run, spacing)
-        total_k = int(k.sum())
+        total_k = int(np.add.reduce(k))
         if total_k:
             if total_k == np.count_nonzero(k):  # one droplet per drop at most: the common case
                 local = k.nonzero()[0]
@@ -281,7 +281,7 @@ class FastMotion:
             ws = es[local] - ds[local] * gap
             wt = et[local] - dt[local] * gap
             ok = self._inside(ws, wt)
-            if not ok.all():
+            if np.count_nonzero(ok) < len(ok):
                 local, ws, wt = local[ok], ws[ok], wt[ok]
             parent = idx[local]
             m_t = TRAIL_FRACTION * d[parent, _M]
@@ -292,7 +292,7 @@ class FastMotion:
             as_drop = np.zeros(len(m_t), bool)
             as_drop[:room] = m_t[:room] >= M_OBJECT_MIN
             film_part = ~as_drop
-            if film_part.any():
+            if np.count_nonzero(film_part):
                 np.add.at(flat, self._cells(ws[film_part], wt[film_part]), m_t[film_part])
-            if as_drop.any():
+            if np.count_nonzero(as_drop):
                 self._append_at_rest(ws[as_drop], wt[as_drop], m_t[as_drop])

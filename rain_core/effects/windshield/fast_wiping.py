@@ -8,12 +8,13 @@ import math
 
 import numpy as np
 
-from rain_core.effects.windshield.constants import BLADE_HALF_WIDTH_M
+from rain_core.effects.windshield.constants import BEAD_BINS, BEAD_CAPACITY_KG_M, BLADE_HALF_WIDTH_M, RESIDUE_M
 from rain_core.effects.windshield.drop_rows import A as _A
 from rain_core.effects.windshield.drop_rows import M as _M
 from rain_core.effects.windshield.drop_rows import S as _S
 from rain_core.effects.windshield.drop_rows import T as _T
 from rain_core.effects.windshield.wipers import Blade
+from rain_core.physics import RHO_WATER
 
 
 class FastWiping:
@@ -26,13 +27,32 @@ class FastWiping:
         if gone is not None:
             self._keep(~gone)
 
+    @staticmethod
+    def _wedge_planes(blade: Blade, ta: float, tb: float, a_max: float):
+        """The two half-planes through the pivot that bound what the blade sweeps between angles ta and tb (rad),
+        its wedge widened by the widest angular margin a drop of radius ≤ ``a_max`` (m) can have in the blade's
+        reach: ((normal, threshold), (normal, threshold)), a drop at p = (s, t) being a candidate only if
+        p·normal ≥ threshold for both; None when that wedge is nearly π wide or wider (no such bound)."""
+        lo, hi = min(ta, tb), max(ta, tb)
+        margin = (a_max + BLADE_HALF_WIDTH_M) / max(blade.r_inner_m - a_max, 1e-3) + 1e-6
+        w_lo, w_hi = (lo - 1e-6, hi + margin) if tb > ta else (lo - margin, hi + 1e-6)
+        if w_hi - w_lo >= 0.9 * math.pi:
+            return None
+        # t·cos(w_lo) − s·sin(w_lo) ≥ that of the pivot, and s·sin(w_hi) − t·cos(w_hi) ≥ that of the pivot.
+        # (Rounding moves the planes by ~1e-15 m; the wedge is widened by ≥ 1e-6 rad, ≥ 1e-7 m where a drop can be
+        # swept, so any evaluation of p·normal keeps every drop the exact test can sweep.)
+        px, py = float(blade.pivot[0]), float(blade.pivot[1])
+        c_lo, s_lo, c_hi, s_hi = math.cos(w_lo), math.sin(w_lo), math.cos(w_hi), math.sin(w_hi)
+        return ((-s_lo, c_lo), py * c_lo - px * s_lo), ((s_hi, -c_hi), px * s_hi - py * c_hi)
+
     def _swept_drops(self, b: int, blade: Blade, ta: float, tb: float, gone: np.ndarray | None,
-                     a_max: float | None = None):
+                     a_max: float | None = None, in_wedge: np.ndarray | None = None):
         """Move the drops blade ``b`` sweeps between angles ta and tb (rad) into its bead, leaving out those
         already ``gone`` (bool over the drops, or None), and mark them gone; returns the mask (None: none gone).
         The caller removes the gone drops (one compaction for both blades: a drop the first swept is not there
         for the second, as in the reference, which removes them in between). ``a_max``: the largest drop
-        radius (m), if the caller has it."""
+        radius (m), and ``in_wedge``: the drops inside the blade's widened wedge (bool; ``_wedge_planes``), if
+        the caller has them."""
         n = self._n
         if n == 0:
             return gone
@@ -40,18 +60,16 @@ class FastWiping:
         d = self._buf[:n]
         px, py = blade.pivot
         px, py = float(px), float(py)
-        # The widest angular margin any drop in the blade's reach can have, and the wedge it widens.
-        if a_max is None:
-            a_max = float(d[:, _A].max())
-        margin = (a_max + BLADE_HALF_WIDTH_M) / max(blade.r_inner_m - a_max, 1e-3) + 1e-6
-        w_lo, w_hi = (lo - 1e-6, hi + margin) if tb > ta else (lo - margin, hi + 1e-6)
-        if w_hi - w_lo < 0.9 * math.pi:
-            # Two half-planes through the pivot bound the wedge (it is narrower than π). (Rounding moves the planes
-            # by ~1e-15 m; the wedge is widened by ≥ 1e-6 rad, ≥ 1e-7 m where a drop can be swept.)
-            c_lo, s_lo, c_hi, s_hi = math.cos(w_lo), math.sin(w_lo), math.cos(w_hi), math.sin(w_hi)
-            s, t = d[:, _S], d[:, _T]
-            in_wedge = t * c_lo - s * s_lo >= py * c_lo - px * s_lo
-            in_wedge &= s * s_hi - t * c_hi >= px * s_hi - py * c_hi
+        if in_wedge is None:
+            if a_max is None:
+                a_max = float(d[:, _A].max())
+            planes = self._wedge_planes(blade, ta, tb, a_max)
+            if planes is not None:
+                (n_lo, k_lo), (n_hi, k_hi) = planes
+                s, t = d[:, _S], d[:, _T]
+                in_wedge = s * n_lo[0] + t * n_lo[1] >= k_lo
+                in_wedge &= s * n_hi[0] + t * n_hi[1] >= k_hi
+        if in_wedge is not None:
             if gone is not None:
                 in_wedge &= ~gone
             cand = in_wedge.nonzero()[0]
@@ -71,7 +89,7 @@ class FastWiping:
         else:
             in_phi = (phi >= lo - margin_c) & (phi <= hi)
         swept = in_r & in_phi
-        if swept.any():
+        if np.count_nonzero(swept):
             idx = cand[swept]
             np.add.at(self.beads[b], self._bin_of(blade, r[swept]), rows[swept, _M])
             if gone is None:
@@ -80,17 +98,32 @@ class FastWiping:
         return gone
 
     def _sweep(self, seg, wear: float) -> None:
-        """wiping.Wiping._sweep, with the blade angles in scalar math (Blade.angle, without NumPy)."""
+        """wiping.Wiping._sweep, with the blade angles in scalar math (Blade.angle, without NumPy) and the drops in
+        the wedges of both blades found in one product."""
         c0 = 1.0 - math.cos(math.pi * min(max(seg.p_start, 0.0), 1.0))
         c1 = 1.0 - math.cos(math.pi * min(max(seg.p_end, 0.0), 1.0))
-        gone = None
-        a_max = float(self._buf[: self._n, _A].max()) if self._n else 0.0
-        for b, blade in enumerate(self.blades):
+        moves = []
+        for blade in self.blades:
             span = blade.top_rad - blade.park_rad
-            ta, tb = blade.park_rad + span * 0.5 * c0, blade.park_rad + span * 0.5 * c1
+            moves.append((blade.park_rad + span * 0.5 * c0, blade.park_rad + span * 0.5 * c1))
+        gone = None
+        n = self._n
+        a_max = float(self._buf[:n, _A].max()) if n else 0.0
+        wedges = [None] * len(moves)
+        planes = [(b, self._wedge_planes(blade, ta, tb, a_max))
+                  for b, (blade, (ta, tb)) in enumerate(zip(self.blades, moves, strict=True)) if n and ta != tb]
+        planes = [(b, p) for b, p in planes if p is not None]
+        if planes:
+            # Every half-plane at once: p·normal for each drop and plane (columns), against the thresholds.
+            normals = np.array([[nrm for nrm, _ in p] for _, p in planes]).reshape(-1, 2).T
+            bounds = np.array([[k for _, k in p] for _, p in planes]).ravel()
+            above = self._buf[:n, _S : _T + 1] @ normals >= bounds
+            for q, (b, _) in enumerate(planes):
+                wedges[b] = above[:, 2 * q] & above[:, 2 * q + 1]
+        for b, (blade, (ta, tb)) in enumerate(zip(self.blades, moves, strict=True)):
             if ta != tb:
                 # Wiping._sweep_blade, the swept drops removed once for both blades (below).
-                gone = self._swept_drops(b, blade, ta, tb, gone, a_max)
+                gone = self._swept_drops(b, blade, ta, tb, gone, a_max, wedges[b])
                 self._sweep_film(b, blade, min(ta, tb), max(ta, tb), wear)
                 rng = self._sweep_ranges[b]
                 rng[0] = min(rng[0], ta, tb)
@@ -102,6 +135,38 @@ class FastWiping:
             for b, blade in enumerate(self.blades):
                 self._end_of_stroke(b, blade, float(blade.angle(seg.p_end)), seg.event)
 
+    def _sweep_film(self, b: int, blade: Blade, lo: float, hi: float, wear: float) -> None:
+        """wiping.Wiping._sweep_film with fewer NumPy calls (the same operations on the same values): the cells'
+        bins and areas gathered once, and a bead bin has swept cells exactly where its residue need is > 0
+        (every cell wants a positive residue)."""
+        cells = self._swept_cells(b, blade, lo, hi)
+        if len(cells) == 0:
+            return
+        bead = self.beads[b]
+        flat = self.film.ravel()
+        bins = self._bins_of_cells[b].take(cells)
+        np.add.at(bead, bins, flat.take(cells))
+        flat[cells] = 0.0
+        # The rubber leaves a thin residue where it pushed water, paid from the bead.
+        areas = self._areas_flat.take(cells)
+        per_area = RHO_WATER * RESIDUE_M * (1.0 + 4.0 * wear)
+        want = per_area * areas
+        need = np.bincount(bins, weights=want, minlength=BEAD_BINS)
+        has_cells = need > 0 if per_area > 0.0 else np.bincount(bins, minlength=BEAD_BINS) > 0
+        scale = np.where(has_cells, np.minimum(1.0, bead / np.maximum(need, 1e-300)), 0.0)
+        leave = want * scale.take(bins)
+        flat[cells] += leave
+        bead -= np.bincount(bins, weights=leave, minlength=BEAD_BINS)
+        # Over capacity the bead leaks past the rubber: spread the excess over the cells just swept.
+        cap = BEAD_CAPACITY_KG_M * (blade.r_outer_m - blade.r_inner_m) / BEAD_BINS
+        excess = np.where(has_cells, np.maximum(bead - cap, 0.0), 0.0)
+        if np.count_nonzero(excess):
+            area_bin = np.bincount(bins, weights=areas, minlength=BEAD_BINS)
+            share = areas / area_bin.take(bins)
+            flat[cells] += excess.take(bins) * share
+            bead -= excess
+        np.maximum(bead, 0.0, out=bead)
+
     def _swept_cells(self, b: int, blade: Blade, lo: float, hi: float) -> np.ndarray:
         order, phi_sorted = self._cells_by_angle[b]  # the cells within the blade's radii, by angle
         return np.sort(order[phi_sorted.searchsorted(lo, "left") : phi_sorted.searchsorted(hi, "right")])
@@ -110,14 +175,20 @@ class FastWiping:
         return self._bins_of_cells[b][cells]
 
     def _bead_off_glass(self, b: int, blade: Blade, angle: float) -> None:
-        """Water pushed past an edge of the glass leaves it: wiped (the reference's, on cached bin radii)."""
+        """Water pushed past an edge of the glass leaves it: wiped (the reference's, on cached bin radii; the
+        few bins in Python floats, the same operations as ``_inside``)."""
         bead = self.beads[b]
-        if not bead.any():
+        if not any(bead.tolist()):
             return
-        r = self._bin_r[b]
-        s = blade.pivot[0] + r * math.cos(angle)
-        t = blade.pivot[1] + r * math.sin(angle)
-        off = ~self._inside(s, t)
-        if off.any():
-            self.wiped += float(bead[off].sum())
+        px, py = float(blade.pivot[0]), float(blade.pivot[1])
+        ca, sa = math.cos(angle), math.sin(angle)
+        height, w0, dw = self._height, self._w0, self._dw
+        off = []
+        for k, r in enumerate(self._bin_r_list[b]):  # every bin: the sum below adds the same elements
+            s = px + r * ca
+            t = py + r * sa
+            if not (0.0 <= t <= height and abs(s) <= 0.5 * (w0 + dw * t)):
+                off.append(k)
+        if off:
+            self.wiped += float(np.add.reduce(bead[off]))
             bead[off] = 0.0

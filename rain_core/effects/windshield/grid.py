@@ -156,7 +156,7 @@ _BOX_MARGIN_CELLS = 1e-6
 def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, members: np.ndarray):
     """Pairs (query id, member) for queries that each meet ``counts`` members stored from ``heads`` on in
     ``members``."""
-    total = int(counts.sum())
+    total = int(np.add.reduce(counts))
     if total == len(counts):  # one member each: the common case
         return query_ids, members.take(heads)
     shift = (heads - (counts.cumsum() - counts)).repeat(counts)
@@ -237,7 +237,7 @@ class PairFinder:
         count *= w1
         key = lo0 * self._n1
         key += lo1
-        total = int(count.sum())
+        total = int(np.add.reduce(count))
         if total > MERGE_CELLS_MAX:
             return None
         ar = self._arange(max(total, n))
@@ -265,7 +265,7 @@ class PairFinder:
         after = ends.repeat(runs)
         after -= ar[:total]
         after -= 1
-        n_pairs = int(after.sum())
+        n_pairs = int(np.add.reduce(after))
         if n_pairs > MERGE_PAIRS_MAX:
             return None
         if n_pairs == 0:
@@ -335,7 +335,7 @@ class PairFinder:
             if len(hit):
                 c = c[hit]
                 qid = q[hit // 9]
-                if int(c.sum()) > budget:
+                if int(np.add.reduce(c)) > budget:
                     over = c.cumsum() > budget
                     if deferred is None:
                         deferred = np.zeros(n, bool)
@@ -406,7 +406,7 @@ class PairFinder:
                 out_j.append(j[keep])
         if not out_i:
             return _EMPTY_I, _EMPTY_I, deferred
-        if deferred is not None and not deferred.any():
+        if deferred is not None and not np.count_nonzero(deferred):
             deferred = None
         i = np.concatenate(out_i) if len(out_i) > 1 else out_i[0]
         j = np.concatenate(out_j) if len(out_j) > 1 else out_j[0]

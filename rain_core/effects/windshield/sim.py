@@ -53,6 +53,8 @@ from rain_core import checks
 from rain_core.effects.windshield.arrivals import ArrivalTable
 from rain_core.effects.windshield.constants import (
     BEAD_BINS,
+    BEAD_KEEP,
+    BEAD_THRESHOLD_M,
     BL_RUN_UP_M,
     CROSSWIND_GAIN,
     EVAP_AIR_M_S,
@@ -107,13 +109,17 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         self._inputs_seen: GlassInputs | None = None
         self._table: ArrivalTable | None = None
         self._air_key: bytes | None = None
+        self._evap_of: np.ndarray | None = None  # the drying rates _evap_step was made from, and for which h
+        self._evap_h = 0.0
+        self._evap_step: np.ndarray | None = None
         self._w0, self._dw, self._height = g.width_bottom, g._dw, g.height
         self._sensor_box = (self.sensor_lo.tolist(), self.sensor_hi.tolist())
         self._sensor_area = float(np.prod(self.sensor_hi - self.sensor_lo))
         # Gravity along the curved glass (GlassGeometry.gravity), its constants folded.
         self._g_up = -G_M_S2 * float(g.up[1])
         self._g_sag = -G_M_S2 * g.sag * float(g.normal[1])
-        # Per blade: bin radii of its bead, and its film cells sorted by angle (a sweep is a range of them).
+        # Per blade: bin radii of its bead (also as Python floats: fast_wiping._bead_off_glass), and its film
+        # cells sorted by angle (a sweep is a range of them).
         self._bin_r = []
         self._cells_by_angle = []
         self._bins_of_cells = []
@@ -126,6 +132,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             reach = (r_c[order] >= blade.r_inner_m) & (r_c[order] <= blade.r_outer_m)  # the cells it can sweep
             self._cells_by_angle.append((order[reach], phi_c[order][reach]))
             self._bins_of_cells.append(self._bin_of(blade, r_c))
+        self._bin_r_list = [r.tolist() for r in self._bin_r]
         # The air over each film cell (airflow.air_velocity) is head·_cell_up (or head·FLOW_AT_BOTTOM in a
         # tailwind) along the glass and |up|·FLOW_SPREAD·_cell_q + CROSSWIND_GAIN·cross across it: the
         # position-only factors, kept so the film's drying costs a few operations when the car's speed changes.
@@ -327,18 +334,20 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         if n_all == 0:
             return
         n = min(n_all, MAX_ARRIVALS_PER_SUBSTEP)
-        d_mm, u_n = self._table.sample(rng.random(n))
+        # The reference's three draws of n (the size, then sample_uniform's two) in one: the same numbers.
+        u = rng.random(3 * n)
+        d_mm, u_n = self._table.sample(u[:n])
         m = (RHO_WATER * math.pi / 6.0 * 1e-9) * (d_mm * d_mm * d_mm)
         # GlassGeometry.sample_uniform, inlined: its u (across) and x (up) are also the film cell's u and v.
         g = self.glass
-        u1, u2 = rng.random(n), rng.random(n)
+        u1, u2 = u[n : 2 * n], u[2 * n :]
         w0, dw, height = self._w0, self._dw * self._height, self._height
         q = u1 * (w0 + 0.5 * dw)
         x = 2.0 * q / (w0 + np.sqrt(w0 * w0 + 2.0 * dw * q)) if dw != 0 else q / w0
         v = np.minimum(np.maximum(x, 0.0), 1.0)
         t = v * height
         s = (u2 - 0.5) * g.width(t)
-        self.arrived += float(m.sum())
+        self.arrived += float(np.add.reduce(m))
         self.arrival_count += n
         lo, hi = SPLASH_SPEED_M_S
         splash = np.minimum(np.maximum((u_n - lo) / (hi - lo), 0.0), 1.0) * SPLASH_MAX
@@ -387,13 +396,44 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         c = per_cell[cells]
         first = (per_cell.cumsum() - per_cell)[cells]
         placed = c > 0
-        if placed.any():
+        if np.count_nonzero(placed):
             pick = idx[order[first[placed] + self.rng.integers(0, c[placed])]]
             np.add.at(d[:, _M], pick, mass[placed])
             d[pick, _A] = drop_radius(d[pick, _M])
             d[pick, _RB] = np.inf  # grown: tested again
             self._fresh_buf[pick] = True
         return placed
+
+    def _film_step(self, h: float, evap_kg_s: np.ndarray, inputs: GlassInputs) -> None:
+        """film.FilmBeading._film_step with fewer NumPy calls (the same operations and random numbers): the
+        drying per sub-step is kept while the air and the sub-step stay, and the beads' two draws are one."""
+        if self._evap_of is not evap_kg_s or self._evap_h != h:
+            self._evap_of, self._evap_h = evap_kg_s, h
+            self._evap_step = evap_kg_s * h
+        flat = self.film.ravel()
+        loss = np.minimum(flat, self._evap_step)
+        flat -= loss
+        self.evaporated += float(np.add.reduce(loss))
+        # Beading: a film thicker than the threshold pulls together into a drop somewhere in its cell.
+        thick = (flat > self._bead_mass).nonzero()[0]
+        if len(thick) == 0:
+            return
+        room = max(int(inputs.drop_budget) - self._n, 0)
+        thick = thick[np.argsort(-flat[thick] / self._areas_flat[thick], kind="stable")]
+        keep = BEAD_KEEP * RHO_WATER * BEAD_THRESHOLD_M * self._areas_flat[thick]
+        if len(thick) > room:  # a full glass: the surplus film joins drops already in those cells
+            over, over_keep = thick[room:], keep[room:]
+            joined = self._give_to_drops(over, flat[over] - over_keep)
+            flat[over[joined]] = over_keep[joined]
+            thick, keep = thick[:room], keep[:room]
+        m = flat[thick] - keep
+        flat[thick] = keep
+        iv, iu = np.divmod(thick, FILM_CELLS)
+        k = len(thick)
+        r = self.rng.random(2 * k)  # the reference's rng.random(k) for u, then for v
+        u = (iu + r[:k]) / FILM_CELLS
+        v = (iv + r[k:]) / FILM_CELLS
+        self._bead_drops(u, v, m)
 
     # --- what the last step did (for drawing): kept as columns, assembled only when asked ------------------
     def frame_impacts(self) -> np.ndarray:
@@ -447,16 +487,16 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
                 outside[placed] = ~self._inside(d[placed, _S], d[placed, _T])
         if gone is not None:
             outside[gone] = False  # no longer drops
-        if outside.any():
-            self.shed += float(d[outside, _M].sum())
+        if np.count_nonzero(outside):
+            self.shed += float(np.add.reduce(d[outside, _M]))
         tiny = d[:, _M] < 0.5 * M_OBJECT_MIN
         tiny &= ~outside
         if gone is not None:
             tiny[gone] = False
-        if tiny.any():
+        if np.count_nonzero(tiny):
             np.add.at(self.film.ravel(), self._cells(d[tiny, _S], d[tiny, _T]), d[tiny, _M])
         drop = outside | tiny
         if gone is not None:
             drop[gone] = True
-        if drop.any():
+        if np.count_nonzero(drop):
             self._keep(~drop)
