@@ -37,7 +37,7 @@ class Camera:
         """(right, up, forward) orthonormal, world frame."""
         f = _normalize(self.forward)
         r = _normalize(_cross(f, np.asarray(self.up, dtype=np.float64)))
-        if not np.any(r):
+        if not r.any():
             r = np.array([1.0, 0.0, 0.0])
         u = _cross(r, f)
         return r, u, f

@@ -286,7 +286,7 @@ def wrap_lights(lights: LightSet, shift_z: float) -> LightSet:
 def nearest_lights(lights: LightSet, camera_position_wrapped, max_lights: int = MAX_LIGHTS) -> LightSet:
     """The ``max_lights`` of ``lights`` nearest to the camera (wrapped frame), nearest first (stable order)."""
     cam = np.asarray(camera_position_wrapped, dtype=np.float64)
-    order = np.argsort(np.sum((lights.position - cam) ** 2, axis=1), kind="stable")[:max_lights]
+    order = ((lights.position - cam) ** 2).sum(axis=1).argsort(kind="stable")[:max_lights]  # methods: no wrappers
     return lights.take(order)
 
 
@@ -295,7 +295,7 @@ def pack_nearest(lights: LightSet, camera_position_wrapped, max_lights: int = MA
     set's rows packed once (``packed_rows``): the renderer packs each view's lights every frame (main and road
     mirror) from one candidate set."""
     cam = np.asarray(camera_position_wrapped, dtype=np.float64)
-    order = np.argsort(np.sum((lights.position - cam) ** 2, axis=1), kind="stable")[:max_lights]
+    order = ((lights.position - cam) ** 2).sum(axis=1).argsort(kind="stable")[:max_lights]  # methods: no wrappers
     packed = np.zeros((3, max_lights, 4), np.float32)
     packed[:, : len(order)] = lights.packed_rows()[:, order]
     return packed[0].tobytes(), packed[1].tobytes(), packed[2].tobytes(), len(order)

@@ -27,7 +27,8 @@ _TO_TEXTURE.flags.writeable = False
 
 
 def sun_is_up(lighting) -> bool:
-    return lighting.sun_direction[1] > 0.0 and float(np.max(lighting.sun_illuminance)) > 0.0
+    # ndarray.max, not np.max's Python-level wrapper: asked every frame
+    return lighting.sun_direction[1] > 0.0 and float(np.asarray(lighting.sun_illuminance).max()) > 0.0
 
 
 class ShadowMap:

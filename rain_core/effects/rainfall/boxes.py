@@ -3,6 +3,7 @@ drawn density a drop's weight divides by (package docstring, "Container")."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,6 +85,10 @@ def layer_boxes(camera_position, camera_forward, container_m: float) -> Boxes:
 
 def wrap_near(z, around_z):
     """z (m) shifted by whole periods to lie within half a period of around_z (m)."""
+    if type(z) is float:  # one position (the vehicles' uniforms, every frame), without NumPy
+        q = (z - around_z) / PERIOD_M
+        if math.isfinite(q):  # Python's round, like np.round, rounds halves to even
+            return z - PERIOD_M * round(q)
     return z - PERIOD_M * np.round((np.asarray(z) - around_z) / PERIOD_M)
 
 

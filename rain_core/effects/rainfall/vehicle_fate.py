@@ -111,9 +111,8 @@ def vehicle_uniforms(vehicles, shift_z: float, around_z: float) -> dict[str, np.
     vehicles = vehicles[:MAX_VEHICLES]
     pose = np.zeros((MAX_VEHICLES, 4))
     for i, veh in enumerate(vehicles):
-        c = np.asarray(veh.position, dtype=np.float64)
-        z = float(wrap_near(c[2] - shift_z, around_z))
-        pose[i] = (c[0], c[1], z, veh.yaw)
+        x, y, z = (float(v) for v in veh.position)
+        pose[i] = (x, y, float(wrap_near(z - float(shift_z), float(around_z))), veh.yaw)
     lo, hi, planes = _piece_arrays(tuple(veh.spec for veh in vehicles))
     return {"u_veh_pose": pose, "u_veh_lo": lo, "u_veh_hi": hi, "u_veh_plane": planes,
             "u_veh_count": len(vehicles)}
