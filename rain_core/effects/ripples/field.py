@@ -110,6 +110,7 @@ class RippleField:
         # unknown iff its row or its column is, so the strips are found without scanning n² NaNs.
         self._unknown_rows = np.zeros(self.n, bool)
         self._unknown_cols = np.zeros(self.n, bool)
+        self._all_cols = np.arange(self.n)
         self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
         self._batch: list | None = None  # the frame's bumps while ``update`` gathers them
         self._law: DropLaw | None = None  # the arriving drops' law at the last rain rate (see _drop_law)
@@ -202,18 +203,25 @@ class RippleField:
         # hence the same depth, whichever window asks about it (so strips asked after scrolls agree exactly
         # with a full evaluation).
         ax, az = self._anchor
-        xs, zs = np.meshgrid((ax + np.asarray(cols)) * self.cell_m, (az + np.asarray(rows)) * self.cell_m)
-        cells = xs.size
-        if extra_xz is not None:
-            xs = np.concatenate([xs.reshape(-1), extra_xz[:, 0]])
-            zs = np.concatenate([zs.reshape(-1), extra_xz[:, 1]])
+        shape = (len(rows), len(cols))
+        cells = shape[0] * shape[1]
+        # The rows × cols grid (meshgrid's values) written into one buffer with the extra points after it.
+        size = cells if extra_xz is None else cells + len(extra_xz)
+        xs, zs = np.empty(size), np.empty(size)
+        xs[:cells].reshape(shape)[...] = (ax + np.asarray(cols)) * self.cell_m
+        zs[:cells].reshape(shape)[...] = ((az + np.asarray(rows)) * self.cell_m)[:, None]
+        if extra_xz is None:
+            xs, zs = xs.reshape(shape), zs.reshape(shape)
+        else:
+            xs[cells:], zs[cells:] = extra_xz[:, 0], extra_xz[:, 1]
         depth = np.asarray(self._film_fn(xs, zs), dtype=np.float64)
         if depth.shape != xs.shape:  # e.g. a constant depth
             depth = np.broadcast_to(depth, xs.shape)
         extra = None
         if extra_xz is not None:
-            depth, extra = depth[:cells].reshape(len(rows), len(cols)), depth[cells:]
-        if not np.isfinite(depth).all() or (depth < 0.0).any():
+            depth, extra = depth[:cells].reshape(shape), depth[cells:]
+        # Two reductions: a NaN makes min() NaN (not >= 0), +inf is the max, -inf below 0.
+        if not depth.min() >= 0.0 or depth.max() == math.inf:
             raise ValueError("film_depth_fn must return finite depths >= 0 mm")
         return depth, extra
 
@@ -230,8 +238,12 @@ class RippleField:
             return None
         asked = None
         if rows.size:
-            depth, asked = self._ask_depths(rows, np.arange(self.n), extra_xz)
-            self._wet[rows, :] = depth > 0.0
+            depth, asked = self._ask_depths(rows, self._all_cols, extra_xz)
+            lo = int(rows[0])
+            if rows[-1] - lo + 1 == rows.size:  # one run of rows (the strip that scrolled in): a slice
+                np.greater(depth, 0.0, out=self._wet[lo:lo + rows.size])
+            else:
+                self._wet[rows, :] = depth > 0.0
         if cols.size:  # the columns' cells outside the rows just asked (all of them when no rows were)
             others = np.ones(self.n, bool)
             others[rows] = False
