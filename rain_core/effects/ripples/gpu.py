@@ -36,6 +36,9 @@ class WaveSolverGPU(WaveSolver):
     constant uniforms before it draws, unless they are already there."""
 
     dtype = np.float32
+    # The CPU copy of the water mask only scrolls, uploads and answers questions (the shaders hold the cells):
+    # bool, a quarter of float32's bytes to move at every scroll.
+    mask_dtype = np.bool_
 
     def __init__(self, ctx, n: int, cell_m: float, speed_m_s: float, damping_per_s: float = 0.0, *,
                  shaders=None, **kwargs):
@@ -302,7 +305,7 @@ class WaveSolverGPU(WaveSolver):
         if self._queued or self._rain:  # laid under the old mask (a cell turning wet must not get them)
             self._flush()
         for rows, cols in regions:  # only the blocks travel; one pass then holds their dry cells
-            data = (self._mask[rows, cols] > 0.5).astype(np.uint8) * np.uint8(255)
+            data = self._mask[rows, cols].astype(np.uint8) * np.uint8(255)
             self.mask_texture.write(data, viewport=(cols.start, rows.start, data.shape[1], data.shape[0]),
                                     alignment=1)
         self._hold_under_mask()

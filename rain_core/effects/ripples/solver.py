@@ -119,6 +119,7 @@ class WaveSolver:
     """
 
     dtype = np.float64
+    mask_dtype = np.float64  # the water mask's storage (the NumPy steps multiply by it)
 
     def __init__(self, n: int, cell_m: float, speed_m_s: float, damping_per_s: float = 0.0, *,
                  sleep_energy: float | None = None, max_substeps: int = DEFAULT_MAX_SUBSTEPS,
@@ -145,7 +146,7 @@ class WaveSolver:
         self.dt_max = dt_max
         self.min_step_s = MIN_STEP_FRACTION * dt_max  # shorter calls are carried, not stepped (see step)
         self._carry = 0.0  # s of calls shorter than min_step_s, not yet stepped
-        self._mask: np.ndarray | None = None  # None: all water; else 1.0 water / 0.0 held, in self.dtype
+        self._mask: np.ndarray | None = None  # None: all water; else 1 water / 0 held, in self.mask_dtype
         self._dt: float | None = None  # sub-step of the stored (z, z⁻); None: synchronous and at rest
         self._debt = 0.0  # s of frame time not yet simulated (only with reuse_tolerance)
         self._dt_avg: float | None = None  # running mean frame time, s (only with reuse_tolerance)
@@ -301,7 +302,9 @@ class WaveSolver:
 
     @property
     def water_mask(self) -> np.ndarray | None:
-        """(n, n) 1.0 where water may move, 0.0 where held; None when every interior cell is water."""
+        """(n, n) 1 where water may move, 0 where held (``mask_dtype``: float for the NumPy solvers, which
+        multiply by it; bool on the GPU, whose CPU copy only scrolls and uploads); None when every interior cell
+        is water."""
         return self._mask
 
     def reset(self, height0=None):
@@ -554,7 +557,7 @@ class WaveSolver:
             if np.any(a < 0):
                 raise ValueError("a film-depth mask must be >= 0 mm")
             a = a > 0.0
-        self._mask = a.astype(self.dtype)
+        self._mask = a.astype(self.mask_dtype)
         self._apply_mask_to_state()
 
     def set_water_mask_blocks(self, blocks):
@@ -563,7 +566,7 @@ class WaveSolver:
         what ``set_water_mask`` of the whole updated mask does, for the cost of the blocks (the field renews
         strips of its mask every frame)."""
         if self._mask is None:
-            self._mask = np.ones((self.n, self.n), self.dtype)
+            self._mask = np.ones((self.n, self.n), self.mask_dtype)
         regions = []
         for row0, col0, block in blocks:
             region = (slice(row0, row0 + block.shape[0]), slice(col0, col0 + block.shape[1]))

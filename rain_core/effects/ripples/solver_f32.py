@@ -14,6 +14,7 @@ class WaveSolverF32(WaveSolver):
     in float64."""
 
     dtype = np.float32
+    mask_dtype = np.float32
 
     def _alloc(self):
         super()._alloc()
