@@ -297,7 +297,7 @@ class SprayEmitter:
     def _pop_landings(self, now: float) -> None:
         if len(self._pending):
             done = self._pending[:, 0] <= now
-            self._landed = np.concatenate([self._landed, self._pending[done, 1:]])
+            self._landed = self._pending[done, 1:]  # (emit emptied _landed; this is the frame's only source)
             self._pending = self._pending[~done]
 
     # --- spawning -----------------------------------------------------------------------------------------
