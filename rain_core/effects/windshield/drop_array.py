@@ -164,7 +164,8 @@ class DropArray:
         d = self._buf[: self._n]
         idx = (d[:, _KEY] == _DIRTY).nonzero()[0]
         if len(idx):
-            d[idx, _PLACED] = self._placed(d[idx, _S], d[idx, _T])
+            st = d[idx, _S : _T + 1]
+            d[idx, _PLACED] = self._placed(st[:, 0], st[:, 1], st)
 
     def _sort_drops(self) -> None:
         """Keep the drops in merge-grid cell order (grid.grid_keys), as the reference does."""

@@ -93,6 +93,8 @@ from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
 _GRID_O = (-1.0, -0.2)  # grid._GRID_ORIGIN, as floats for the sort key
 _G0, _G1 = _grid_shape(GRID_CELL_M)
+_GRID_O2 = np.array(_GRID_O)
+_GRID_TOP2 = np.array([_G0 - 1, _G1 - 1])
 
 
 class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSimReference):
@@ -193,11 +195,12 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         v = np.minimum(t * (FILM_CELLS / self._height), FILM_CELLS - 0.5)
         return (v.astype(np.int64) * FILM_CELLS) + u.astype(np.int64)
 
-    def _placed(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    def _placed(self, s: np.ndarray, t: np.ndarray, st: np.ndarray | None = None) -> np.ndarray:
         """The position's columns (drop_rows CELL … KEY) of drops at (s, t) m, (k, 7): the film cell, the air's
         factors, the boundary layer's run, gravity per unit mass and the merge-grid key, with the operations
         (so the bits) of the formulas they replace in ``_move`` and ``_sort_drops`` (``_cells``, airflow, the
-        glass's gravity, grid.grid_keys), written in place to save NumPy calls."""
+        glass's gravity, grid.grid_keys), written in place to save NumPy calls. ``st``: (s, t) as (k, 2), if
+        the caller has them so (s and t may be its columns)."""
         out = np.empty((len(s), 7))
         height, dw = self._height, self._dw
         w = dw * t
@@ -252,11 +255,16 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         g *= self._g_sag
         np.add(g, self._g_up, out=out[:, 5])
         # The merge-grid key (grid.grid_keys).
-        k0 = np.minimum(np.maximum(((s - _GRID_O[0]) / GRID_CELL_M).astype(np.int64), 0), _G0 - 1)
-        k1 = np.minimum(np.maximum(((t - _GRID_O[1]) / GRID_CELL_M).astype(np.int64), 0), _G1 - 1)
-        k0 *= _G1
-        k0 += k1
-        out[:, 6] = k0
+        if st is None:
+            st = np.stack([s, t], axis=1)
+        k = st - _GRID_O2  # both axes at once
+        k /= GRID_CELL_M
+        k = k.astype(np.int64)
+        np.maximum(k, 0, out=k)
+        np.minimum(k, _GRID_TOP2, out=k)
+        key = k[:, 0] * _G1
+        key += k[:, 1]
+        out[:, 6] = key
         return out
 
     # --- inputs -------------------------------------------------------------------------------------------
@@ -394,7 +402,8 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         # Where each cell's run starts in the sorted cells, and its length (two binary searches, as a count).
         per_cell = np.bincount(dc, minlength=FILM_CELLS * FILM_CELLS)
         c = per_cell[cells]
-        first = (per_cell.cumsum() - per_cell)[cells]
+        first = per_cell.cumsum()[cells]
+        first -= c
         placed = c > 0
         if np.count_nonzero(placed):
             pick = idx[order[first[placed] + self.rng.integers(0, c[placed])]]
