@@ -18,11 +18,9 @@ import math
 import numpy as np
 
 from rain_core.effects.windshield.constants import BEAD_BINS, TRAIL_FILM_M
-from rain_core.effects.windshield.drop_rows import VS as _VS
 from rain_core.effects.windshield.drop_rows import VT as _VT
 from rain_core.effects.windshield.drop_rows import A as _A
 from rain_core.effects.windshield.drop_rows import S as _S
-from rain_core.effects.windshield.drop_rows import T as _T
 from rain_core.physics import RHO_WATER
 
 # A drop buffer instance (the vertex format "4f 1f/i"): (s, t, vs, vt) m, m/s and the contact radius (m) of a
@@ -68,7 +66,7 @@ class DropRows:
         n = sim.count
         beads = sim.beads
         lines = None
-        if beads.any():
+        if np.count_nonzero(beads):  # (ndarray.any goes through Python)
             if self._blades is not sim.blades:
                 self._bead_tables(sim.blades)
             # The bead's cross-section as a half cylinder (m) of its bin's water, at most 1 cm.
@@ -81,9 +79,9 @@ class DropRows:
         if n:
             block = getattr(sim, "_buf", None)  # the fast path's drop array (drop_rows' columns): no copies
             if block is not None:
-                # Column by column: a cast of a strided (n, 4) block loops over its short rows (slower).
-                for c, col in enumerate((_S, _T, _VS, _VT)):
-                    out[:n, c] = block[:n, col]
+                # The drop array's rows are 128 bytes and cold in the cache by now: one pass over the (n, 4) block
+                # reads them once (~45 us for 5,700 drops against ~60 for column by column; warm both ~27 us).
+                out[:n, 0:4] = block[:n, _S : _VT + 1]  # S, T, VS, VT: adjacent columns (drop_rows)
                 out[:n, 4] = block[:n, _A]
             else:
                 out[:n, 0:2] = sim.pos
