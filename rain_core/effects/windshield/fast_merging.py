@@ -110,7 +110,8 @@ class FastMerging:
         # Groups among the touching drops only, each labelled by its smallest member (grid.components).
         k = len(i)
         ij = np.concatenate([i, j])
-        both = np.sort(ij)
+        both = ij.copy()
+        both.sort()
         nodes = both[np.concatenate(([True], both[1:] != both[:-1]))]
         ij = nodes.searchsorted(ij)
         slot = small_components(len(nodes), ij[:k], ij[k:])  # the root's place in ``nodes``

@@ -273,8 +273,10 @@ class FastMotion:
                 local = k.nonzero()[0]
                 gap = 1.3 * a[local]
             else:
-                local = np.repeat(np.arange(len(idx)), k)
-                within = np.arange(total_k) - np.repeat(k.cumsum() - k, k)
+                local = np.arange(len(idx)).repeat(k)
+                first = k.cumsum()
+                first -= k
+                within = np.arange(total_k) - first.take(local)  # (a gather: repeat copies element by element)
                 gap = (1.3 + TRAIL_SPACING_RADII * within) * a[local]
             # Behind the drop on the path it ran, clear of it (so they do not join again at once).
             gap /= step_len[local]

@@ -159,8 +159,10 @@ def _expand(query_ids: np.ndarray, counts: np.ndarray, heads: np.ndarray, member
     total = int(np.add.reduce(counts))
     if total == len(counts):  # one member each: the common case
         return query_ids, members.take(heads)
-    shift = (heads - (counts.cumsum() - counts)).repeat(counts)
-    return query_ids.repeat(counts), members.take(shift + np.arange(total))
+    at = np.arange(len(counts)).repeat(counts)  # (repeat copies element by element: the rest are gathers)
+    shift = (heads - (counts.cumsum() - counts)).take(at)
+    shift += np.arange(total)
+    return query_ids.take(at), members.take(shift)
 
 
 def _box_cells(lo0, lo1, hi0, hi1, ids: np.ndarray, n1: int) -> tuple[np.ndarray, np.ndarray]:
@@ -244,24 +246,27 @@ class PairFinder:
         if total == n:
             owner = ar[:n]
         else:
-            owner = ar[:n].repeat(count)
+            owner = ar[:n].repeat(count)  # (repeat copies element by element: the others are gathers by owner)
             first = count.cumsum()
             first -= count
-            within = ar[:total] - first.repeat(count)
-            d0, d1 = np.divmod(within, w1.repeat(count))
+            within = ar[:total] - first.take(owner)
+            d0, d1 = np.divmod(within, w1.take(owner))
             d0 *= self._n1
             d0 += d1
-            key = key.repeat(count)
+            key = key.take(owner)
             key += d0
         key = key.astype(np.int16)
         order = key.argsort(kind="stable")  # 16-bit keys: a radix sort
         key = key[order]
         owner = owner[order]
         # Each entry pairs with the entries after it in its cell's run.
-        ends = (key[1:] != key[:-1]).nonzero()[0]
-        ends += 1
-        ends = np.append(ends, total)
-        runs = np.diff(ends, prepend=0)
+        brk = (key[1:] != key[:-1]).nonzero()[0]
+        ends = np.empty(len(brk) + 1, np.int64)  # where each cell's run ends, and its length
+        ends[:-1] = brk
+        ends[:-1] += 1
+        ends[-1] = total
+        runs = ends.copy()
+        runs[1:] -= ends[:-1]
         after = ends.repeat(runs)
         after -= ar[:total]
         after -= 1
@@ -274,7 +279,7 @@ class PairFinder:
         pi = ar[:total].repeat(after)
         first = after.cumsum()
         first -= after
-        pj = ar[:n_pairs] - first.repeat(after)
+        pj = ar[:n_pairs] - first.take(pi)
         pj += pi
         pj += 1
         i = owner.take(pi)

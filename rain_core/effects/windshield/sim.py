@@ -428,7 +428,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         if len(thick) == 0:
             return
         room = max(int(inputs.drop_budget) - self._n, 0)
-        thick = thick[np.argsort(-flat[thick] / self._areas_flat[thick], kind="stable")]
+        thick = thick[(-flat[thick] / self._areas_flat[thick]).argsort(kind="stable")]
         keep = BEAD_KEEP * RHO_WATER * BEAD_THRESHOLD_M * self._areas_flat[thick]
         if len(thick) > room:  # a full glass: the surplus film joins drops already in those cells
             over, over_keep = thick[room:], keep[room:]
