@@ -103,9 +103,9 @@ class RippleField:
         self._film_fn: FilmDepthFn | None = None
         self._film_key = None  # the film function's ``cache_key`` (None: unknown, keep re-asking)
         self._rows_to_renew = 0  # rows still to re-ask since the function last changed
-        # Whether each cell's film depth from _film_fn is > 0 (bool: all the mask needs, an eighth of float64 depths
-        # to scroll every frame); cells not asked yet lie in _unknown_rows / _unknown_cols.
-        self._wet: np.ndarray | None = None
+        # Whether the mask follows _film_fn: the solver's mask then holds whether each cell's film depth is > 0
+        # (exactly 0 or 1), except at cells not asked yet, which lie in _unknown_rows / _unknown_cols.
+        self._following = False
         # Whole rows / columns whose depth is not asked yet (after a scroll, the strips that entered): a cell is
         # unknown iff its row or its column is, so the strips are found without scanning n² NaNs.
         self._unknown_rows = np.zeros(self.n, bool)
@@ -153,8 +153,7 @@ class RippleField:
         if dx or dz:
             self.solver.shift(dx, dz)
             self._anchor = target
-            if self._wet is not None:  # keep what is known, ask only about the cells that entered
-                shift_in_place(self._wet, dx, dz, False)
+            if self._following:  # the mask scrolled with the solver: ask only about the cells that entered
                 shift_in_place(self._unknown_rows[:, None], 0, dz, True)
                 shift_in_place(self._unknown_cols[None, :], dx, 0, True)
                 if fill:
@@ -170,7 +169,7 @@ class RippleField:
         Replaces any film-depth function given to ``update``."""
         self._film_fn = None
         self._film_key = None
-        self._wet = None
+        self._following = False
         self._set_mask(mask)
 
     def _set_mask(self, mask):
@@ -190,7 +189,7 @@ class RippleField:
         self._film_fn = film_depth_fn
         self._film_key = getattr(film_depth_fn, "cache_key", None)
         self._rows_to_renew = 0
-        self._wet = np.zeros((self.n, self.n), bool)
+        self._following = True
         self._unknown_rows[:] = True
         self._unknown_cols[:] = True
         self._fill_unknown_depths()
@@ -237,44 +236,46 @@ class RippleField:
         if rows.size == 0 and cols.size == 0:
             return None
         asked = None
+        blocks = []
         if rows.size:
             depth, asked = self._ask_depths(rows, self._all_cols, extra_xz)
-            lo = int(rows[0])
-            if rows[-1] - lo + 1 == rows.size:  # one run of rows (the strip that scrolled in): a slice
-                np.greater(depth, 0.0, out=self._wet[lo:lo + rows.size])
-            else:
-                self._wet[rows, :] = depth > 0.0
+            if rows.size == self.n and self.solver.water_mask is None:  # the first full evaluation
+                self._unknown_rows[:] = False
+                self._unknown_cols[:] = False
+                self._set_mask(depth > 0.0)
+                return asked
+            self._changed_blocks(blocks, rows, self._all_cols, depth > 0.0)
         if cols.size:  # the columns' cells outside the rows just asked (all of them when no rows were)
             others = np.ones(self.n, bool)
             others[rows] = False
             others = others.nonzero()[0]
             if others.size:
                 depth, extra = self._ask_depths(others, cols, None if rows.size else extra_xz)
-                self._wet[np.ix_(others, cols)] = depth > 0.0
+                self._changed_blocks(blocks, others, cols, depth > 0.0)
                 asked = asked if rows.size else extra
         self._unknown_rows[:] = False
         self._unknown_cols[:] = False
-        self._apply_depth_mask(rows, cols)
-        return asked
-
-    def _apply_depth_mask(self, rows: np.ndarray, cols: np.ndarray):
-        """Bring the solver's mask up to date where depths were just asked (whole ``rows``, whole ``cols``):
-        the rest of the mask already matches the depths."""
-        current = self.solver.water_mask
-        if current is None:
-            self._set_mask(self._wet.copy())
-            return
-        blocks = []
-        for axis, index in ((0, rows), (1, cols)):
-            for lo, hi in _runs(index):
-                region = (slice(lo, hi), slice(None)) if axis == 0 else (slice(None), slice(lo, hi))
-                water = self._wet[region]
-                if not (water == (current[region] > 0.5)).all():
-                    blocks.append((lo, 0, water) if axis == 0 else (0, lo, water))
         if blocks:
             self.solver.set_water_mask_blocks(blocks)
             self._water_fraction_stale = True
             self.version += 1
+        return asked
+
+    def _changed_blocks(self, blocks: list, rows: np.ndarray, cols: np.ndarray, water: np.ndarray):
+        """Append to ``blocks`` the (row0, col0, block) of each run of ``rows`` × run of ``cols`` (sorted cell
+        indices; ``water`` (len(rows), len(cols)) bool) where the solver's mask differs: the rest of the mask
+        already matches the depths."""
+        current = self.solver.water_mask  # exactly 0 or 1: compared with the bools as they are
+        row_runs, col_runs = _runs(rows), _runs(cols)
+        p = 0
+        for r0, r1 in row_runs:
+            q = 0
+            for c0, c1 in col_runs:
+                block = water[p:p + r1 - r0, q:q + c1 - c0]
+                if current is None or not (block == current[r0:r1, c0:c1]).all():
+                    blocks.append((r0, c0, block))
+                q += c1 - c0
+            p += r1 - r0
 
     def _refresh_depth_band(self, dt: float, extra_xz=None) -> tuple[int, np.ndarray | None]:
         """Re-ask the film depth of the next band of rows (the whole window every mask_refresh_s), together
@@ -535,13 +536,13 @@ class RippleField:
         if batch.needs_depth and film_depth_fn is None:
             raise ValueError("a wheel without film_depth_mm needs film_depth_fn")
         # With a film-depth function the cells that scroll in are asked together with this frame's band.
-        fill = film_depth_fn is None or self._wet is None
+        fill = film_depth_fn is None or not self._following
         shift = (0, 0) if center_xz is None else self._recenter(*center_xz, fill=fill)
         # The wheels' depths ride along with the strips' call (one call of the road's function a frame).
         wheel_xz = batch.depth_points() if film_depth_fn is not None and batch.needs_depth else None
         wheel_depths = None
         if film_depth_fn is not None:
-            if self._wet is None:
+            if not self._following:
                 self.refresh_water_mask(film_depth_fn)
             else:  # a new function object each frame (the weather moves on): keep rolling, no full re-ask
                 self._film_fn = film_depth_fn
