@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -101,10 +102,11 @@ class WheelBatch:
             known = depth[~np.isnan(depth)]
             if known.size and not (known.min() >= 0.0 and known.max() <= 1e3):
                 return False
-        # NaN fails every comparison, so it takes the long way too.
-        return bool(np.isfinite(self.p0_xz).all() and np.isfinite(self.p1_xz).all()
-                    and self.speed_m_s.min() >= 0.0 and self.speed_m_s.max() <= 1e3
-                    and self.tire_width_m.min() >= 1e-3 and self.tire_width_m.max() <= 10.0)
+        # Every value against its range in one pass (positions within ±the largest float: finite); NaN fails
+        # every comparison, so it takes the long way too.
+        lo, hi = _bounds(w)
+        values = np.concatenate((self.p0_xz.reshape(-1), self.p1_xz.reshape(-1), self.speed_m_s, self.tire_width_m))
+        return bool(((values >= lo) & (values <= hi)).all())
 
     def rows(self, film_depth_fn: FilmDepthFn | None, asked: np.ndarray | None = None) -> np.ndarray:
         """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call (or given:
@@ -120,6 +122,15 @@ class WheelBatch:
             depth[unknown] = np.minimum(np.maximum(np.where(np.isnan(asked), 0.0, asked), 0.0), 1e3)
         return np.concatenate([self.p0_xz, self.p1_xz, self.speed_m_s[:, None], depth[:, None],
                                self.tire_width_m[:, None]], axis=1)
+
+
+@lru_cache(maxsize=8)
+def _bounds(w: int) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) of a valid batch of w wheels' values in ``_valid``'s order: p0, p1 (finite), speed, width."""
+    big = np.finfo(np.float64).max
+    lo = np.concatenate([np.full(4 * w, -big), np.zeros(w), np.full(w, 1e-3)])
+    hi = np.concatenate([np.full(4 * w, big), np.full(w, 1e3), np.full(w, 10.0)])
+    return lo, hi
 
 
 _NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
