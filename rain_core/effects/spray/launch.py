@@ -176,7 +176,10 @@ def _draws(rng, d_mm, bounds, ks):
     for k in ks:
         lo, hi = int(bounds[k]), int(bounds[k + 1])
         if hi > lo:
-            d_mm[lo:hi] = rng.standard_normal(hi - lo)
+            if d_mm.flags.c_contiguous:
+                rng.standard_normal(out=d_mm[lo:hi])  # the same draws as standard_normal(hi − lo), in place
+            else:
+                d_mm[lo:hi] = rng.standard_normal(hi - lo)
             rows.append(_uniform_rows(rng, k, hi - lo))
     if not rows:
         return None
