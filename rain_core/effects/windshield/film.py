@@ -26,8 +26,18 @@ class FilmBeading:
         thick = np.flatnonzero(flat > self._bead_mass)
         if len(thick) == 0:
             return
-        room = max(int(inputs.drop_budget) - self.count, 0)
-        thick = thick[np.argsort(-flat[thick] / self._areas_flat[thick], kind="stable")]
+        thick, m = self._beads(flat, thick, max(int(inputs.drop_budget) - self.count, 0))
+        iv, iu = np.divmod(thick, FILM_CELLS)
+        u = (iu + self.rng.random(len(thick))) / FILM_CELLS
+        v = (iv + self.rng.random(len(thick))) / FILM_CELLS
+        self._bead_drops(u, v, m)
+
+    def _beads(self, flat: np.ndarray, thick: np.ndarray, room: int) -> tuple[np.ndarray, np.ndarray]:
+        """Of the film cells ``thick`` (indices into ``flat``, the film in kg, edited here), the ones that bead —
+        thickest first, at most ``room`` (the drop budget left); the surplus of a full glass joins drops already
+        in its cell — and the bead masses (kg). Each beading cell keeps BEAD_KEEP × the threshold. Shared by
+        the reference and the fast path (``WindshieldSim._film_step``)."""
+        thick = thick[(-flat[thick] / self._areas_flat[thick]).argsort(kind="stable")]
         keep = BEAD_KEEP * RHO_WATER * BEAD_THRESHOLD_M * self._areas_flat[thick]
         if len(thick) > room:  # a full glass: the surplus film joins drops already in those cells
             over, over_keep = thick[room:], keep[room:]
@@ -36,10 +46,7 @@ class FilmBeading:
             thick, keep = thick[:room], keep[:room]
         m = flat[thick] - keep
         flat[thick] = keep
-        iv, iu = np.divmod(thick, FILM_CELLS)
-        u = (iu + self.rng.random(len(thick))) / FILM_CELLS
-        v = (iv + self.rng.random(len(thick))) / FILM_CELLS
-        self._bead_drops(u, v, m)
+        return thick, m
 
     def _bead_drops(self, u: np.ndarray, v: np.ndarray, m: np.ndarray) -> None:
         """New drops at rest at film UV (u, v) of masses m (kg)."""

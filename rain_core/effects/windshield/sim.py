@@ -53,8 +53,6 @@ from rain_core import checks
 from rain_core.effects.windshield.arrivals import ArrivalTable
 from rain_core.effects.windshield.constants import (
     BEAD_BINS,
-    BEAD_KEEP,
-    BEAD_THRESHOLD_M,
     BL_RUN_UP_M,
     CROSSWIND_GAIN,
     EVAP_AIR_M_S,
@@ -427,16 +425,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         thick = (flat > self._bead_mass).nonzero()[0]
         if len(thick) == 0:
             return
-        room = max(int(inputs.drop_budget) - self._n, 0)
-        thick = thick[(-flat[thick] / self._areas_flat[thick]).argsort(kind="stable")]
-        keep = BEAD_KEEP * RHO_WATER * BEAD_THRESHOLD_M * self._areas_flat[thick]
-        if len(thick) > room:  # a full glass: the surplus film joins drops already in those cells
-            over, over_keep = thick[room:], keep[room:]
-            joined = self._give_to_drops(over, flat[over] - over_keep)
-            flat[over[joined]] = over_keep[joined]
-            thick, keep = thick[:room], keep[:room]
-        m = flat[thick] - keep
-        flat[thick] = keep
+        thick, m = self._beads(flat, thick, max(int(inputs.drop_budget) - self._n, 0))
         iv, iu = np.divmod(thick, FILM_CELLS)
         k = len(thick)
         r = self.rng.random(2 * k)  # the reference's rng.random(k) for u, then for v
