@@ -30,7 +30,8 @@ from rain_core.effects.ripples.raindrops import (
     rain_key,
     raindrops,
 )
-from rain_core.effects.ripples.solver import WaveSolver, shift_in_place
+from rain_core.effects.ripples.scroll import shift_in_place
+from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
 from rain_core.effects.ripples.wheels import FilmDepthFn, WheelBatch
 from rain_core.effects.ripples.window import field_grid

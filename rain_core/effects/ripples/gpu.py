@@ -8,7 +8,8 @@ import numpy as np
 from rain_core import physics
 from rain_core.effects.ripples.constants import MIN_FOOTPRINT_CELLS
 from rain_core.effects.ripples.raindrops import DROP_CDF_NODES, DROP_MOMENTUM_NODES, RainBatch, momentum_table
-from rain_core.effects.ripples.solver import WaveSolver, shift_in_place
+from rain_core.effects.ripples.scroll import shift_in_place
+from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.gfx import units
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import PingPong, float_target, fullscreen_triangle

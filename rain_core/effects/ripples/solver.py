@@ -68,44 +68,7 @@ from rain_core.effects.ripples.constants import (
     MIN_STEP_FRACTION,
     SLEEP_SLOPE,
 )
-
-
-def shifted(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
-    """out[iz, ix] = a[iz + dz, ix + dx] where that exists, else ``fill``."""
-    n_z, n_x = a.shape
-    out = np.full_like(a, fill)
-    if abs(dx) < n_x and abs(dz) < n_z:
-        out[max(0, -dz):n_z - max(0, dz), max(0, -dx):n_x - max(0, dx)] = \
-            a[max(0, dz):n_z - max(0, -dz), max(0, dx):n_x - max(0, -dx)]
-    return out
-
-
-def shift_in_place(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
-    """``shifted`` into ``a`` itself (returned): the window scrolls every frame at speed, and a fresh n² array
-    filled and copied each time costs more than moving the part that stays and filling the strips that enter."""
-    n_z, n_x = a.shape
-    if abs(dx) >= n_x or abs(dz) >= n_z:
-        a[...] = fill
-        return a
-    # NumPy copies overlapping views as if through a temporary, so the move is exact in either direction.
-    if dx == 0 and a.flags.c_contiguous:  # whole rows: one contiguous move (the car drives along z)
-        flat, k = a.reshape(-1), abs(dz) * n_x
-        if dz > 0:
-            flat[:flat.size - k] = flat[k:]
-        elif dz < 0:
-            flat[k:] = flat[:flat.size - k]
-    else:
-        a[max(0, -dz):n_z - max(0, dz), max(0, -dx):n_x - max(0, dx)] = \
-            a[max(0, dz):n_z - max(0, -dz), max(0, dx):n_x - max(0, -dx)]
-    if dz > 0:
-        a[n_z - dz:, :] = fill
-    elif dz < 0:
-        a[:-dz, :] = fill
-    if dx > 0:
-        a[:, n_x - dx:] = fill
-    elif dx < 0:
-        a[:, :-dx] = fill
-    return a
+from rain_core.effects.ripples.scroll import shift_in_place, shifted
 
 
 class WaveSolver:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rain_core.effects.ripples.solver import shift_in_place, shifted
+from rain_core.effects.ripples.scroll import shift_in_place, shifted
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32, bool])
