@@ -146,7 +146,7 @@ class WindshieldEffect(Effect):
             tex.repeat_x = tex.repeat_y = False
             tex.write(np.zeros((FILM_CELLS, FILM_CELLS), np.float16).tobytes())
         self._coarse_index = 0
-        self._coarse_scratch = None  # (cell areas, ρ × them, float64, float32 and uint16 arrays) of _coarse_bits
+        self._coarse_scratch = None  # (float64, float32 and uint16 arrays) of _coarse_bits
         self._frame_copy = None
         self._last_time: float | None = None
         self._inputs = GlassInputs()
@@ -319,15 +319,13 @@ class WindshieldEffect(Effect):
 
     def _coarse_bits(self) -> np.ndarray:
         """The CPU film's mean thickness per cell (µm, at most 6e4: half floats end at 65504) as float16 bits
-        (NumPy's float16 cast is slow), (FILM_CELLS, FILM_CELLS) uint16: ``film_thickness_m`` × 1e6 with the
-        same operations, in arrays kept from frame to frame."""
-        film = self.sim.film
-        if self._coarse_scratch is None or self._coarse_scratch[0] is not self.sim.cell_areas:
-            areas = self.sim.cell_areas
-            self._coarse_scratch = (areas, RHO_WATER * areas, np.empty(film.shape), np.empty(film.shape, np.float32),
-                                    np.empty(film.shape, np.uint16))
-        _, mass_per_m, f64, f32, bits16 = self._coarse_scratch
-        np.divide(film, mass_per_m, out=f64)
+        (NumPy's float16 cast is slow), (FILM_CELLS, FILM_CELLS) uint16: ``film_thickness_m`` × 1e6, in arrays kept
+        from frame to frame."""
+        shape = self.sim.film.shape
+        if self._coarse_scratch is None or self._coarse_scratch[0].shape != shape:
+            self._coarse_scratch = (np.empty(shape), np.empty(shape, np.float32), np.empty(shape, np.uint16))
+        f64, f32, bits16 = self._coarse_scratch
+        self.sim.film_thickness_m(out=f64)
         f64 *= 1e6
         np.minimum(f64, 6e4, out=f64)
         f32[...] = f64

@@ -142,9 +142,10 @@ class WindshieldSimReference(DropDynamics, Merging, FilmBeading, Wiping):
         """arrived − wiped − shed − evaporated − on the glass (kg); 0 up to float64 rounding."""
         return self.arrived - self.wiped - self.shed - self.evaporated - self.mass_on_glass()
 
-    def film_thickness_m(self) -> np.ndarray:
-        """Mean film thickness per cell (m), (FILM_CELLS, FILM_CELLS) indexed [iv, iu]."""
-        return self.film / (RHO_WATER * self.cell_areas)
+    def film_thickness_m(self, out: np.ndarray | None = None) -> np.ndarray:
+        """Mean film thickness per cell (m), (FILM_CELLS, FILM_CELLS) indexed [iv, iu]; ``out``: a float64 array of
+        that shape to write it to (the effect asks every frame)."""
+        return np.divide(self.film, RHO_WATER * self.cell_areas, out=out)
 
     def has_water(self) -> bool:
         return self.count > 0 or bool(self.film.any()) or bool(self.beads.any())
