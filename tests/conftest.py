@@ -31,3 +31,15 @@ def shaders(gl_ctx):
     from rain_core.gl import ShaderLibrary
 
     return ShaderLibrary(gl_ctx)
+
+
+@pytest.fixture(params=["numpy", "compiled"])
+def kernel_path(request):
+    """Run a test twice: with the CPU simulations' NumPy twins and with their compiled kernels (rain_core.jit);
+    the compiled run is skipped only where Numba is missing (CI installs it with the test extra)."""
+    from rain_core import jit
+
+    if request.param == "compiled" and not jit.AVAILABLE:
+        pytest.skip("Numba not installed (pip install 'rainroad[fast]')")
+    with jit.forced(request.param == "compiled"):
+        yield request.param

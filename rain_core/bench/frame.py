@@ -449,10 +449,11 @@ def summary_table(results: list[dict]) -> str:
 
 def header(args, overhead_ns: float) -> str:
     import rain_core
+    from rain_core import jit
 
     return (f"# Whole frames at heavy rain ({RAIN_MM_H:g} mm/h, wetness/cracks/puddles 1, driver camera, noon), "
             f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}\n\n"
-            f"rain_core: {Path(rain_core.__file__).parent}\n\n"
+            f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {jit.describe()}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
             "framebuffer binds, uniform writes, context state, object creation, timer queries) are wrapped by "
             "counters of calls, bytes written and time inside; CPU outside GL = the pass's CPU time (measured around "
@@ -498,6 +499,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                    help="thread: the main thread's CPU time (default; robust on a shared machine); wall: wall time")
     p.add_argument("--ripples-backend", choices=("auto", "numpy32", "gpu", "reference"), default="auto",
                    help="the ripples solver (auto: timed at start; on llvmpipe numpy32 wins)")
+    p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
+                   help="the CPU simulations' compiled kernels (auto: on where Numba is installed; off: their NumPy "
+                        "twins, for before/after on one tree)")
     p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
                    help="leave the renderer's timer queries off (no llvmpipe %% column)")
     args = p.parse_args(argv)
@@ -514,6 +518,14 @@ def main(argv=None) -> int:
     from rain_core.gl import create_headless_context
 
     args = parse_args(argv)
+    if args.jit != "auto":
+        from rain_core import jit
+
+        try:
+            jit.set_active(args.jit == "on")
+        except RuntimeError as exc:
+            print(f"--jit on: {exc}", file=sys.stderr)
+            return 2
     ctx = create_headless_context()
     results = []
     with GLCounter(args.clock) as counter:
