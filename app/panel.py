@@ -18,7 +18,7 @@ from imgui_bundle import imgui
 
 from app.controls import KEY_HELP, reset_to_lane
 from app.imgui_layer import ImGuiLayer
-from rain_core import physics
+from rain_core import jit, physics
 from rain_core.settings import SettingsError, all_fields, apply_rain_preset, field_info, get_value, set_value
 
 # The sections in panel order: (settings section or None, title). A section is "wired" when an effect or the
@@ -253,6 +253,7 @@ class RainManagerPanel:
         renderer = self.scene.renderer
         width, height = renderer.size
         imgui.text(f"render {width}x{height}   GPU timing: {renderer.timing_source}")
+        imgui.text(f"CPU simulations: {jit.describe()}")
         imgui.text_disabled("GPU ms are timed only while this section is open (one frame late)")
         # Columns as wide as their text (no cut pass names); a table wider than the panel scrolls sideways.
         flags = (imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
