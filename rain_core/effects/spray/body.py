@@ -120,8 +120,12 @@ def _steps(k: int) -> np.ndarray:
     return (np.arange(1, k + 1, dtype=np.float32) / np.float32(k))[:, None]
 
 
+# body_hit_time_fast's search: coarse samples, then rounds of zoom ages (its compiled twin reads them too).
+SAMPLES, ZOOM, ROUNDS = 12, 16, 2
+
+
 def body_hit_time_fast(p0, v0, u, tau, t_max, body_origin, body_velocity, right, forward, box_params,
-                       samples: int = 12, zoom: int = 16, rounds: int = 2) -> np.ndarray:
+                       samples: int = SAMPLES, zoom: int = ZOOM, rounds: int = ROUNDS) -> np.ndarray:
     """First age (s, ≤ t_max) at which each drop is inside its thrower's body, else t_max: what
     :func:`body_hit_time` (the reference) finds, in fewer and narrower NumPy passes.
 

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from rain_core import layout, physics
-from rain_core.effects.spray.flight import ground_time
+from rain_core import jit, layout, physics
+from rain_core.effects.spray import body, kernels
+from rain_core.effects.spray.flight import DRAG_TAIL_FIT, ground_time
 from rain_core.effects.spray.launch import (
     MIST_LIFE_S,
     MIST_SIGMA_MAX,
+    WAKE_TAU_S,
     carrier_air_and_tau,
     launch_droplets_sorted,
     launch_mist,
@@ -79,6 +81,8 @@ class SpawnBuffers:
         self.launch = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3)),
                        np.empty(n))
         self.records = np.zeros(n, PARTICLE_DTYPE)
+        # The compiled path's flight outputs: u, speed, τ, ground and body ages.
+        self.flight = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
 
     def ensure(self, n: int) -> SpawnBuffers:
         if n > self.size:
@@ -111,20 +115,32 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     if nm:
         launch_mist(rng, geo, w[nd:], None, age_now[nd:], out=tuple(a[nd:n] for a in out))
     p0, v0, d_mm, sigma0, growth, air, updraught = (a[:n] for a in out)
-    vt = np.empty(n)
-    vt[:nd] = _terminal_velocity(d_mm[:nd])
-    vt[nd:] = _MIST_VT_M_S
-    u, speed, tau = carrier_air_and_tau(wind, air, updraught, v0, d_mm, vt, nd)
-    t_ground = ground_time(p0, v0, u, tau)
+    compiled = jit.active()
+    if compiled:
+        u, speed, tau, t_ground, t_body = (a[:n] for a in buf.flight)
+        kernels.fly(p0, v0, d_mm, air, updraught, nd, np.ascontiguousarray(wind, dtype=np.float64), _MIST_VT_M_S,
+                    WAKE_TAU_S, _GK_X, _GK_X0, _GK_H, _GK_Y0, _GK_Y1, _GK_D0, _GK_D1, physics.G_M_S2, DRAG_TAIL_FIT,
+                    layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M, 1e-5, 40, u, speed, tau, t_ground)
+    else:
+        vt = np.empty(n)
+        vt[:nd] = _terminal_velocity(d_mm[:nd])
+        vt[nd:] = _MIST_VT_M_S
+        u, speed, tau = carrier_air_and_tau(wind, air, updraught, v0, d_mm, vt, nd)
+        t_ground = ground_time(p0, v0, u, tau)
     vi = w // 4
     life = np.empty(n)
     fate = np.empty(n, dtype=np.int64)
     if nd:
         d = slice(0, nd)
-        rows = _vehicle_table(geo).take(vi[d], axis=0)  # one gather for all the per-vehicle quantities
-        vel = rows[:, 3:6]
-        t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d], rows[:, 0:3] - vel * age_now[d, None], vel,
-                          rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
+        if compiled and body_hit is body.body_hit_time_fast:  # (tests may plug in another body test)
+            kernels.body_hit(p0, v0, u, tau, t_ground, _vehicle_table(geo), vi, age_now, nd, body.SAMPLES,
+                             body.ZOOM, body.ROUNDS, t_body)
+            t_body = t_body[d]
+        else:
+            rows = _vehicle_table(geo).take(vi[d], axis=0)  # one gather for all the per-vehicle quantities
+            vel = rows[:, 3:6]
+            t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d], rows[:, 0:3] - vel * age_now[d, None], vel,
+                              rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
         hit = t_body < t_ground[d]
         fate[d] = np.where(hit, FATE_BODY, FATE_ROAD)
         np.minimum(t_body, t_ground[d], out=life[d])

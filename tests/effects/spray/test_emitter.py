@@ -47,7 +47,7 @@ def _all_records(emitter):
     return [r.data[r.death > -np.inf] for r in emitter.rings]
 
 
-def test_droplets_never_pass_below_the_road(gl_ctx, shaders):
+def test_droplets_never_pass_below_the_road(gl_ctx, shaders, kernel_path):
     em = SprayEmitter(seed=3, budget=4000, film_depth_fn=_puddle(8.0))
     t = _drive(em, _cars(80.0), 1.0, wind=(3.0, 0.0, -2.0))
     recs = np.concatenate(_all_records(em))
@@ -64,7 +64,7 @@ def test_droplets_never_pass_below_the_road(gl_ctx, shaders):
     assert t > 0.9
 
 
-def test_emitted_parcels_carry_the_thrown_mass():
+def test_emitted_parcels_carry_the_thrown_mass(kernel_path):
     em = SprayEmitter(seed=5, budget=3000, film_depth_fn=_puddle(3.0))
     _drive(em, _cars(70.0), 0.5, wetness=1.0)
     pending = sum(float(a.sum()) for a in em._acc.values())
@@ -75,7 +75,7 @@ def test_emitted_parcels_carry_the_thrown_mass():
     assert st.fates.sum() == pytest.approx(st.emitted_kg, rel=1e-12)
 
 
-def test_determinism():
+def test_determinism(kernel_path):
     runs = []
     for seed in (11, 11, 12):
         em = SprayEmitter(seed=seed, budget=2000, film_depth_fn=_puddle(5.0))
@@ -107,7 +107,7 @@ def test_budget_bounds_the_parcels_alive():
     assert em.rings[0].capacity == 100 and em.alive_counts(t) == (0, 0)
 
 
-def test_landings_in_standing_water_feed_the_ripples():
+def test_landings_in_standing_water_feed_the_ripples(kernel_path):
     em = SprayEmitter(seed=4, budget=3000, film_depth_fn=_puddle(8.0))
     cars = _cars(60.0)
     landed = []

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rain_core import layout
+from rain_core import jit, layout
 from rain_core.effects.spray import body, emitter, flight, launch, parcels, spawn, wheels
 from rain_core.effects.spray.emitter import SprayEmitter
 from rain_core.effects.spray.water import KMH
@@ -158,12 +158,15 @@ def _same_body_test(monkeypatch):
 
 def test_fast_emitter_writes_the_references_parcels(monkeypatch):
     """Same seed, same frames → the same parcels (float32 records equal) and the same landings, once the body
-    test (the one approximation that differs: see the next test) is the same."""
+    test (the one approximation that differs: see the next test) is the same. The NumPy twin: its landings match
+    to the last bits kept here, which the compiled kernels' Newton stops do not promise (test_kernels.py compares
+    them with the twin)."""
     _same_body_test(monkeypatch)
     runs = []
     for reference in (False, True):
         em = SprayEmitter(seed=7, budget=3000, film_depth_fn=_puddle(4.0), reference=reference)
-        _, landed = _drive(em, _fleet(), 45)
+        with jit.forced(False):
+            _, landed = _drive(em, _fleet(), 45)
         runs.append((em, np.concatenate(landed)))
     (fast, fast_landed), (ref, ref_landed) = runs
     assert fast.stats.parcels == ref.stats.parcels > 5000 and fast.stats.mist_puffs == ref.stats.mist_puffs > 0
@@ -182,7 +185,7 @@ def test_fast_emitter_writes_the_references_parcels(monkeypatch):
     assert all(tuple(row) in as_set for row in np.round(fast_landed, 6))
 
 
-def test_fast_emitter_matches_the_reference_statistics():
+def test_fast_emitter_matches_the_reference_statistics(kernel_path):
     """With its own body test (denser in the window where a drop can meet the body) the fast path throws the
     same water into the same fates within a few per cent."""
     out = []
@@ -201,7 +204,7 @@ def test_fast_emitter_matches_the_reference_statistics():
 
 
 @pytest.mark.parametrize("reference", [False, True])
-def test_water_thrown_per_second_is_the_water_models_flux(reference):
+def test_water_thrown_per_second_is_the_water_models_flux(reference, kernel_path):
     """Per wheel: the parcels' mass per second equals the water model's thrown flux (the remainder waiting for
     the next parcel is all that is missing), and the flux is M_w = v·b·WFD·ρ_w above 64 km/h."""
     fleet = _fleet(100.0)[:2]
@@ -219,7 +222,7 @@ def test_water_thrown_per_second_is_the_water_models_flux(reference):
         assert np.all(np.abs(emitted / thrown - 1.0) < 0.03)
 
 
-def test_only_new_parcels_are_written_and_uploaded():
+def test_only_new_parcels_are_written_and_uploaded(kernel_path):
     em = SprayEmitter(seed=1, budget=2000, film_depth_fn=_puddle(3.0))
     fleet = _fleet()
     t, _ = _drive(em, fleet, 3)

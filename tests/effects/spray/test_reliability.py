@@ -101,7 +101,7 @@ def test_public_water_functions_refuse_non_finite_input():
 
 
 @pytest.mark.parametrize("reference", [False, True])
-def test_a_bad_film_override_counts_as_dry_or_capped(reference):
+def test_a_bad_film_override_counts_as_dry_or_capped(reference, kernel_path):
     """A film-depth override that returns NaN, inf or negative depths (a user's function) gives finite parcels."""
     values = iter([math.nan, math.inf, -5.0, 1e30])
     em = SprayEmitter(seed=2, budget=800, reference=reference,
@@ -114,7 +114,7 @@ def test_a_bad_film_override_counts_as_dry_or_capped(reference):
 
 
 @pytest.mark.parametrize("reference", [False, True])
-def test_the_work_per_step_is_bounded_whatever_the_interval_and_rate(reference):
+def test_the_work_per_step_is_bounded_whatever_the_interval_and_rate(reference, kernel_path):
     """However long the step and however short the lives, one step spawns at most about a ring's worth."""
     em = SprayEmitter(seed=3, budget=300, film_depth_fn=_depth(9.0), reference=reference)
     em.strength = spray_emitter.MAX_STRENGTH
@@ -130,7 +130,7 @@ def test_the_work_per_step_is_bounded_whatever_the_interval_and_rate(reference):
     _finite_state(em)
 
 
-def test_huge_time_jumps_and_long_runs_keep_float32_births_precise():
+def test_huge_time_jumps_and_long_runs_keep_float32_births_precise(kernel_path):
     """The effect clock restarts when it passes REBASE_S, so births stay small and finite in float32 however far
     the time goes (a jump of 1e300 s included); the landings move with it."""
     em = SprayEmitter(seed=4, budget=600, film_depth_fn=_depth(4.0))
@@ -153,7 +153,7 @@ def test_huge_time_jumps_and_long_runs_keep_float32_births_precise():
 
 
 @pytest.mark.parametrize("reference", [False, True])
-def test_random_valid_inputs_give_finite_bounded_parcels(reference):
+def test_random_valid_inputs_give_finite_bounded_parcels(reference, kernel_path):
     """Random valid frames (speeds from reversing to 300 km/h, yaw rates, winds to 40 m/s, depths 0–10 mm, steps
     0–1 s, strengths 0–4) → finite parcels, no more alive than the budget."""
     rng = np.random.default_rng(18)

@@ -1,0 +1,228 @@
+"""Compiled kernels of the spray's per-frame spawn (rain_core.jit): each replaces a chain of NumPy calls of the
+emitter's fast path (``spawn.spawn_parcels_fast``) with one loop over a frame's parcels.
+
+Their NumPy twins stay the fallback and the oracle: ``launch.launch_droplets_sorted`` / ``launch_mist``
+(:func:`launch_parcels`), ``spawn._terminal_velocity``, ``launch.carrier_air_and_tau`` and
+``flight.ground_time`` (:func:`fly`), ``body.body_hit_time_fast`` (:func:`body_hit`). The same operations in the
+same order, so the results agree to rounding (libm's exp/log/sin/cos/pow against NumPy's, and Newton's
+stopping test per parcel instead of over all of them: tests/effects/spray/test_kernels.py states the tolerances).
+Random numbers are drawn by the caller, in the twin's order, and passed in. Units: m, s, m/s, mm for drop sizes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rain_core import jit
+
+
+@jit.kernel
+def _newton_time_to_height(y0, w0, uy, tau, level, tol_s, max_steps):
+    """``flight.time_to_height_newton`` for one parcel (s; 0 where it starts at or below ``level`` m): the same
+    steps, stopped by this parcel's own step (the twin stops when every parcel's is under ``tol_s``)."""
+    if y0 <= level:
+        return 0.0
+    uy = min(uy, -1e-6)
+    a = w0 - uy
+    w0 = uy + a
+    drop = max(y0 - level, 0.0)
+    t = (drop + a * tau) / -uy if a > 0.0 else 0.0
+    rate = -1.0 / tau
+    a_tau = a * tau
+    neg_a = -a
+    for i in range(max_steps):
+        em1 = math.expm1(t * rate)
+        num = (drop + uy * t) - a_tau * em1
+        den = w0 - neg_a * em1
+        step = num / den
+        t -= step
+        if i >= 5 and not abs(step) > tol_s:
+            break
+    return t
+
+
+@jit.kernel
+def fly(p0, v0, d_mm, air, updraught, nd, wind, mist_vt, mist_tau, gk_x, gk_x0, gk_h, gk_y0, gk_y1, gk_d0, gk_d1,
+        g, tail_fit, kerb_m, half_width_m, tol_s, max_steps, u, speed, tau, t_ground):
+    """Per parcel (rows [:nd] droplets, the rest mist): its terminal velocity (m/s; droplets by Gunn–Kinzer's
+    Hermite interpolant of d_mm, mist ``mist_vt``), the air it drifts in ``u`` (n, 3) m/s (``wind`` + ``air``, less
+    the unheld part ``1 − updraught`` of its settling), its launch ``speed`` relative to that air (m/s), its drag
+    time constant ``tau`` (s; mist ``mist_tau``) and ``t_ground`` (s), its age at the road or kerb-top (levels 0 and
+    ``kerb_m`` m, the kerb line at |x| = ``half_width_m``). Writes u, speed, tau, t_ground."""
+    n = p0.shape[0]
+    nk = gk_x.shape[0]
+    for i in range(n):
+        if i < nd:
+            d = d_mm[i]
+            # gk_x.searchsorted(d, side="right") − 1: the last knot at or below d.
+            lo, hi = 0, nk
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if gk_x[mid] <= d:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            k = lo - 1
+            h = gk_h[k]
+            t = (d - gk_x0[k]) / h
+            t2 = t * t
+            t3 = t2 * t
+            two_t3, three_t2 = 2 * t3, 3 * t2
+            vt = ((two_t3 - three_t2 + 1) * gk_y0[k] + (t3 - 2 * t2 + t) * h * gk_d0[k]
+                  + (three_t2 - two_t3) * gk_y1[k] + (t3 - t2) * h * gk_d1[k])
+        else:
+            vt = mist_vt
+        ux = wind[0] + air[i, 0]
+        uy = wind[1] + air[i, 1]
+        uz = wind[2] + air[i, 2]
+        uy -= vt * (1.0 - updraught[i])
+        u[i, 0], u[i, 1], u[i, 2] = ux, uy, uz
+        ex, ey, ez = v0[i, 0] - ux, v0[i, 1] - uy, v0[i, 2] - uz
+        s0 = math.sqrt(ex * ex + ey * ey + ez * ez)
+        speed[i] = s0
+        if i < nd:
+            # flight.drag_time_constant_unchecked
+            vtc = max(vt, 1e-3)
+            ratio = max(s0 / vtc, 1.0)
+            if ratio > 1.0 + 1e-6:
+                stretch = 1.0 + (tail_fit - 1.0) * (1.0 - 1.0 / (ratio * ratio))
+                tc = vtc * math.log(ratio) / (g * (ratio - 1.0)) * stretch
+            else:
+                tc = vtc / g
+        else:
+            tc = mist_tau
+        tau[i] = tc
+        # flight.ground_time: the road and kerb-top crossings, x there from the closed form.
+        y0, w0 = p0[i, 1], v0[i, 1]
+        t_road = _newton_time_to_height(y0, w0, uy, tc, 0.0, tol_s, max_steps)
+        t_kerb = _newton_time_to_height(y0, w0, uy, tc, kerb_m, tol_s, max_steps)
+        px, dvx_tau = p0[i, 0], (v0[i, 0] - ux) * tc
+        x_road = px + ux * t_road - dvx_tau * math.expm1(-t_road / tc)
+        x_kerb = px + ux * t_kerb - dvx_tau * math.expm1(-t_kerb / tc)
+        t_ground[i] = t_kerb if (abs(x_kerb) >= half_width_m or abs(x_road) >= half_width_m) else t_road
+
+
+@jit.kernel
+def _inside(px, py, pz, hw, floor, height, hl, hwb, well_hl, well_top, well_x):
+    """``BodyBox.contains`` of one local point (float32: right, up, back) — ``body._inside``'s comparisons."""
+    in_box = (px > -hw) and (px < hw) and (py > floor) and (py < height) and (pz > -hl) and (pz < hl)
+    if not in_box:
+        return False
+    in_well = (abs(abs(pz) - hwb) < well_hl) and (py < well_top) and (abs(px) > well_x)
+    return not in_well
+
+
+@jit.kernel
+def _local_at(t, coarse, P, U, D, tau32, rate32):
+    """The float32 local position P + U·t + D·τ(1 − e^(−t/τ)) at age t (coarse: e^x − 1 by exp, as the twin's
+    first pass)."""
+    x = t * rate32
+    if coarse:
+        rel = np.float32(math.exp(x)) - np.float32(1.0)
+    else:
+        rel = np.float32(math.expm1(x))
+    rel = rel * tau32
+    return (P[0] + U[0] * t - D[0] * rel, P[1] + U[1] * t - D[1] * rel, P[2] + U[2] * t - D[2] * rel)
+
+
+@jit.kernel
+def body_hit(p0, v0, u, tau, t_max, vehicle, vi, age_now, nd, samples, zoom, rounds, out):
+    """``body.body_hit_time_fast`` for droplets [:nd] (s, ≤ t_max; t_max where the drop never enters its
+    thrower's body): the body frame from ``vehicle`` (V, 20) (position, velocity, right, forward, BodyBox fields;
+    ``spawn._vehicle_table``) of vehicle ``vi`` moved back by ``age_now`` (s), the window where the drop can meet
+    the body from linear bounds (float64), then ``samples`` coarse ages and ``rounds`` zooms of ``zoom`` ages in
+    float32. Writes ``out[:nd]``."""
+    f32 = np.float32
+    P = np.empty(3, np.float32)
+    U = np.empty(3, np.float32)
+    D = np.empty(3, np.float32)
+    Pd = np.empty(3)
+    Ud = np.empty(3)
+    Dd = np.empty(3)
+    upper = np.empty(3)
+    lower = np.empty(3)
+    for i in range(nd):
+        t_mx = t_max[i]
+        out[i] = t_mx
+        row = vehicle[vi[i]]
+        age = age_now[i]
+        # The drop's start, drift and excess in the body's moving frame (right, up, back).
+        ox, oy, oz = row[0] - row[3] * age, row[1] - row[4] * age, row[2] - row[5] * age
+        for a in range(3):
+            if a == 0:
+                vx, vy, vz = p0[i, 0] - ox, p0[i, 1] - oy, p0[i, 2] - oz
+            elif a == 1:
+                vx, vy, vz = u[i, 0] - row[3], u[i, 1] - row[4], u[i, 2] - row[5]
+            else:
+                vx, vy, vz = v0[i, 0] - u[i, 0], v0[i, 1] - u[i, 1], v0[i, 2] - u[i, 2]
+            lx = vx * row[6] + vz * row[8]
+            lz = -(vx * row[9] + vz * row[11])
+            if a == 0:
+                Pd[0], Pd[1], Pd[2] = lx, vy, lz
+            elif a == 1:
+                Ud[0], Ud[1], Ud[2] = lx, vy, lz
+            else:
+                Dd[0], Dd[1], Dd[2] = lx, vy, lz
+        upper[0], upper[1], upper[2] = row[12], row[15], row[13]
+        lower[0], lower[1], lower[2] = -row[12], row[14], -row[13]
+        tc = tau[i]
+        # Beyond the body for good past t_end (linear bounds of each coordinate).
+        exit_min = np.inf
+        for a in range(3):
+            lo_b = Pd[a] + min(Dd[a], 0.0) * tc
+            hi_b = Pd[a] + max(Dd[a], 0.0) * tc
+            if Ud[a] > 0.0:
+                e = (upper[a] - lo_b) / Ud[a]
+            elif Ud[a] < 0.0:
+                e = (lower[a] - hi_b) / Ud[a]
+            else:
+                e = np.inf
+            exit_min = min(exit_min, e)
+        t_end = min(max(exit_min, 0.0), t_mx)
+        if not t_end > 0.0:
+            continue
+        near = True
+        for a in range(3):
+            lo_b = Pd[a] + min(Dd[a], 0.0) * tc
+            hi_b = Pd[a] + max(Dd[a], 0.0) * tc
+            span_lo = lo_b + min(Ud[a], 0.0) * t_end
+            span_hi = hi_b + max(Ud[a], 0.0) * t_end
+            if not (span_lo < upper[a] and span_hi > lower[a]):
+                near = False
+        if not near:
+            continue
+        for a in range(3):
+            P[a], U[a], D[a] = f32(Pd[a]), f32(Ud[a]), f32(Dd[a])
+        hw, hl, floor, height = f32(row[12]), f32(row[13]), f32(row[14]), f32(row[15])
+        hwb, well_hl, well_top, well_x = f32(row[16]), f32(row[17]), f32(row[18]), f32(row[19])
+        tau32 = f32(tc)
+        rate32 = f32(-1.0) / tau32
+        te32 = f32(t_end)
+        # Coarse pass: the first of ``samples`` equal steps inside.
+        lo = f32(0.0)
+        hi = f32(-1.0)
+        for j in range(1, samples + 1):
+            t = te32 * (f32(j) / f32(samples))
+            x, y, z = _local_at(t, True, P, U, D, tau32, rate32)
+            if _inside(x, y, z, hw, floor, height, hl, hwb, well_hl, well_top, well_x):
+                hi = t
+                break
+            lo = t
+        if hi < f32(0.0):
+            continue
+        for _ in range(rounds):
+            # The first zoomed age inside (the last is ``hi`` itself); none found: the first step (as argmax).
+            width = hi - lo
+            first = 1
+            for j in range(1, zoom + 1):
+                t = hi if j == zoom else lo + width * (f32(j) / f32(zoom))
+                x, y, z = _local_at(t, False, P, U, D, tau32, rate32)
+                if _inside(x, y, z, hw, floor, height, hl, hwb, well_hl, well_top, well_x):
+                    first = j
+                    break
+            new_lo = lo if first == 1 else lo + width * (f32(first - 1) / f32(zoom))
+            new_hi = hi if first == zoom else lo + width * (f32(first) / f32(zoom))
+            lo, hi = new_lo, new_hi
+        out[i] = lo

@@ -1,0 +1,100 @@
+"""The spray's compiled kernels (rain_core/effects/spray/kernels.py) against their NumPy twins: each kernel on its
+own, and the emitter driven through 150 frames of a real scene on both paths.
+
+Tolerances: the kernels do the twins' operations in the same order, so most outputs are equal; what may differ
+is libm's exp/expm1/log (float64 and float32) against NumPy's own, by an ulp, and Newton's stopping test (per
+parcel instead of over all parcels: a converged landing time moves by ≪ 1e-7 s). A float32 record may then
+differ in its last bit (rtol 2e-7), a float64 landing time by 1e-7 s."""
+
+import numpy as np
+import pytest
+
+from rain_core import jit, layout, physics
+from rain_core.effects.spray import body, flight, kernels, launch, parcels, spawn
+from rain_core.effects.spray.emitter import SprayEmitter
+from tests.effects.spray.test_fast_path import _body_case, _drive, _fleet, _puddle
+
+pytestmark = pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed")
+
+
+def _flight_case(n=4000, nd=3000, seed=8):
+    rng = np.random.default_rng(seed)
+    p0 = np.column_stack([rng.uniform(-9.0, 9.0, n), rng.uniform(0.0, 1.5, n), rng.uniform(0.0, 50.0, n)])
+    v0 = np.column_stack([rng.uniform(-20.0, 20.0, n), rng.uniform(-10.0, 12.0, n), rng.uniform(-30.0, 30.0, n)])
+    d_mm = np.concatenate([rng.uniform(0.1, 5.0, nd), np.full(n - nd, 0.05)])
+    air = np.column_stack([rng.uniform(-9.0, 9.0, n), np.zeros(n), rng.uniform(-9.0, 9.0, n)])
+    air[nd:] = 0.0
+    updraught = np.where(np.arange(n) < nd, rng.uniform(0.0, 0.6, n), 0.0)
+    return p0, v0, d_mm, air, updraught, nd, np.array([1.5, 0.2, -2.0])
+
+
+def test_fly_equals_the_twins_chain():
+    """Terminal velocity, carrier air, τ and the landing age of every parcel: the twin's values (u, speed and τ
+    to an ulp of log/sqrt, the landing age within 1e-7 s)."""
+    p0, v0, d_mm, air, updraught, nd, wind = _flight_case()
+    n = len(p0)
+    vt = np.empty(n)
+    vt[:nd] = spawn._terminal_velocity(d_mm[:nd])
+    vt[nd:] = spawn._MIST_VT_M_S
+    u_ref, speed_ref, tau_ref = launch.carrier_air_and_tau(wind, air.copy(), updraught, v0, d_mm, vt, nd)
+    ground_ref = flight.ground_time(p0, v0, u_ref, tau_ref)
+    u, speed, tau, ground = np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n)
+    kernels.fly(p0, v0, d_mm, air, updraught, nd, wind, spawn._MIST_VT_M_S, launch.WAKE_TAU_S, spawn._GK_X,
+                spawn._GK_X0, spawn._GK_H, spawn._GK_Y0, spawn._GK_Y1, spawn._GK_D0, spawn._GK_D1, physics.G_M_S2,
+                flight.DRAG_TAIL_FIT, layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M, 1e-5, 40, u, speed, tau, ground)
+    assert np.array_equal(u, u_ref)
+    assert np.allclose(speed, speed_ref, rtol=4e-16, atol=0.0)
+    assert np.allclose(tau, tau_ref, rtol=1e-15, atol=0.0)
+    assert np.abs(ground - ground_ref).max() < 1e-7
+    assert (ground > 0).mean() > 0.5 and (np.abs(ground - ground_ref) > 0).mean() < 0.5  # a real test: mostly equal
+
+
+def test_body_hit_equals_the_twin():
+    """The kernel finds the twin's age (the same float32 search; an ulp of float32 exp may move a coarse or zoomed
+    sample across the body's face, so a few ages differ, by at most one zoom step)."""
+    args, box = _body_case(n=3000)
+    p0, v0, u, tau, t_max, origin, vel, right, forward = args
+    n = len(tau)
+    box_params = np.tile(np.array(list(vars(box).values())), (n, 1))
+    ref = body.body_hit_time_fast(*args, box_params)
+    age = np.random.default_rng(1).random(n) / 30.0
+    # The kernel reads the vehicle's table and moves its origin back by each drop's age: give it origins that
+    # come back to ``origin``.
+    table = np.column_stack([origin[:1] + vel[:1] * 0.0, vel[:1], right[:1], forward[:1], box_params[:1]])
+    table = np.ascontiguousarray(np.repeat(table, n, axis=0))
+    table[:, 0:3] = origin + vel * age[:, None]
+    out = np.full(n, -1.0)
+    kernels.body_hit(p0, v0, u, tau, t_max, table, np.arange(n, dtype=np.int64), age, n, body.SAMPLES, body.ZOOM,
+                     body.ROUNDS, out)
+    ref2 = body.body_hit_time_fast(p0, v0, u, tau, t_max, table[:, 0:3] - vel * age[:, None], vel, right, forward,
+                                   box_params)
+    hit = ref2 < t_max
+    assert 0.1 < hit.mean() < 0.9
+    assert np.mean(out == ref2) > 0.995
+    assert np.array_equal(out < t_max, hit) or np.mean((out < t_max) != hit) < 0.002
+    assert np.abs(out - ref2).max() <= np.max(t_max) / body.SAMPLES / body.ZOOM + 1e-6
+    assert np.abs(ref2 - ref).max() < 1e-6  # the moved origin is the same origin (to rounding)
+
+
+def test_kernel_emitter_writes_the_twins_parcels():
+    """150 frames of four vehicles (turning, reversing, a lorry) in wind on a 4 mm puddle, twice: the compiled path
+    writes the twin's parcels (float32 records to an ulp), spawns the same counts, books the same fates and lands
+    the same drops in the water."""
+    runs = []
+    for compiled in (False, True):
+        with jit.forced(compiled):
+            em = SprayEmitter(seed=7, budget=3000, film_depth_fn=_puddle(4.0))
+            _, landed = _drive(em, _fleet(), 150)
+            runs.append((em, np.concatenate(landed)))
+    (twin, twin_landed), (comp, comp_landed) = runs
+    assert comp.stats.parcels == twin.stats.parcels > 10_000 and comp.stats.mist_puffs == twin.stats.mist_puffs > 0
+    assert np.allclose(comp.stats.fates, twin.stats.fates, rtol=1e-12)
+    assert comp.stats.emitted_kg == twin.stats.emitted_kg
+    for rc, rt in zip(comp.rings, twin.rings, strict=True):
+        assert rc.head == rt.head
+        assert np.array_equal(rc.birth, rt.birth)
+        for name in parcels.PARTICLE_DTYPE.names:
+            assert np.allclose(rc.data[name], rt.data[name], rtol=2e-7, atol=0.0), name
+        assert np.allclose(rc.death, rt.death, rtol=0.0, atol=1e-6)
+    assert len(comp_landed) == len(twin_landed) > 1000
+    assert np.allclose(comp_landed, twin_landed, rtol=1e-9, atol=1e-7)
