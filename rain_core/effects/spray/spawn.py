@@ -120,7 +120,7 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
         u, speed, tau, t_ground, t_body = (a[:n] for a in buf.flight)
         kernels.fly(p0, v0, d_mm, air, updraught, nd, np.ascontiguousarray(wind, dtype=np.float64), _MIST_VT_M_S,
                     WAKE_TAU_S, _GK_X, _GK_X0, _GK_H, _GK_Y0, _GK_Y1, _GK_D0, _GK_D1, physics.G_M_S2, DRAG_TAIL_FIT,
-                    layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M, 1e-5, 40, u, speed, tau, t_ground)
+                    layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M, 1e-9, 40, u, speed, tau, t_ground)
     else:
         vt = np.empty(n)
         vt[:nd] = _terminal_velocity(d_mm[:nd])

@@ -41,7 +41,7 @@ def test_fly_equals_the_twins_chain():
     u, speed, tau, ground = np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n)
     kernels.fly(p0, v0, d_mm, air, updraught, nd, wind, spawn._MIST_VT_M_S, launch.WAKE_TAU_S, spawn._GK_X,
                 spawn._GK_X0, spawn._GK_H, spawn._GK_Y0, spawn._GK_Y1, spawn._GK_D0, spawn._GK_D1, physics.G_M_S2,
-                flight.DRAG_TAIL_FIT, layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M, 1e-5, 40, u, speed, tau, ground)
+                flight.DRAG_TAIL_FIT, layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M, 1e-9, 40, u, speed, tau, ground)
     assert np.array_equal(u, u_ref)
     assert np.allclose(speed, speed_ref, rtol=4e-16, atol=0.0)
     assert np.allclose(tau, tau_ref, rtol=1e-15, atol=0.0)
