@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rain_core.effects.spray import kernels
 from rain_core.effects.spray.flight import drag_time_constant_unchecked
 from rain_core.effects.spray.water import MIST_D_MM, SPLASH_MIN_MM, SPRAY_MAX_MM
 from rain_core.effects.spray.wheels import WheelGeometry
@@ -318,3 +319,57 @@ def carrier_air_and_tau(wind, air, updraught, v0, d_mm, vt, nd: int) -> tuple[np
     tau[:nd] = drag_time_constant_unchecked(d_mm[:nd], speed[:nd], vt[:nd])
     tau[nd:] = WAKE_TAU_S
     return u, speed, tau
+
+
+# The compiled launches' tables (kernels.launch): each bucket's uniform rows padded to 8 (lo 0, span 1: a plain
+# draw), the mist's rows, and its constants.
+_UNIFORM_ROWS = tuple(len(_UNIFORMS[k]) for k in range(5))
+_UNIFORM_LO_TABLE = np.zeros((5, 8))
+_UNIFORM_SPAN_TABLE = np.ones((5, 8))
+for _k in range(5):
+    _UNIFORM_LO_TABLE[_k, :_UNIFORM_ROWS[_k]] = _UNIFORM_LO[_k][:, 0]
+    _UNIFORM_SPAN_TABLE[_k, :_UNIFORM_ROWS[_k]] = _UNIFORM_SPAN[_k][:, 0]
+_MIST_LO_ROW, _MIST_SPAN_ROW = _MIST_LO[:, 0].copy(), _MIST_SPAN[:, 0].copy()
+_MIST_CONSTS = np.array([WAKE_LIFT_HEIGHT_M, MIST_SIGMA0_M, MIST_D_MM, MIST_DIFFUSIVITY])
+
+
+def draws_needed(n: int) -> int:
+    """Size of the draws buffer :func:`launch_parcels_compiled` needs for n parcels (≤ 8 uniform rows, the
+    tread's across and lateral normal each)."""
+    return 10 * n
+
+
+def launch_parcels_compiled(rng, geo: WheelGeometry, w, bounds, nd: int, age_now, out, vehicle, vehicle_consts,
+                            draws, offs) -> None:
+    """What :func:`launch_droplets_sorted` (rows [:nd]) and :func:`launch_mist` (the rest) write into ``out``,
+    by ``kernels.launch``: the same generator calls in the same order here (into ``draws``, a flat float64
+    buffer of at least draws_needed(len(w)), with their offsets in ``offs`` (7,) int64), the arithmetic there.
+    ``vehicle``: spawn's (V, 20) vehicle table; ``vehicle_consts`` (V, ≥ 2) height and half length."""
+    n = len(w)
+    nm = n - nd
+    d_mm = out[2]
+    pos = 0
+    if nd:
+        rng.random(out=draws[:nd])  # the tread position's ``across``
+        pos = nd
+        b = bounds.tolist()
+        for k in range(5):
+            lo, hi = b[k], b[k + 1]
+            offs[k] = pos
+            if hi > lo:
+                m = hi - lo
+                rng.standard_normal(out=d_mm[lo:hi])
+                rows = _UNIFORM_ROWS[k]
+                rng.random(out=draws[pos:pos + rows * m].reshape(rows, m))
+                pos += rows * m
+                if k == 2:  # the tread pickup's lateral speed, after its uniforms
+                    offs[5] = pos
+                    rng.standard_normal(out=draws[pos:pos + m])
+                    pos += m
+    if nm:
+        offs[6] = pos
+        rng.random(out=draws[pos:pos + 7 * nm].reshape(7, nm))
+    p0, v0, _, sigma0, growth, air, updraught = out
+    kernels.launch(w, bounds, nd, age_now, draws, offs, wheel_table(geo), vehicle, vehicle_consts, _BUCKET_TABLE,
+                   _UNIFORM_LO_TABLE, _UNIFORM_SPAN_TABLE, _WAVE_TABLE, _MIST_LO_ROW, _MIST_SPAN_ROW, _MIST_CONSTS,
+                   p0, v0, d_mm, sigma0, growth, air, updraught)

@@ -17,8 +17,10 @@ from rain_core.effects.spray.launch import (
     MIST_SIGMA_MAX,
     WAKE_TAU_S,
     carrier_air_and_tau,
+    draws_needed,
     launch_droplets_sorted,
     launch_mist,
+    launch_parcels_compiled,
 )
 from rain_core.effects.spray.optics import extinction_area_m2
 from rain_core.effects.spray.parcels import (
@@ -83,6 +85,8 @@ class SpawnBuffers:
         self.records = np.zeros(n, PARTICLE_DTYPE)
         # The compiled path's flight outputs: u, speed, τ, ground and body ages.
         self.flight = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+        self.draws = np.empty(draws_needed(n))  # the compiled launches' random draws, and their offsets
+        self.offs = np.zeros(7, dtype=np.int64)
 
     def ensure(self, n: int) -> SpawnBuffers:
         if n > self.size:
@@ -100,6 +104,16 @@ def _vehicle_table(geo) -> np.ndarray:
     return table
 
 
+def _vehicle_consts(geo) -> np.ndarray:
+    """(V, ≥ 2) float64, each vehicle's height and half length (m) in its first columns: gather_wheels' table of
+    the fleet's constants, or made once for a geometry built otherwise."""
+    table = getattr(geo, "_vehicle_consts", None)
+    if table is None:
+        table = np.column_stack([geo.height, geo.half_length])
+        geo._vehicle_consts = table
+    return table
+
+
 def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now, now: float, wind,
                        body_hit) -> None:
     """What ``SprayEmitter._spawn_parcels`` does on its reference path, for parcels sorted by bucket: rows [:nd]
@@ -110,12 +124,16 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     nm = n - nd
     buf = em._spawn_buffers.ensure(n)
     out = buf.launch
-    if nd:
-        launch_droplets_sorted(rng, geo, w[:nd], bounds, age_now[:nd], out)
-    if nm:
-        launch_mist(rng, geo, w[nd:], None, age_now[nd:], out=tuple(a[nd:n] for a in out))
-    p0, v0, d_mm, sigma0, growth, air, updraught = (a[:n] for a in out)
     compiled = jit.active()
+    if compiled:
+        launch_parcels_compiled(rng, geo, w, bounds, nd, age_now, tuple(a[:n] for a in out), _vehicle_table(geo),
+                                _vehicle_consts(geo), buf.draws, buf.offs)
+    else:
+        if nd:
+            launch_droplets_sorted(rng, geo, w[:nd], bounds, age_now[:nd], out)
+        if nm:
+            launch_mist(rng, geo, w[nd:], None, age_now[nd:], out=tuple(a[nd:n] for a in out))
+    p0, v0, d_mm, sigma0, growth, air, updraught = (a[:n] for a in out)
     if compiled:
         u, speed, tau, t_ground, t_body = (a[:n] for a in buf.flight)
         kernels.fly(p0, v0, d_mm, air, updraught, nd, np.ascontiguousarray(wind, dtype=np.float64), _MIST_VT_M_S,

@@ -255,6 +255,7 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None,
     vt[:, 0:3] = state[:, _XYZ]
     consts = fleet.consts
     geo.height, geo.half_length = consts[:, 0], consts[:, 1]
+    geo._vehicle_consts = consts  # (V, 4) height, half length, …: the compiled launches read its rows
     local = fleet.local
     # Vehicle.to_world: rotation about +Y by yaw, then the translation.
     contacts = w3[:, :, 3:6]

@@ -98,3 +98,37 @@ def test_kernel_emitter_writes_the_twins_parcels():
         assert np.allclose(rc.death, rt.death, rtol=0.0, atol=1e-6)
     assert len(comp_landed) == len(twin_landed) > 1000
     assert np.allclose(comp_landed, twin_landed, rtol=1e-9, atol=1e-7)
+
+
+def test_launches_equal_the_twins_and_draw_the_same_numbers():
+    """Droplets of every bucket and mist puffs from four vehicles' wheels: the compiled launches give the twins'
+    values (to an ulp of exp, sin, cos and pow: rtol 1e-13) and leave the generator where the twins leave it."""
+    from rain_core.effects.spray import wheels
+
+    fleet = _fleet()
+    _, geo = wheels.gather_wheels(fleet, _puddle(6.0), build_wheels=False)
+    rng = np.random.default_rng(4)
+    counts = np.array([700, 500, 300, 200, 150])
+    nd, nm = int(counts.sum()), 120
+    n = nd + nm
+    bounds = np.zeros(7, dtype=np.int64)
+    np.cumsum(np.append(counts, nm), out=bounds[1:])
+    w = np.concatenate([rng.integers(0, 4 * len(fleet), nd), rng.integers(0, 4 * len(fleet), nm)])
+    age = rng.random(n) / 30
+
+    def buffers():
+        return (np.full((n, 3), np.nan), np.full((n, 3), np.nan), np.full(n, np.nan), np.full(n, np.nan),
+                np.full(n, np.nan), np.full((n, 3), np.nan), np.full(n, np.nan))
+
+    twin, comp = buffers(), buffers()
+    rng_twin, rng_comp = np.random.default_rng(9), np.random.default_rng(9)
+    launch.launch_droplets_sorted(rng_twin, geo, w[:nd], bounds, age[:nd], twin)
+    launch.launch_mist(rng_twin, geo, w[nd:], None, age[nd:], out=tuple(a[nd:] for a in twin))
+    buf = spawn.SpawnBuffers().ensure(n)
+    launch.launch_parcels_compiled(rng_comp, geo, w, bounds, nd, age, comp, spawn._vehicle_table(geo),
+                                   spawn._vehicle_consts(geo), buf.draws, buf.offs)
+    for name, a, b in zip(("p0", "v0", "d_mm", "sigma0", "growth", "air", "updraught"), comp, twin, strict=True):
+        assert np.isfinite(a).all(), name
+        assert np.allclose(a, b, rtol=1e-13, atol=1e-15), name
+    assert np.mean(comp[0] == twin[0]) > 0.9  # mostly the same bits
+    assert rng_comp.random() == rng_twin.random()
