@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rain_core.effects.windshield.constants import drop_radius
+from rain_core import jit
+from rain_core.effects.windshield import kernels
+from rain_core.effects.windshield.constants import FILM_CELLS, MERGE_CELLS_MAX, drop_radius
 from rain_core.effects.windshield.drop_rows import COLS as _COLS
 from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
 from rain_core.effects.windshield.drop_rows import KEY as _KEY
@@ -28,6 +30,33 @@ from rain_core.effects.windshield.drop_rows import S as _S
 from rain_core.effects.windshield.drop_rows import T as _T
 
 
+class KernelScratch:
+    """Work arrays of the compiled kernels (``kernels``) for a drop array of capacity ``cap``: made once, kept
+    (not copied with the simulation), so a step allocates nothing large."""
+
+    def __init__(self, cap: int):
+        self.cap = cap
+        self.go = np.empty(cap, np.int64)  # move_drops: the drops that slid, and their motion
+        self.gcol = np.empty((6, cap))
+        self.loss = np.empty(cap)
+        self.ridx = np.empty(cap, np.int64)  # run_drops: the running drops, their trails, the new droplets
+        self.rcol = np.empty((5, cap))
+        self.wcol = np.empty((3, 4 * cap))
+        self.total = np.zeros(FILM_CELLS * FILM_CELLS)
+        self.col = np.empty((7, cap))  # merge_drops
+        self.active = np.empty(cap, bool)
+        self.deferred = np.empty(cap, bool)
+        self.mark = np.zeros(cap, bool)
+        self.parent = np.empty(cap, np.int64)
+        self.count = np.zeros(kernels.NEAR_CELLS, np.int64)
+        self.head = np.full(kernels.NEAR_CELLS, -1, np.int64)
+        entries = max(MERGE_CELLS_MAX, cap)
+        self.nxt = np.empty(entries, np.int64)
+        self.owner = np.empty(entries, np.int64)
+        self.ekey = np.empty(entries, np.int64)
+        self.out = np.empty(cap, np.int64)
+
+
 class DropArray:
     """The drops of ``WindshieldSim`` as rows of one array (see the module docstring)."""
 
@@ -40,6 +69,14 @@ class DropArray:
         self._rest_air = None  # the air (head, cross) of the epoch the drops' RB columns hold for (fast_motion)
         self._step_air = None  # the air (head, cross) of the last step: the drops' EV columns hold for it
         self._shed_all = False  # test every drop against the glass's edges in the next _shed_outside
+        self._ks: KernelScratch | None = None
+
+    def _scratch(self) -> KernelScratch:
+        """The compiled kernels' work arrays, for the drop array's capacity."""
+        ks = self._ks
+        if ks is None or ks.cap < len(self._buf):
+            ks = self._ks = KernelScratch(len(self._buf))
+        return ks
 
     @property
     def pos(self) -> np.ndarray:
@@ -161,6 +198,9 @@ class DropArray:
         """Write the position's columns (``_placed``) of the drops placed since they were last written (their KEY
         is drop_rows.DIRTY): the same values, computed once a step for all of them."""
         self._dirty = False
+        if jit.active():
+            kernels.place_rows(self._buf, self._n, self._w0, self._dw, self._height, self._g_up, self._g_sag)
+            return
         d = self._buf[: self._n]
         idx = (d[:, _KEY] == _DIRTY).nonzero()[0]
         if len(idx):

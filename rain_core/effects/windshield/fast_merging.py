@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rain_core import jit
+from rain_core.effects.windshield import kernels
 from rain_core.effects.windshield.constants import drop_radius
 from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
 from rain_core.effects.windshield.drop_rows import KEY as _KEY
@@ -37,11 +39,38 @@ class FastMerging:
             keep[gone] = False
             self._keep(keep)
 
+    def _merge_compiled(self, n_moved: int, go, s_g, t_g, ds_g, dt_g, step_len) -> bool:
+        """``_merge_moves`` by ``kernels.merge_drops``; False (nothing done) where its candidate search would pass
+        the work budget: the twin then runs, with its far grid."""
+        n = self._n
+        n_go = len(go)
+        ks = self._scratch()
+        if n_go and go.base is not ks.go:  # the motion's columns from elsewhere than _move's kernel: copied in
+            ks.go[:n_go] = go
+            g = ks.gcol
+            g[0, :n_go], g[1, :n_go], g[2, :n_go], g[3, :n_go] = s_g, t_g, ds_g, dt_g
+            g[4, :n_go] = np.sqrt(ds_g * ds_g + dt_g * dt_g) if step_len is None else step_len
+        status, n_roots, n_gone = kernels.merge_drops(
+            self._buf, n, n_moved, self._fresh_buf, n_go, ks.go, ks.gcol, ks.col, ks.active, ks.deferred, ks.mark,
+            ks.parent, ks.count, ks.head, ks.nxt, ks.owner, ks.ekey, ks.out)
+        if status < 0:
+            return False
+        if n_roots:
+            r = ks.out[:n_roots]
+            d = self._buf
+            d[r, _A] = drop_radius(d[r, _M])
+            self._dirty = True
+            self._merged_away = ks.out[n_roots : n_roots + n_gone].copy()
+            self.merges += n_gone
+        return True
+
     def _merge_moves(self, n_moved: int, go, s_g, t_g, ds_g, dt_g, step_len=None) -> None:
         """``_merge`` with the step's motion as columns (``_move``): of the first ``n_moved`` drops, those in
         ``go`` started at (s_g, t_g) and moved by (ds_g, dt_g) m (``step_len``: its length, if the caller has
         it); the others stayed where they are. Candidate pairs come from ``grid.PairFinder``; the groups are
         formed on the drops that touch only."""
+        if jit.active() and self._merge_compiled(n_moved, go, s_g, t_g, ds_g, dt_g, step_len):
+            return
         n = self._n
         fresh = self._fresh_buf[:n]
         if n < 2:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rain_core import jit
+from rain_core.effects.windshield import kernels
 from rain_core.effects.windshield.constants import (
     CROSSWIND_GAIN,
     DRAG_CD,
@@ -115,10 +117,11 @@ class FastMotion:
         self._step_air = (head, cross)
         dev = _air_deviation(head, cross, self._rest_air)
         cand = None  # None: every drop
-        if dev is None or dev > _AIR_SLACK:  # a new epoch: every drop is tested, its bound made for this air
+        new_epoch = dev is None or dev > _AIR_SLACK
+        if new_epoch:  # a new epoch: every drop is tested, its bound made for this air
             self._rest_air = (head, cross)
             dev = 0.0
-        else:
+        elif not jit.active():
             cand = (d[:, _RB] >= _REST_TEST).nonzero()[0]
             if len(cand) == n:
                 cand = None
@@ -126,6 +129,8 @@ class FastMotion:
         # every drop (relative): the drag then differs from this one's by at most ``grow`` times it (docstring).
         slack = (_AIR_SLACK + dev) / (1.0 - dev) if self._rest_air[0] != 0.0 else 0.0
         grow = (2.0 * slack + slack * slack) * (1.0 + slack) + slack
+        if jit.active():
+            return self._move_compiled(h, head, cross, new_air, new_epoch, grow)
         c = d if cand is None else d.take(cand, axis=0)
         k = len(c)
         s_g = t_g = ds = dt_ = step_len = _EMPTY1
@@ -231,6 +236,30 @@ class FastMotion:
             if len(run):
                 self._run(go[run], s_g[run], t_g[run], ds[run], dt_[run], step_len[run], a_g[run])
         return n, go, s_g, t_g, ds, dt_, step_len
+
+    def _move_compiled(self, h: float, head: float, cross: float, new_air: bool, new_epoch: bool, grow: float):
+        """``_move`` from the epoch's bookkeeping on: the motion (``kernels.move_drops``) and the running drops'
+        film and trails (``kernels.run_drops``), the cube roots and sums as the twin takes them."""
+        n = self._n
+        ks = self._scratch()
+        buf = self._buf
+        n_go = kernels.move_drops(buf, n, h, head, cross, new_air or new_epoch, new_epoch, _REST_TEST, grow,
+                                  ks.go, ks.gcol, ks.loss)
+        self.evaporated += float(np.add.reduce(ks.loss[:n]))
+        if n_go == 0:
+            return n, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
+        self._dirty = True
+        room = max(self._budget - n, 0)
+        k, n_new = kernels.run_drops(buf, n_go, ks.go, ks.gcol, self.film.ravel(), self._areas_flat, ks.total, room,
+                                     self._w0, self._dw, self._height, ks.ridx, ks.rcol, ks.wcol)
+        if k:
+            self._trails.append(tuple(ks.rcol[:, :k].copy()))
+            idx = ks.ridx[:k]
+            buf[idx, _A] = drop_radius(buf[idx, _M])
+            if n_new:
+                self._append_at_rest(ks.wcol[0, :n_new], ks.wcol[1, :n_new], ks.wcol[2, :n_new])
+        g = ks.gcol
+        return n, ks.go[:n_go], g[0, :n_go], g[1, :n_go], g[2, :n_go], g[3, :n_go], g[4, :n_go]
 
     def _run(self, idx, s0, t0, ds, dt, step_len, a) -> None:
         """Running drops take up the film in their path, lay a thin wet line and drop trail droplets

@@ -144,6 +144,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         del state["_rows"]  # a view of _buf: rebuilt on the copy's own array (copy.deepcopy, pickle)
+        state["_ks"] = None  # the kernels' work arrays: made again when needed
         return state
 
     def __setstate__(self, state: dict) -> None:

@@ -34,7 +34,7 @@ def _assert_same(fast, ref, atol_m=1e-9):
     "speed_kmh, rate_mm_h, mode, budget",
     [(120.0, 8.0, "low", 2000), (0.0, 8.0, "auto", 1500), (60.0, 30.0, "high", 600), (-20.0, 4.0, "off", 800)],
 )
-def test_same_seed_same_drops(speed_kmh, rate_mm_h, mode, budget):
+def test_same_seed_same_drops(speed_kmh, rate_mm_h, mode, budget, kernel_path):
     fast, ref = _pair(11)
     inputs = GlassInputs.for_speed(speed_kmh, rate_mm_h, drop_budget=budget, wiper_mode=mode, wiper_interval_s=1.0)
     for k in range(60):
@@ -48,7 +48,7 @@ def test_same_seed_same_drops(speed_kmh, rate_mm_h, mode, budget):
     assert np.allclose(fast.frame_trails(), ref.frame_trails(), rtol=1e-9, atol=1e-15)
 
 
-def test_same_state_through_changing_speed_wind_and_long_frames():
+def test_same_state_through_changing_speed_wind_and_long_frames(kernel_path):
     fast, ref = _pair(12)
     for k in range(120):
         inputs = GlassInputs.for_speed(
@@ -113,7 +113,7 @@ def test_pair_finder_work_is_capped_for_a_flood_of_fast_drops():
     assert len(i) <= MERGE_PAIRS_MAX and deferred is not None and deferred.any()
 
 
-def test_a_copy_runs_on_like_the_original():
+def test_a_copy_runs_on_like_the_original(kernel_path):
     import copy
     import pickle
 
@@ -195,7 +195,7 @@ def test_arrival_sampling_by_search_and_by_buckets_agree_with_interp():
         assert np.allclose(d_big, np.interp(u * cdf[-1], cdf, _D_GRID_MM), rtol=1e-12, atol=1e-12)
 
 
-def test_position_columns_follow_the_drops():
+def test_position_columns_follow_the_drops(kernel_path):
     # The drop array keeps functions of each drop's position (film cell, air factors, gravity, sort key) written
     # where drops are placed; after arrivals, runs, merges, trails, wipes and beading they must equal a fresh
     # computation, bit for bit.
@@ -220,7 +220,7 @@ def test_sensor_reading_is_the_references():
     assert sim.sensor_reading() == WindshieldSimReference.sensor_reading(sim)
 
 
-def test_resting_drops_skipped_by_their_bound_would_not_have_started(monkeypatch):
+def test_resting_drops_skipped_by_their_bound_would_not_have_started(monkeypatch, kernel_path):
     # fast_motion tests only the drops whose bound RB (drop_rows) may reach the pinning: the others provably stay
     # at rest. A twin that tests every drop every step (the bound disabled) must give the same glass, bit for bit,
     # through parking, driving, braking, a tailwind, a crosswind and changing frame lengths.
@@ -251,7 +251,7 @@ def test_resting_drops_skipped_by_their_bound_would_not_have_started(monkeypatch
 
 
 @pytest.mark.parametrize("slack", [None, 0.2])
-def test_resting_drops_skipped_through_a_drifting_air_would_not_have_started(monkeypatch, slack):
+def test_resting_drops_skipped_through_a_drifting_air_would_not_have_started(monkeypatch, slack, kernel_path):
     # The bounds hold within an epoch of nearby airs (fast_motion._air_deviation): a car whose speed and crosswind
     # drift a little every frame (an autopilot, gusts) retests only the drops near their pinning, with the same
     # glass, bit for bit, as a twin that tests every drop every step; the epoch restarts as the air leaves it.

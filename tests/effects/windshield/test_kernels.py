@@ -1,0 +1,147 @@
+"""The windshield's compiled kernels (``kernels``) against their NumPy twins: the same seed gives the same glass,
+bit for bit (the kernels do the twins' operations in the same order; cube roots and pairwise sums stay in NumPy),
+through driving, parking, a tailwind, changing frames and the merge test's work budget."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rain_core import jit
+from rain_core.effects.windshield import GlassInputs, WindshieldSim, drop_mass, kernels
+
+pytestmark = pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed (pip install 'rainroad[fast]')")
+
+
+def _assert_identical(twin: WindshieldSim, sim: WindshieldSim) -> None:
+    n = twin.count
+    assert sim.count == n
+    assert np.array_equal(sim._buf[:n], twin._buf[:n])  # every column: position, motion, mass, cached, bounds
+    assert np.array_equal(sim.fresh, twin.fresh)
+    assert np.array_equal(sim.film, twin.film) and np.array_equal(sim.beads, twin.beads)
+    for name in ("arrived", "wiped", "shed", "evaporated", "merges", "arrival_count"):
+        assert getattr(sim, name) == getattr(twin, name), name
+    assert np.array_equal(sim.frame_trails(), twin.frame_trails())
+    assert np.array_equal(sim.frame_impacts(), twin.frame_impacts())
+
+
+def _drive(scenario, frames: int, seed: int, check_every: int = 10) -> WindshieldSim:
+    twin, sim = WindshieldSim(seed=seed), WindshieldSim(seed=seed)
+    for k in range(frames):
+        inputs, dt = scenario(k)
+        with jit.forced(False):
+            twin.step(dt, inputs)
+        with jit.forced(True):
+            sim.step(dt, inputs)
+        if k % check_every == check_every - 1:
+            _assert_identical(twin, sim)
+    return sim
+
+
+SCENARIOS = {
+    "motorway, wipers low": lambda k: (GlassInputs.for_speed(120.0, 8.0, drop_budget=2000, wiper_mode="low"), 1 / 30),
+    "speed, crosswind and long frames": lambda k: (
+        GlassInputs.for_speed(130.0 * math.sin(math.pi * k / 120), 12.0,
+                              wind_m_s=np.array([6.0 * math.sin(k / 9), 0.0, 4.0]), drop_budget=1200,
+                              wiper_mode="intermittent", wiper_interval_s=1.0),
+        0.1 if k % 10 == 0 else 1 / 30,
+    ),
+    "parked, downpour, full glass": lambda k: (GlassInputs.for_speed(0.0, 40.0, drop_budget=900, wiper_mode="off"),
+                                               1 / 30),
+    "tailwind, auto": lambda k: (GlassInputs.for_speed(-25.0, 10.0, drop_budget=1500, wiper_mode="auto"), 1 / 30),
+    "storm at 200 km/h": lambda k: (GlassInputs.for_speed(200.0, 40.0, drop_budget=5000, wiper_mode="high"), 1 / 30),
+}
+
+
+@pytest.mark.parametrize("name", list(SCENARIOS))
+def test_kernels_give_the_twins_glass_bit_for_bit(name):
+    sim = _drive(SCENARIOS[name], 90, seed=31)
+    assert sim.count > 100 and sim.merges > 0
+
+
+def _fresh_flood(seed: int, n: int, speed_m_s: float, spread_m: float) -> WindshieldSim:
+    """A glass with ``n`` new small drops within ``spread_m`` of one point, moving at up to ``speed_m_s``."""
+    rng = np.random.default_rng(seed)
+    sim = WindshieldSim(seed=seed)
+    pos = np.array([0.0, 0.5]) + rng.uniform(-spread_m, spread_m, (n, 2))
+    vel = rng.normal(0.0, speed_m_s, (n, 2))
+    sim._append(pos, vel, drop_mass(rng.uniform(0.1e-3, 0.3e-3, n)))
+    return sim
+
+
+@pytest.mark.parametrize(
+    "n, speed_m_s, spread_m, falls_back",
+    [
+        (3000, 3.0, 0.3, True),  # far-reaching boxes past MERGE_CELLS_MAX: the twin's far grid runs
+        (4000, 0.0, 0.02, False),  # all near, packed: lookups past MERGE_PAIRS_MAX are deferred (fresh stays)
+    ],
+)
+def test_merge_over_the_work_budget_is_the_twins(monkeypatch, n, speed_m_s, spread_m, falls_back):
+    statuses = []
+    merge = kernels.merge_drops
+
+    def spy(*args):
+        out = merge(*args)
+        statuses.append(out[0])
+        return out
+
+    monkeypatch.setattr(kernels, "merge_drops", spy)
+    twin = _fresh_flood(5, n, speed_m_s, spread_m)
+    sim = _fresh_flood(5, n, speed_m_s, spread_m)
+    deferred = []
+    pairs = twin._pairs.pairs
+
+    def twin_pairs(*args):
+        out = pairs(*args)
+        deferred.append(out[2] is not None)
+        return out
+
+    twin._pairs.pairs = twin_pairs
+    h = 1 / 30
+    start = twin.pos.copy()
+    disp = h * twin.vel
+    with jit.forced(False):
+        twin._merge_moves(n, np.arange(n), start[:, 0], start[:, 1], disp[:, 0], disp[:, 1])
+    with jit.forced(True):
+        sim._merge_moves(n, np.arange(n), start[:, 0], start[:, 1], disp[:, 0], disp[:, 1])
+    assert statuses == [-1 if falls_back else 0]
+    assert twin.merges > 0 and sim.merges == twin.merges
+    assert np.array_equal(sim._merged_away, twin._merged_away)
+    _assert_identical(twin, sim)
+    if not falls_back:
+        assert deferred == [True]  # packed near drops: some lookups wait for the next sub-step, in both
+
+
+def test_kernels_follow_the_twin_after_a_copy_and_a_grown_array():
+    # The work arrays are made per simulation (not copied) and again when the drop array grows.
+    import copy
+
+    inputs = GlassInputs.for_speed(90.0, 30.0, drop_budget=3000, wiper_mode="high")
+    twin = WindshieldSim(seed=33)
+    for _ in range(20):
+        twin.step(1 / 30, inputs)
+    sim = copy.deepcopy(twin)
+    for _ in range(40):  # the array grows past 512, then 1024 rows
+        with jit.forced(False):
+            twin.step(1 / 30, inputs)
+        with jit.forced(True):
+            sim.step(1 / 30, inputs)
+    assert len(sim._buf) > 1024
+    _assert_identical(twin, sim)
+
+
+def test_place_rows_in_plain_python_is_placed():
+    # The kernel's own logic (its plain-Python version, as it runs where Numba is missing), on a few rows.
+    from rain_core.effects.windshield.drop_rows import DIRTY, KEY, PLACED, S, T
+
+    sim = WindshieldSim(seed=2)
+    rng = np.random.default_rng(2)
+    sim._append(sim.glass.from_uv(rng.uniform(0.0, 1.0, (40, 2))), np.zeros((40, 2)), np.full(40, 1e-6))
+    d = sim._buf[: sim.count]
+    d[::3, KEY] = 0.0  # not dirty: left alone
+    before = d.copy()
+    place = getattr(kernels.place_rows, "py_func", kernels.place_rows)
+    assert place(sim._buf, sim.count, sim._w0, sim._dw, sim._height, sim._g_up, sim._g_sag) == 40 - 14
+    dirty = before[:, KEY] == DIRTY
+    assert np.array_equal(d[~dirty], before[~dirty])
+    assert np.array_equal(d[dirty][:, PLACED], sim._placed(d[dirty, S], d[dirty, T]))
