@@ -384,3 +384,89 @@ def launch(w, bounds, nd, age_now, draws, offs, wheel, vehicle, mist_vehicle, bu
         growth[i] = 2.0 * (diffusivity * math.sqrt(wx * wx + wy * wy + wz * wz) * mist_vehicle[vi, 0])
         air[i, 0], air[i, 1], air[i, 2] = 0.0, 0.0, 0.0
         updraught[i] = 0.0
+
+
+@jit.kernel
+def settle(t_body, t_ground, cap, speed, nd, life, fate, growth, fate_road, fate_body, fate_air):
+    """Each parcel's fate and life (s), as ``spawn.spawn_parcels_fast`` decides them before the rings' horizons:
+    droplets [:nd] end at the body (``t_body`` < ``t_ground``) or on the ground, and their spread rate
+    ``growth`` is scaled by their launch ``speed``; mist puffs [nd:] fade at their drawn ``cap`` or land. Lives are
+    then drawn 1 ms short of the surface (not below 0). Writes life, fate, growth."""
+    n = life.shape[0]
+    for i in range(n):
+        if i < nd:
+            tb, tg = t_body[i], t_ground[i]
+            fate[i] = fate_body if tb < tg else fate_road
+            t = min(tb, tg)
+            growth[i] *= speed[i]
+        else:
+            c, tg = cap[i - nd], t_ground[i]
+            fate[i] = fate_air if c < tg else fate_road
+            t = min(c, tg)
+        life[i] = max(t - 1e-3, 0.0)
+
+
+@jit.kernel
+def file_records(fate, life, horizon_drop, horizon_mist, nd, now, landings_on, mass, p0, v0, u, tau, birth, sigma0,
+                 growth, d_mm, vi, vehicle_consts, consts, fates, landings, records, birth_out, death_out):
+    """The end of ``spawn.spawn_parcels_fast`` for a frame's parcels (droplets [:nd], then mist): lives past their
+    ring's horizon (s) fade in the air; the mass by fate is added to ``fates`` (3,) kg; with ``landings_on`` the
+    droplets that land on the road write (time s, x m, z m, downward momentum kg·m/s) rows into ``landings``
+    (``_road_landings``); and the GPU records of the parcels still alive at ``now`` (s) are written, ring 0's
+    first, into ``records`` (k, 20) float32 (the PARTICLE_DTYPE fields in order, all but ``rand``), their birth
+    and death (s) into ``birth_out``/``death_out``. ``consts``: PERIOD_M, Q·1.5, RHO_WATER, SPLASH_MIN_MM,
+    MIST_SIGMA_MAX, then the fates road, body, air and kinds droplet, mist, fade. Returns (records of ring 0,
+    records, landings)."""
+    n = life.shape[0]
+    period_m, q15, rho, splash_mm, sigma_max = consts[0], consts[1], consts[2], consts[3], consts[4]
+    fate_road, fate_air = int(consts[5]), int(consts[7])
+    kind_drop, kind_mist, kind_fade = consts[8], consts[9], consts[10]
+    sums = np.zeros(3)  # kg by fate, summed in order as np.bincount does
+    k0, k, m = 0, 0, 0
+    for i in range(n):
+        horizon = horizon_drop if i < nd else horizon_mist
+        t = life[i]
+        f = fate[i]
+        if t > horizon:
+            f = fate_air
+            t = horizon
+        fate[i] = f
+        life[i] = t
+        sums[f] += mass[i]
+        if landings_on and i < nd and f == fate_road:
+            tc = tau[i]
+            e = -t / tc
+            relax = -tc * math.expm1(e)
+            landings[m, 0] = birth[i] + t
+            landings[m, 1] = p0[i, 0] + u[i, 0] * t + (v0[i, 0] - u[i, 0]) * relax
+            landings[m, 2] = p0[i, 2] + u[i, 2] * t + (v0[i, 2] - u[i, 2]) * relax
+            vel_y = u[i, 1] + (v0[i, 1] - u[i, 1]) * math.exp(e)
+            landings[m, 3] = mass[i] * max(-vel_y, 0.0)
+            m += 1
+        death = birth[i] + t
+        if not death > now:
+            continue
+        rec = records[k]
+        period = math.floor(p0[i, 2] / period_m)
+        rec[0], rec[1], rec[2] = p0[i, 0], p0[i, 1], p0[i, 2] - period * period_m
+        rec[3] = period
+        rec[4], rec[5], rec[6] = v0[i, 0], v0[i, 1], v0[i, 2]
+        rec[7] = tau[i]
+        rec[8], rec[9], rec[10] = u[i, 0], u[i, 1], u[i, 2]
+        rec[11], rec[12], rec[13], rec[14] = birth[i], t, sigma0[i], growth[i]
+        rec[15] = q15 * mass[i] / (rho * d_mm[i] * 1e-3)  # optics.extinction_area_m2
+        kind = kind_drop + kind_fade if f == fate_air else kind_drop
+        if i < nd:
+            rec[16] = kind
+            rec[19] = 1.0 if d_mm[i] >= splash_mm else 0.5
+            k0 += 1
+        else:
+            rec[16] = kind + (kind_mist - kind_drop)
+            rec[19] = sigma_max * vehicle_consts[vi[i], 0]  # mist puffs hold σ_max (m)
+        rec[17] = d_mm[i]
+        birth_out[k] = birth[i]
+        death_out[k] = death
+        k += 1
+    for f in range(3):
+        fates[f] += sums[f]
+    return k0, k, m

@@ -22,7 +22,7 @@ from rain_core.effects.spray.launch import (
     launch_mist,
     launch_parcels_compiled,
 )
-from rain_core.effects.spray.optics import extinction_area_m2
+from rain_core.effects.spray.optics import EXTINCTION_EFFICIENCY, extinction_area_m2
 from rain_core.effects.spray.parcels import (
     FATE_AIR,
     FATE_BODY,
@@ -87,6 +87,11 @@ class SpawnBuffers:
         self.flight = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
         self.draws = np.empty(draws_needed(n))  # the compiled launches' random draws, and their offsets
         self.offs = np.zeros(7, dtype=np.int64)
+        # The compiled filing's outputs: road landings, the kept records (as floats) and their birth and death.
+        self.landings = np.empty((n, 4))
+        self.record_floats = as_floats(self.records)
+        self.birth = np.empty(n)
+        self.death = np.empty(n)
 
     def ensure(self, n: int) -> SpawnBuffers:
         if n > self.size:
@@ -102,6 +107,49 @@ def _vehicle_table(geo) -> np.ndarray:
         table = np.column_stack([geo.position, geo.velocity, geo.right, geo.forward, geo.box_params])
         geo._vehicle_table = table
     return table
+
+
+_NO_CAPS = np.zeros(0)  # no mist caps or body ages (the kernels' arrays when a frame has no mist or droplets)
+# kernels.file_records' constants: the period, Q·1.5 and ρ_w of the extinction area, the splash size, the mist's
+# σ_max share, the fates and the kinds.
+_FILE_CONSTS = np.array([layout.PERIOD_M, EXTINCTION_EFFICIENCY * 1.5, physics.RHO_WATER, SPLASH_MIN_MM,
+                         MIST_SIGMA_MAX, FATE_ROAD, FATE_BODY, FATE_AIR, KIND_DROPLET, KIND_MIST, KIND_FADE],
+                        dtype=np.float64)
+
+
+def _horizons(q90: list, life: np.ndarray, nd: int) -> tuple[float, float]:
+    """Each ring's horizon (s): the running 90th percentile of its parcels' lives (``q90``, updated in place with
+    this frame's droplets [:nd] and mist [nd:]), at least 50 ms."""
+    out = [0.0, 0.0]
+    for ring, sl in ((0, slice(0, nd)), (1, slice(nd, len(life)))):
+        if sl.stop > sl.start:
+            q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile_90(life[sl]), 0.05)
+            out[ring] = max(q90[ring], 0.05)
+    return out[0], out[1]
+
+
+def _file_compiled(em, frame, geo, buf, nd, now, horizons, fate, life, mass, p0, v0, u, tau, birth, sigma0, growth,
+                   d_mm, vi) -> None:
+    """The compiled path's end of :func:`spawn_parcels_fast`: ``kernels.file_records`` (horizons, fates, road
+    landings, the kept records), then the records' ``rand`` draw (the twin's one call) and the rings' push."""
+    landings_on = bool(nd) and em._standing_water_possible(frame)
+    k0, k, m = kernels.file_records(fate, life, horizons[0], horizons[1], nd, now, landings_on, mass, p0, v0, u, tau,
+                                    birth, sigma0, growth, d_mm, vi, _vehicle_consts(geo), _FILE_CONSTS,
+                                    em.stats.fates, buf.landings, buf.record_floats, buf.birth, buf.death)
+    if m:
+        em._candidates = np.concatenate([em._candidates, buf.landings[:m]])
+    if k:
+        rec = buf.records[:k]
+        rec["rand"] = em.rng.random(k)
+        for ring, sl in ((0, slice(0, k0)), (1, slice(k0, k))):
+            if sl.stop > sl.start:
+                em.dirty[ring].extend(em.rings[ring].push(rec[sl], buf.birth[sl], buf.death[sl]))
+    n = len(life)
+    st = em.stats
+    st.parcels += nd
+    st.last_parcels += nd
+    st.mist_puffs += n - nd
+    st.last_mist += n - nd
 
 
 def _vehicle_consts(geo) -> np.ndarray:
@@ -159,6 +207,15 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
             vel = rows[:, 3:6]
             t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d], rows[:, 0:3] - vel * age_now[d, None], vel,
                               rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
+    if compiled:
+        cap = rng.uniform(*MIST_LIFE_S, nm) if nm else _NO_CAPS
+        kernels.settle(t_body if nd else _NO_CAPS, t_ground, cap, speed, nd, life, fate, growth, FATE_ROAD,
+                       FATE_BODY, FATE_AIR)
+        horizons = _horizons(em._life_q90, life, nd)
+        _file_compiled(em, frame, geo, buf, nd, now, horizons, fate, life, mass, p0, v0, u, tau, birth, sigma0, growth,
+                       d_mm, vi)
+        return
+    if nd:
         hit = t_body < t_ground[d]
         fate[d] = np.where(hit, FATE_BODY, FATE_ROAD)
         np.minimum(t_body, t_ground[d], out=life[d])
@@ -171,11 +228,7 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     life -= 1e-3
     np.maximum(life, 0.0, out=life)
     horizon = np.empty(n)
-    q90 = em._life_q90
-    for ring, sl in ((0, slice(0, nd)), (1, slice(nd, n))):
-        if sl.stop > sl.start:
-            q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile_90(life[sl]), 0.05)
-            horizon[sl] = max(q90[ring], 0.05)
+    horizon[:nd], horizon[nd:] = _horizons(em._life_q90, life, nd)
     # The ring is refilled every q90 seconds (that is how the emission rate was set): a parcel living longer
     # would be overwritten in flight, so it fades out at that age instead.
     faded = life > horizon

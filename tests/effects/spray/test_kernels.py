@@ -98,6 +98,11 @@ def test_kernel_emitter_writes_the_twins_parcels():
         assert np.allclose(rc.death, rt.death, rtol=0.0, atol=1e-6)
     assert len(comp_landed) == len(twin_landed) > 1000
     assert np.allclose(comp_landed, twin_landed, rtol=1e-9, atol=1e-7)
+    for name in ("_candidates", "_pending"):  # the landings still in flight, and still to be looked up
+        a, b = getattr(comp, name), getattr(twin, name)
+        assert a.shape == b.shape and np.allclose(a, b, rtol=1e-9, atol=1e-7), name
+    assert np.allclose(comp._life_q90, twin._life_q90, rtol=1e-9, atol=0.0)
+    assert comp.rng.random() == twin.rng.random()  # the same draws, in the same order
 
 
 def test_launches_equal_the_twins_and_draw_the_same_numbers():
