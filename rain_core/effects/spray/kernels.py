@@ -97,7 +97,7 @@ def fly(p0, v0, d_mm, air, updraught, nd, wind, mist_vt, mist_tau, gk_x, gk_x0, 
         uy -= vt * (1.0 - updraught[i])
         u[i, 0], u[i, 1], u[i, 2] = ux, uy, uz
         ex, ey, ez = v0[i, 0] - ux, v0[i, 1] - uy, v0[i, 2] - uz
-        s0 = math.sqrt(ex * ex + ey * ey + ez * ez)
+        s0 = math.sqrt((ex * ex + ez * ez) + ey * ey)  # np.einsum's order for three components
         speed[i] = s0
         if i < nd:
             # flight.drag_time_constant_unchecked
@@ -365,8 +365,9 @@ def launch(w, bounds, nd, age_now, draws, offs, wheel, vehicle, mist_vehicle, bu
         for q in range(7):
             u[q] = mist_lo[q] + mist_span[q] * draws[off + q * nm + j]
         # Behind the body's tail, in line with the wheel: half length − (c − position)·(−forward).
-        to_tail = mist_vehicle[vi, 1] - ((cx - vehicle[vi, 0]) * -vehicle[vi, 9] + (cy - vehicle[vi, 1])
-                                          * -vehicle[vi, 10] + (cz - vehicle[vi, 2]) * -vehicle[vi, 11])
+        # (np.einsum's order for three components: x + z, then y.)
+        to_tail = mist_vehicle[vi, 1] - (((cx - vehicle[vi, 0]) * -vehicle[vi, 9] + (cz - vehicle[vi, 2])
+                                           * -vehicle[vi, 11]) + (cy - vehicle[vi, 1]) * -vehicle[vi, 10])
         behind = max(to_tail, 0.0) + u[0]
         up = r * u[1]
         p0[i, 0] = cx - fx * behind + 0.0 * up + ox * u[2]

@@ -42,8 +42,7 @@ def test_fly_equals_the_twins_chain():
     kernels.fly(p0, v0, d_mm, air, updraught, nd, wind, spawn._MIST_VT_M_S, launch.WAKE_TAU_S, spawn._GK_X,
                 spawn._GK_X0, spawn._GK_H, spawn._GK_Y0, spawn._GK_Y1, spawn._GK_D0, spawn._GK_D1, physics.G_M_S2,
                 flight.DRAG_TAIL_FIT, layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M, 1e-9, 40, u, speed, tau, ground)
-    assert np.array_equal(u, u_ref)
-    assert np.allclose(speed, speed_ref, rtol=4e-16, atol=0.0)
+    assert np.array_equal(u, u_ref) and np.array_equal(speed, speed_ref)
     assert np.allclose(tau, tau_ref, rtol=1e-15, atol=0.0)
     assert np.abs(ground - ground_ref).max() < 1e-7
     assert (ground > 0).mean() > 0.5 and (np.abs(ground - ground_ref) > 0).mean() < 0.5  # a real test: mostly equal
@@ -135,5 +134,7 @@ def test_launches_equal_the_twins_and_draw_the_same_numbers():
     for name, a, b in zip(("p0", "v0", "d_mm", "sigma0", "growth", "air", "updraught"), comp, twin, strict=True):
         assert np.isfinite(a).all(), name
         assert np.allclose(a, b, rtol=1e-13, atol=1e-15), name
-    assert np.mean(comp[0] == twin[0]) > 0.9  # mostly the same bits
+    # Mostly the same bits: p0, v0 ~99.9 % (the tread's sin, cos and pow), d_mm ~97 % (exp), the rest all.
+    assert np.mean(comp[0] == twin[0]) > 0.99 and np.mean(comp[2] == twin[2]) > 0.9
+    assert all(np.array_equal(a, b) for a, b in zip(comp[3:], twin[3:], strict=True))
     assert rng_comp.random() == rng_twin.random()
