@@ -55,6 +55,7 @@ class KernelScratch:
         self.owner = np.empty(entries, np.int64)
         self.ekey = np.empty(entries, np.int64)
         self.out = np.empty(cap, np.int64)
+        self.gone = np.empty(cap, bool)  # sweep_blades
 
 
 class DropArray:

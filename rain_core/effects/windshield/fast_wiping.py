@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from rain_core import jit
+from rain_core.effects.windshield import kernels
 from rain_core.effects.windshield.constants import BEAD_BINS, BEAD_CAPACITY_KG_M, BLADE_HALF_WIDTH_M, RESIDUE_M
 from rain_core.effects.windshield.drop_rows import A as _A
 from rain_core.effects.windshield.drop_rows import M as _M
@@ -106,6 +108,9 @@ class FastWiping:
         for blade in self.blades:
             span = blade.top_rad - blade.park_rad
             moves.append((blade.park_rad + span * 0.5 * c0, blade.park_rad + span * 0.5 * c1))
+        if jit.active():
+            self._sweep_compiled(seg, wear, moves)
+            return
         gone = None
         n = self._n
         a_max = float(self._buf[:n, _A].max()) if n else 0.0
@@ -131,6 +136,57 @@ class FastWiping:
             self._bead_off_glass(b, blade, tb)
         if gone is not None:
             self._keep(~gone)
+        if seg.event is not None:
+            for b, blade in enumerate(self.blades):
+                self._end_of_stroke(b, blade, float(blade.angle(seg.p_end)), seg.event)
+
+    def _sweep_tables(self) -> tuple:
+        """What ``kernels.sweep_blades`` reads of the blades that never changes: the cells within each blade's
+        radii by angle (concatenated, with offsets), the bead bin over each cell, the bins' radii."""
+        if self._kw_tables is None:
+            orders = [order for order, _ in self._cells_by_angle]
+            off = np.zeros(len(orders) + 1, np.int64)
+            off[1:] = np.cumsum([len(o) for o in orders])
+            self._kw_tables = (
+                np.concatenate(orders).astype(np.int64),
+                np.concatenate([phi for _, phi in self._cells_by_angle]),
+                off,
+                np.stack(self._bins_of_cells).astype(np.int64),
+                np.stack(self._bin_r),
+                np.zeros((len(self.blades), BEAD_BINS)),
+                np.zeros(len(self.blades), np.int64),
+            )
+        return self._kw_tables
+
+    def _sweep_compiled(self, seg, wear: float, moves: list) -> None:
+        """``_sweep`` from the blades' angles on, by ``kernels.sweep_blades`` (the drops, film and off-glass bead
+        of both blades), the drops it gathered removed once and the stroke's end as the twin does them."""
+        n = self._n
+        a_max = float(self._buf[:n, _A].max()) if n else 0.0
+        par = []
+        for blade, (ta, tb) in zip(self.blades, moves, strict=True):
+            planes = self._wedge_planes(blade, ta, tb, a_max) if n and ta != tb else None
+            (n_lo, k_lo), (n_hi, k_hi) = planes if planes is not None else (((0.0, 0.0), 0.0), ((0.0, 0.0), 0.0))
+            par.append((float(ta != tb), float(planes is not None), n_lo[0], n_lo[1], k_lo, n_hi[0], n_hi[1], k_hi,
+                        min(ta, tb), max(ta, tb), float(tb > ta), float(blade.pivot[0]), float(blade.pivot[1]),
+                        blade.r_inner_m, blade.r_outer_m,
+                        BEAD_CAPACITY_KG_M * (blade.r_outer_m - blade.r_inner_m) / BEAD_BINS,
+                        math.cos(tb), math.sin(tb)))
+        order, phi, off, bins, bin_r, offv, offk = self._sweep_tables()
+        gone = self._scratch().gone
+        n_gone = kernels.sweep_blades(self._buf, n, np.array(par), gone, self.beads, self.film.ravel(),
+                                      self._areas_flat, order, phi, off, bins, bin_r,
+                                      RHO_WATER * RESIDUE_M * (1.0 + 4.0 * wear), self._w0, self._dw, self._height,
+                                      offv, offk)
+        for b, (ta, tb) in enumerate(moves):
+            if ta != tb:
+                rng = self._sweep_ranges[b]
+                rng[0] = min(rng[0], ta, tb)
+                rng[1] = max(rng[1], ta, tb)
+            if offk[b]:
+                self.wiped += float(np.add.reduce(offv[b, : offk[b]]))
+        if n_gone:
+            self._keep(~gone[:n])
         if seg.event is not None:
             for b, blade in enumerate(self.blades):
                 self._end_of_stroke(b, blade, float(blade.angle(seg.p_end)), seg.event)

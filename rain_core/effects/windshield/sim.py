@@ -133,6 +133,7 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             self._cells_by_angle.append((order[reach], phi_c[order][reach]))
             self._bins_of_cells.append(self._bin_of(blade, r_c))
         self._bin_r_list = [r.tolist() for r in self._bin_r]
+        self._kw_tables = None  # fast_wiping._sweep_tables
         # The air over each film cell (airflow.air_velocity) is head·_cell_up (or head·FLOW_AT_BOTTOM in a
         # tailwind) along the glass and |up|·FLOW_SPREAD·_cell_q + CROSSWIND_GAIN·cross across it: the
         # position-only factors, kept so the film's drying costs a few operations when the car's speed changes.
