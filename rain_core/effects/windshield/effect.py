@@ -14,8 +14,10 @@ import math
 import moderngl
 import numpy as np
 
+from rain_core import jit
 from rain_core.car_mesh import windshield_surface
 from rain_core.checks import MAX_FRAME_DT_S
+from rain_core.effects.windshield import render_kernels
 from rain_core.effects.windshield.constants import (
     EVAP_AIR_M_S,
     FILM_CELLS,
@@ -26,7 +28,7 @@ from rain_core.effects.windshield.constants import (
 )
 from rain_core.effects.windshield.inputs import GlassInputs
 from rain_core.effects.windshield.sim import WindshieldSim
-from rain_core.effects.windshield.splats import DropRows, film_splats, half_bits
+from rain_core.effects.windshield.splats import DropRows, FilmRows, half_bits
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
@@ -133,6 +135,7 @@ class WindshieldEffect(Effect):
         # The drop pass reads the drops' rows where the drop texture's splats left them: nothing more is uploaded.
         self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], _DROP_FORMAT, "in_seg", "in_radius")])
         self._drop_builder = DropRows()
+        self._film_builder = FilmRows()
         self._drop_rows = 0  # rows in the drop buffer this frame
         self.upload_bytes = 0  # bytes written to the GPU by the last frame's water pass
         self.splat_draws = 0  # instanced splat draws in the last frame
@@ -326,6 +329,9 @@ class WindshieldEffect(Effect):
             self._coarse_scratch = (np.empty(shape), np.empty(shape, np.float32), np.empty(shape, np.uint16))
         f64, f32, bits16 = self._coarse_scratch
         self.sim.film_thickness_m(out=f64)
+        if jit.active():  # the rest in one pass
+            render_kernels.coarse_half_bits(f64.ravel(), f32.ravel(), f32.view(np.uint32).ravel(), bits16.ravel())
+            return bits16
         f64 *= 1e6
         np.minimum(f64, 6e4, out=f64)
         f32[...] = f64
@@ -397,7 +403,7 @@ class WindshieldEffect(Effect):
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.ONE, moderngl.ONE)
         ctx.blend_equation = moderngl.FUNC_ADD
-        self._draw_splats(0, film_splats(self.sim, self._texel_m()))
+        self._draw_splats(0, self._film_builder.rows(self.sim, self._texel_m()))
         dst.color.build_mipmaps()
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()

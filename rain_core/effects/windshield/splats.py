@@ -1,4 +1,5 @@
-"""The instance rows the effect splats into its water textures, built from the simulation's state (NumPy only).
+"""The instance rows the effect splats into its water textures, built from the simulation's state: by NumPy, or
+by the compiled kernels of ``render_kernels`` where they run (the same bits).
 
 The film rows are 8 numbers, the layout of ``shaders/windshield/splat.vert``: a segment (s0, t0, s1, t1) m on the
 glass, a radius (m), an amount, a kind (1 a line: wet trail, 2 splash speckle) and a seed. ``texel_m`` is the size
@@ -17,6 +18,8 @@ import math
 
 import numpy as np
 
+from rain_core import jit
+from rain_core.effects.windshield import render_kernels
 from rain_core.effects.windshield.constants import BEAD_BINS, TRAIL_FILM_M
 from rain_core.effects.windshield.drop_rows import VT as _VT
 from rain_core.effects.windshield.drop_rows import A as _A
@@ -60,9 +63,16 @@ class DropRows:
         inner = np.array([b.r_inner_m for b in blades])[:, None]
         centre = inner + (np.arange(BEAD_BINS) + 0.5) * lengths
         self._ends = np.stack([centre - 0.5 * lengths, centre + 0.5 * lengths], axis=-1)[:, :, :, None]
+        # The same tables for the compiled path: contiguous float64, (blades,) and (blades, BEAD_BINS, 2).
+        self._w_scale_flat = np.ascontiguousarray(self._w_scale[:, 0])
+        self._ends_flat = np.ascontiguousarray(self._ends[..., 0])
+        self._no_frames = np.zeros((len(blades), 4))
 
     def rows(self, sim) -> np.ndarray:
         """The rows (n,) ``DROP_ROW`` of ``sim``'s drops, then its beads' lines (the bins with water)."""
+        block = getattr(sim, "_buf", None)  # the fast path's drop array (drop_rows' columns): no copies
+        if block is not None and jit.active():
+            return self._compiled_rows(sim, block)
         n = sim.count
         beads = sim.beads
         lines = None
@@ -77,7 +87,6 @@ class DropRows:
             self._out = np.zeros((max(total, 2 * len(self._out), 1024), 5), np.float32)
         out = self._out
         if n:
-            block = getattr(sim, "_buf", None)  # the fast path's drop array (drop_rows' columns): no copies
             if block is not None:
                 # The drop array's rows are 128 bytes and cold in the cache by now: one pass over the (n, 4) block
                 # reads them once (~45 us for 5,700 drops against ~60 for column by column; warm both ~27 us).
@@ -88,20 +97,41 @@ class DropRows:
                 out[:n, 2:4] = sim.vel
                 out[:n, 4] = sim.radius()
         if lines is not None and len(lines):
-            # WindshieldSimReference.bead_bin_centres ± half a bin along the blade, 4 mm ahead of it (towards the
-            # stroke's direction): pivot + ahead·normal + r·direction for each bin's two ends.
-            ahead = 0.004 if (sim.wipers.phase or 0.0) < 0.5 else -0.004
-            progress = sim.wipers.progress
-            frames = []  # per blade: its direction, and its pivot moved ahead along its normal
-            for blade in sim.blades:
-                angle = float(blade.angle(progress))
-                c, s = math.cos(angle), math.sin(angle)
-                frames.append(((c, s), (blade.pivot[0] - ahead * s, blade.pivot[1] + ahead * c)))
-            frames = np.array(frames)[:, None, None]  # (blades, 1, 1, 2, 2)
+            frames = np.array(_blade_frames(sim)).reshape(-1, 1, 1, 2, 2)  # (blades, 1, 1, direction/pivot, s/t)
             ends = (self._ends * frames[..., 0, :] + frames[..., 1, :]).reshape(-1, 4)  # (s0, t0, s1, t1) a bin
             out[n:total, 0:4] = ends[lines]
             np.negative(w[lines], out=out[n:total, 4])
         return out[:total].view(DROP_ROW)[:, 0]
+
+    def _compiled_rows(self, sim, block: np.ndarray) -> np.ndarray:
+        """``rows`` by ``render_kernels.drop_rows``: one pass over the drop array's rows and the bead bins."""
+        n = sim.count
+        beads = sim.beads
+        if self._blades is not sim.blades:
+            self._bead_tables(sim.blades)
+        if n + beads.size > len(self._out):
+            self._out = np.zeros((max(n + beads.size, 2 * len(self._out), 1024), 5), np.float32)
+        if np.count_nonzero(beads):
+            frames = np.array(_blade_frames(sim))
+        else:  # no bin has water: the kernel draws no line, whatever the blades' frames
+            frames = self._no_frames
+        total = render_kernels.drop_rows(block, n, _S, _A, beads, self._w_scale_flat, self._ends_flat, frames,
+                                         self._out)
+        return self._out[:total].view(DROP_ROW)[:, 0]
+
+
+def _blade_frames(sim) -> list[tuple[float, float, float, float]]:
+    """Per blade: the cos and sin of its angle now and its pivot (s, t) m moved 4 mm ahead along its normal
+    (towards the stroke's direction), where its bead bins' lines lie: WindshieldSimReference.bead_bin_centres ±
+    half a bin along the blade, i.e. pivot + ahead·normal + r·direction for each bin's two ends."""
+    ahead = 0.004 if (sim.wipers.phase or 0.0) < 0.5 else -0.004
+    progress = sim.wipers.progress
+    frames = []
+    for blade in sim.blades:
+        angle = float(blade.angle(progress))
+        c, s = math.cos(angle), math.sin(angle)
+        frames.append((c, s, blade.pivot[0] - ahead * s, blade.pivot[1] + ahead * c))
+    return frames
 
 
 def drop_splats(sim, texel_m: float | None = None) -> np.ndarray:
@@ -111,13 +141,38 @@ def drop_splats(sim, texel_m: float | None = None) -> np.ndarray:
     return DropRows().rows(sim).copy()
 
 
+_MAX_SPLASHES = 4096  # the most splash speckles a frame draws
+_TRAIL_UM = TRAIL_FILM_M * 1e6 * 4 / math.pi  # a trail line's film (µm) × its visible width / the drop radius
+
+
+class FilmRows:
+    """Builds ``film_splats``'s rows of a simulation frame after frame: with the compiled kernels into one array
+    it keeps (grown when needed; each call's rows are valid until the next call), else ``film_splats`` itself."""
+
+    def __init__(self):
+        self._out = np.zeros((0, 8), np.float32)
+
+    def rows(self, sim, texel_m: float) -> np.ndarray:
+        """The rows (n, 8) float32 of ``film_splats(sim, texel_m)``."""
+        if not jit.active():
+            return film_splats(sim, texel_m)
+        trails = np.ascontiguousarray(sim.frame_trails(), np.float64)  # (the fast path's are already)
+        impacts = np.ascontiguousarray(sim.frame_impacts(), np.float64)
+        need = len(trails) + min(len(impacts), _MAX_SPLASHES)
+        if need > len(self._out):
+            self._out = np.zeros((max(need, 2 * len(self._out), 256), 8), np.float32)
+        total = render_kernels.film_rows(trails, impacts, 0.6 * texel_m, _TRAIL_UM, 0.5 * texel_m, _MAX_SPLASHES,
+                                         7 * sim.arrival_count, self._out)
+        return self._out[:total]
+
+
 def film_splats(sim, texel_m: float) -> np.ndarray:
     """Instances (n, 8) float32 added to the film texture (µm): wet trail lines (which also stamp the beads a
     sliding drop leaves behind) and splash speckle."""
     trails = sim.frame_trails()
     impacts = sim.frame_impacts()
     if len(impacts):
-        impacts = impacts.compress(impacts[:, 2] >= 0.5 * texel_m, axis=0)[:4096]  # (a boolean index is slower)
+        impacts = impacts.compress(impacts[:, 2] >= 0.5 * texel_m, axis=0)[:_MAX_SPLASHES]  # (faster than a mask)
     k = len(trails)
     out = np.zeros((k + len(impacts), 8), np.float32)  # written in place: the rows the GPU reads
     if k:
@@ -127,7 +182,7 @@ def film_splats(sim, texel_m: float) -> np.ndarray:
         a = trails[:, 4]
         a_vis = np.maximum(a, 0.6 * texel_m)
         out[:k, 4] = a_vis
-        out[:k, 5] = TRAIL_FILM_M * 1e6 * 4 / math.pi * a / a_vis
+        out[:k, 5] = _TRAIL_UM * a / a_vis
         out[:k, 6] = 1.0
     if len(impacts):
         rows = out[k:]

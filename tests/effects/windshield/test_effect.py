@@ -151,7 +151,7 @@ def test_release_frees_every_gl_object_it_made(gl_ctx):
         gl_ctx.gc_mode = old_mode
 
 
-def test_splats_are_one_instanced_draw_per_water_target_with_only_what_the_frame_draws(gl_ctx, shaders):
+def test_splats_are_one_instanced_draw_per_water_target_with_only_what_the_frame_draws(gl_ctx, shaders, kernel_path):
     from rain_core.effects.windshield.splats import drop_splats, film_splats
 
     s = Settings()
@@ -311,7 +311,7 @@ def test_inputs_are_made_again_only_when_what_they_are_made_of_changes(gl_ctx, s
     scene.release()
 
 
-def test_drop_rows_are_the_drops_as_they_are_and_the_beads_along_the_blades():
+def test_drop_rows_are_the_drops_as_they_are_and_the_beads_along_the_blades(kernel_path):
     # The drop buffer's rows (splats.DropRows): a drop's (s, t, vs, vt) and radius as float32, read from the fast
     # path's drop array or through the public arrays alike; a bead bin with water is a line from one end of its
     # bin to the other, 4 mm ahead of the blade (WindshieldSimReference.bead_bin_centres), of minus its radius.
