@@ -7,6 +7,8 @@ from dataclasses import astuple, dataclass
 
 import numpy as np
 
+from rain_core import jit, physics
+from rain_core.effects.spray import kernels, water
 from rain_core.effects.spray.body import BodyBox
 from rain_core.effects.spray.water import (
     TYRE_PRESSURE_KPA,
@@ -188,6 +190,13 @@ class _Fleet:
 
 
 _FLEETS: dict[tuple, tuple[list, _Fleet]] = {}
+# kernels.wheel_water's tables: per mechanism its depth band (start, width, mm) and release ramp (start, span,
+# m/s); ρ_w·1e-3, the tread spray ramp, the shares, the hydroplaning onset and drained depth, the depth cap.
+_WATER_BANDS = np.column_stack([water._BAND_LO_MM, water._BAND_MM, water._RAMP_LO, water._RAMP_SPAN])
+_WATER_CONSTS = np.array([physics.RHO_WATER * 1e-3, water._SPRAY_LO, water._SPRAY_SPAN, water.TREAD_SPRAY_SHARE,
+                          1.0 - water.MIST_SHARE, water.MIST_SHARE, water.HYDRO_LIFT_ONSET,
+                          1.0 - water.HYDRO_LIFT_ONSET, water.HYDRO_DEPTH_MM[0],
+                          water.HYDRO_DEPTH_MM[1] - water.HYDRO_DEPTH_MM[0], MAX_FILM_DEPTH_MM])
 _XYZ = [0, 5, 1]  # check_vehicles' columns x, y, z
 _SIDE = np.array([-1.0, 1.0, -1.0, 1.0])
 
@@ -247,42 +256,49 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None,
     w3 = wt.reshape(n, 4, 15)
     geo.position, geo.velocity, geo.right, geo.forward = vt[:, 0:3], vt[:, 3:6], vt[:, 6:9], vt[:, 9:12]
     geo.box_params = vt[:, 12:20]
-    # Forward (−sin, 0, −cos) and right (cos, 0, −sin).
-    np.negative(s, out=vt[:, 9])
-    np.negative(c, out=vt[:, 11])
-    vt[:, 6] = c
-    vt[:, 8] = vt[:, 9]
-    vt[:, 0:3] = state[:, _XYZ]
     consts = fleet.consts
     geo.height, geo.half_length = consts[:, 0], consts[:, 1]
     geo._vehicle_consts = consts  # (V, 4) height, half length, …: the compiled launches read its rows
-    local = fleet.local
-    # Vehicle.to_world: rotation about +Y by yaw, then the translation.
-    contacts = w3[:, :, 3:6]
-    contacts[..., 0] = c[:, None] * local[..., 0] + s[:, None] * local[..., 2] + px[:, None]
-    contacts[..., 1] = local[..., 1] + py[:, None]
-    contacts[..., 2] = c[:, None] * local[..., 2] - s[:, None] * local[..., 0] + pz[:, None]
-    contacts = wt[:, 3:6]
-    geo.contacts = contacts
-    # Vehicle._point_velocity: v·forward + ω ŷ × (p − rear axle), the rear axle wheelbase/2 behind the centre;
-    # ŷ × (a, 0, c) = (c, 0, −a). (Its y component, 0·v + 0, is +0: the template's.)
-    ax = px + s * consts[:, 3]
-    az = pz + c * consts[:, 3]
-    base = geo.forward * speed[:, None]
-    np.add(base[:, 0], omega * (pz - az), out=vt[:, 3])
-    np.add(base[:, 2], omega * (ax - px), out=vt[:, 5])
-    wv = base.repeat(4, axis=0)  # (ndarray methods: np.repeat's Python wrapper costs more than the work)
-    om4 = omega.repeat(4)
-    wv[:, 0] += om4 * (contacts[:, 2] - az.repeat(4))
-    wv[:, 2] -= om4 * (contacts[:, 0] - ax.repeat(4))
-    backwards = np.where(speed < 0.0, -1.0, 1.0)
-    geo.speed = wt[:, 14]
-    np.sqrt(np.einsum("wc,wc->w", wv, wv), out=geo.speed)
-    signed = geo.speed * backwards.repeat(4)
-    # Per wheel: its vehicle's forward × the sign of travel, its right × the side, its velocity.
-    w3[:, :, 6:9] = (geo.forward * backwards[:, None])[:, None, :]
-    np.multiply(geo.right[:, None, :], fleet.outward_sign.reshape(n, 4, 1), out=w3[:, :, 9:12])
-    w3[:, :, 0:3] = geo.velocity[:, None, :]
+    compiled = jit.active()
+    if compiled:  # the same arithmetic in one loop (the yaw's cosine and sine stay NumPy's, as the twin's)
+        signed = np.empty(4 * n)
+        kernels.wheel_kinematics(state, c, s, fleet.local, consts, fleet.outward_sign.reshape(-1), vt, wt, signed)
+        contacts = wt[:, 3:6]
+        geo.contacts, geo.speed = contacts, wt[:, 14]
+    else:
+        # Forward (−sin, 0, −cos) and right (cos, 0, −sin).
+        np.negative(s, out=vt[:, 9])
+        np.negative(c, out=vt[:, 11])
+        vt[:, 6] = c
+        vt[:, 8] = vt[:, 9]
+        vt[:, 0:3] = state[:, _XYZ]
+        local = fleet.local
+        # Vehicle.to_world: rotation about +Y by yaw, then the translation.
+        contacts = w3[:, :, 3:6]
+        contacts[..., 0] = c[:, None] * local[..., 0] + s[:, None] * local[..., 2] + px[:, None]
+        contacts[..., 1] = local[..., 1] + py[:, None]
+        contacts[..., 2] = c[:, None] * local[..., 2] - s[:, None] * local[..., 0] + pz[:, None]
+        contacts = wt[:, 3:6]
+        geo.contacts = contacts
+        # Vehicle._point_velocity: v·forward + ω ŷ × (p − rear axle), the rear axle wheelbase/2 behind the centre;
+        # ŷ × (a, 0, c) = (c, 0, −a). (Its y component, 0·v + 0, is +0: the template's.)
+        ax = px + s * consts[:, 3]
+        az = pz + c * consts[:, 3]
+        base = geo.forward * speed[:, None]
+        np.add(base[:, 0], omega * (pz - az), out=vt[:, 3])
+        np.add(base[:, 2], omega * (ax - px), out=vt[:, 5])
+        wv = base.repeat(4, axis=0)  # (ndarray methods: np.repeat's Python wrapper costs more than the work)
+        om4 = omega.repeat(4)
+        wv[:, 0] += om4 * (contacts[:, 2] - az.repeat(4))
+        wv[:, 2] -= om4 * (contacts[:, 0] - ax.repeat(4))
+        backwards = np.where(speed < 0.0, -1.0, 1.0)
+        geo.speed = wt[:, 14]
+        np.sqrt(np.einsum("wc,wc->w", wv, wv), out=geo.speed)
+        signed = geo.speed * backwards.repeat(4)
+        # Per wheel: its vehicle's forward × the sign of travel, its right × the side, its velocity.
+        w3[:, :, 6:9] = (geo.forward * backwards[:, None])[:, None, :]
+        np.multiply(geo.right[:, None, :], fleet.outward_sign.reshape(n, 4, 1), out=w3[:, :, 9:12])
+        w3[:, :, 0:3] = geo.velocity[:, None, :]
     geo.travel, geo.outward, geo.wheel_velocity = wt[:, 6:9], wt[:, 9:12], wt[:, 0:3]
     geo.radius, geo.width = wt[:, 12], wt[:, 13]
     geo._wheel_table, geo._vehicle_table = wt, vt
@@ -296,13 +312,19 @@ def gather_wheels(vehicles, depth_fn, state=None, extra_xz=None,
     else:
         depth = np.zeros(0)
     depth, geo.extra_depth_mm = depth[:4 * n], depth[4 * n:]
-    # NaN → 0 (fmax drops it), below 0 → 0, +inf and beyond → MAX_FILM_DEPTH_MM.
-    depth = np.minimum(np.fmax(depth, 0.0), MAX_FILM_DEPTH_MM)
-    depth_m = depth * 1e-3
-    budget = allocate_water_unchecked(signed, geo.width, depth_m)
-    risk = hydroplaning_risk_unchecked(signed, depth_m, fleet.pressure, fleet.planing_speed)
+    if compiled:
+        depth, available, allocated, thrown, buckets, risk, throwing = kernels.wheel_water(
+            signed, wt, np.ascontiguousarray(depth), fleet.planing_speed, _WATER_BANDS, _WATER_CONSTS)
+        budget = WaterBudget(available, allocated, thrown, buckets)
+        geo.throwing = bool(throwing)
+    else:
+        # NaN → 0 (fmax drops it), below 0 → 0, +inf and beyond → MAX_FILM_DEPTH_MM.
+        depth = np.minimum(np.fmax(depth, 0.0), MAX_FILM_DEPTH_MM)
+        depth_m = depth * 1e-3
+        budget = allocate_water_unchecked(signed, geo.width, depth_m)
+        risk = hydroplaning_risk_unchecked(signed, depth_m, fleet.pressure, fleet.planing_speed)
+        geo.throwing = bool((budget.thrown > 0.0).any())  # thrown ≥ 0: any wheel's total > 0
     geo.buckets, geo.available = budget.buckets, budget.available
-    geo.throwing = bool((budget.thrown > 0.0).any())  # thrown ≥ 0: any wheel's total > 0
     geo.wheel_parts = (list(vehicles), signed, depth, budget, risk)
     return (wheel_list(geo) if build_wheels else None), geo
 

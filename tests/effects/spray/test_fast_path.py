@@ -45,7 +45,7 @@ def _drive(em, vehicles, frames, dt=1 / 30, t0=0.0, **kw):
     return t, out
 
 
-def test_all_wheels_at_once_equal_the_per_vehicle_water_model():
+def test_all_wheels_at_once_equal_the_per_vehicle_water_model(kernel_path):
     fleet = _fleet()
     fn = _puddle(2.5)
     got, geo = wheels.gather_wheels(fleet, fn)

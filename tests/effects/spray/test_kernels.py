@@ -138,3 +138,31 @@ def test_launches_equal_the_twins_and_draw_the_same_numbers():
     assert np.mean(comp[0] == twin[0]) > 0.99 and np.mean(comp[2] == twin[2]) > 0.9
     assert all(np.array_equal(a, b) for a, b in zip(comp[3:], twin[3:], strict=True))
     assert rng_comp.random() == rng_twin.random()
+
+
+@pytest.mark.parametrize("depth_mm", [0.0, 0.15, 1.2, 2.5, 6.0, float("nan"), -3.0, 1e30])
+def test_wheels_equal_the_twins(depth_mm):
+    """The wheels' kinematics and water model (turning, reversing, a lorry and a van; dry to beyond the cap, NaN
+    and negative depths from an override): every table column, depth, budget array and risk is the twin's, bit
+    for bit (the yaw's cosine and sine stay NumPy's; the rest is the twin's arithmetic in its order)."""
+    from rain_core.effects.spray import wheels
+
+    fleet = _fleet()
+    fleet[1].speed_m_s = -0.0
+    fleet[2].yaw_rate_rad_s = -0.3
+    fn = _puddle(depth_mm)
+    extra = np.array([[1.0, 500.0], [-3.0, 700.0]])
+    out = []
+    for compiled in (False, True):
+        with jit.forced(compiled):
+            out.append(wheels.gather_wheels(fleet, fn, extra_xz=extra))
+    (twin_list, twin), (comp_list, comp) = out
+    for name in ("_vehicle_table", "_wheel_table", "buckets", "available", "extra_depth_mm"):
+        assert np.array_equal(getattr(comp, name), getattr(twin, name), equal_nan=True), name
+    assert comp.throwing == twin.throwing
+    for a, b in zip(comp_list, twin_list, strict=True):
+        for name in ("contacts", "speed_m_s", "width_m", "film_depth_mm", "hydroplaning_risk"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+        for name in ("available", "allocated", "thrown", "buckets"):
+            assert np.array_equal(getattr(a.budget, name), getattr(b.budget, name)), name
+    assert twin.throwing == (depth_mm > 0.0)  # a real test: water is thrown where there is some
