@@ -56,6 +56,10 @@ class KernelScratch:
         self.ekey = np.empty(entries, np.int64)
         self.out = np.empty(cap, np.int64)
         self.gone = np.empty(cap, bool)  # sweep_blades
+        self.cell_mark = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)  # drops_in_cells
+        self.cell_count = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)
+        self.cell_start = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)
+        self.members = np.empty(cap, np.int64)
 
 
 class DropArray:

@@ -5,11 +5,12 @@ the fast path (``sim.WindshieldSim``) with one loop over the drop rows (``drop_r
 Their NumPy twins stay the fallback and the oracle: ``DropArray._flush_placed`` / ``WindshieldSim._placed``
 (:func:`place_rows`), ``FastMotion._move`` (:func:`move_drops`) and ``_run`` (:func:`run_drops`),
 ``FastMerging._merge_moves`` with ``grid.PairFinder`` (:func:`merge_drops`), ``FastWiping._sweep``'s drops, film
-and off-glass bead (:func:`sweep_blades`). The same operations in the same order on the same values, so the results
-are the twins' bit for bit (cube roots and the sums that NumPy adds pairwise stay in NumPy, done by the caller on
-the kernels' outputs), but for the blade's angle to a drop: libm's atan2 may differ from NumPy's by an ulp, which
-flips a drop's sweep only within an ulp of the blade's edge. Random numbers are drawn by the caller. Units: m, s,
-kg, m/s, rad.
+and off-glass bead (:func:`sweep_blades`), ``WindshieldSim._arrive_fast`` (:func:`sample_arrivals`,
+:func:`land_arrivals`) and ``_give_to_drops`` (:func:`drops_in_cells`, :func:`give_to_drops`). The same operations
+in the same order on the same values, so the results are the twins' bit for bit (cube roots and the sums that NumPy
+adds pairwise stay in NumPy, done by the caller on the kernels' outputs), but for the blade's angle to a drop:
+libm's atan2 may differ from NumPy's by an ulp, which flips a drop's sweep only within an ulp of the blade's edge.
+Random numbers are drawn by the caller, in the twins' order. Units: m, s, kg, m/s, rad.
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ from rain_core.effects.windshield.constants import (
     MERGE_PAIRS_MAX,
     MU_W,
     NU_AIR,
+    SPLASH_MAX,
+    SPLASH_SPEED_M_S,
     TRAIL_FILM_M,
     TRAIL_FRACTION,
     TRAIL_PARENT_MIN,
@@ -58,6 +61,8 @@ from rain_core.physics import RHO_AIR, RHO_WATER
 _DRAG_K = 0.5 * RHO_AIR * DRAG_CD * FRONTAL_PER_RADIUS2
 _INV_MASS_PER_A3 = 1.0 / (RHO_WATER * VOLUME_PER_RADIUS3)
 _WET_PER_AREA = RHO_WATER * TRAIL_FILM_M
+_KG_PER_MM3 = RHO_WATER * math.pi / 6.0 * 1e-9  # a raindrop's mass over its diameter (mm) cubed
+_SPLASH_LO, _SPLASH_HI = SPLASH_SPEED_M_S
 _O0, _O1 = float(_GRID_ORIGIN[0]), float(_GRID_ORIGIN[1])
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 _N0, _N1 = _grid_shape(NEAR_CELL_M)
@@ -645,3 +650,110 @@ def _sweep_film(flat, areas, bead, order, phi, start, end, bins, lo, hi, per_are
     for k in range(BEAD_BINS):
         if bead[k] < 0.0:
             bead[k] = 0.0
+
+
+@jit.kernel
+def sample_arrivals(u, n, cdf, coef, total, w0, dw, height, imp, cells, obj):
+    """``WindshieldSim._arrive_fast``'s draws made arrivals: ``n`` raindrops from the uniform numbers ``u`` (3n:
+    the size's quantile, then across and up the glass), the size law's CDF ``cdf`` over the diameter grid and
+    ``coef`` (ArrivalTable._coef: per grid interval the diameter's slope, the CDF, the diameter, the closing
+    speed's slope and the closing speed), ``total`` the CDF's end; the glass's width ``w0`` (m) at its bottom,
+    growing by ``dw`` per metre up, ``height`` (m). Writes ``imp`` rows s, t (m), diameter (mm), splash
+    fraction, mass and kept mass (kg), the film cell of each to ``cells`` and the rows of those that are
+    objects (kept mass ≥ M_OBJECT_MIN) to ``obj``; returns how many are."""
+    dwh = dw * height
+    last = len(cdf) - 2
+    n_obj = 0
+    for k in range(n):
+        x = u[k] * total
+        j = min(np.searchsorted(cdf, x, "right") - 1, last)  # ArrivalTable.sample's interval
+        d = (x - coef[j, 1]) * coef[j, 0] + coef[j, 2]
+        closing = (d - coef[j, 2]) * coef[j, 3] + coef[j, 4]
+        m = _KG_PER_MM3 * (d * d * d)
+        # GlassGeometry.sample_uniform: uniform over the trapezoid.
+        q = u[n + k] * (w0 + 0.5 * dwh)
+        up = 2.0 * q / (w0 + math.sqrt(w0 * w0 + 2.0 * dwh * q)) if dwh != 0 else q / w0
+        t = min(max(up, 0.0), 1.0) * height
+        s = (u[2 * n + k] - 0.5) * (w0 + dw * t)
+        splash = min(max((closing - _SPLASH_LO) / (_SPLASH_HI - _SPLASH_LO), 0.0), 1.0) * SPLASH_MAX
+        keep = m * (1.0 - splash)
+        imp[0, k] = s
+        imp[1, k] = t
+        imp[2, k] = d
+        imp[3, k] = splash
+        imp[4, k] = m
+        imp[5, k] = keep
+        cells[k] = film_cell(s, t, w0, dw, height)
+        if keep >= M_OBJECT_MIN:
+            obj[n_obj] = k
+            n_obj += 1
+    return n_obj
+
+
+@jit.kernel
+def land_arrivals(flat, acc, cells, imp, n, obj, n_obj, room, placed):
+    """What of ``sample_arrivals``' arrivals goes to the film (``flat``, kg per cell): all but the kept mass of
+    the first ``room`` objects (``obj``) and of the others ``placed`` (bool, joined to a drop); written to
+    ``imp`` row 6 and added per cell (``acc``: a zeroed scratch per cell, left zeroed) as the twin's bincount."""
+    for k in range(n):
+        imp[6, k] = 1.0  # (until below: 0 where it landed as a drop or on one)
+    for q in range(n_obj):
+        if q < room or placed[q - room]:
+            imp[6, obj[q]] = 0.0
+    for k in range(n):
+        to_film = imp[4, k] - (imp[5, k] if imp[6, k] == 0.0 else 0.0)
+        imp[6, k] = to_film
+        acc[cells[k]] += to_film
+    for c in range(flat.shape[0]):
+        flat[c] += acc[c]
+        acc[c] = 0.0
+
+
+@jit.kernel
+def drops_in_cells(buf, n, w0, dw, height, cells, mark, per_cell, start, members, c_out, first_out):
+    """For ``WindshieldSim._give_to_drops``: the drops among rows [:n] in each of the film ``cells`` (flat
+    indices), grouped by cell in row order into ``members``; per query its cell's count ``c_out`` and where its
+    group starts ``first_out``. ``mark``, ``per_cell``, ``start``: zeroed scratch per cell, left zeroed."""
+    k = len(cells)
+    for q in range(k):
+        mark[cells[q]] = 1
+    for i in range(n):
+        c = film_cell(buf[i, S], buf[i, T], w0, dw, height) if buf[i, KEY] == _DIRTY else int(buf[i, CELL])
+        if mark[c]:
+            per_cell[c] += 1
+    at = 0
+    for q in range(k):
+        c = cells[q]
+        if mark[c] == 1:
+            mark[c] = 2
+            start[c] = at
+            at += per_cell[c]
+        c_out[q] = per_cell[c]
+        first_out[q] = start[c]
+    for i in range(n):
+        c = film_cell(buf[i, S], buf[i, T], w0, dw, height) if buf[i, KEY] == _DIRTY else int(buf[i, CELL])
+        if mark[c]:
+            members[start[c]] = i
+            start[c] += 1
+    for q in range(k):
+        c = cells[q]
+        mark[c] = 0
+        per_cell[c] = 0
+        start[c] = 0
+
+
+@jit.kernel
+def give_to_drops(buf, fresh, members, first, c, draw, mass, picks):
+    """Add each ``mass`` (kg) whose cell has drops (``c`` > 0) to the drop ``draw`` (its random index among them:
+    ``drops_in_cells``' ``members`` from ``first``), in order; the drop is tested again (RB) and fresh. Writes the
+    rows to ``picks``; returns how many. The caller sets their radius from their mass."""
+    n_p = 0
+    for q in range(len(c)):
+        if c[q] > 0:
+            i = members[first[q] + draw[n_p]]
+            buf[i, M] += mass[q]
+            buf[i, RB] = _INF
+            fresh[i] = True
+            picks[n_p] = i
+            n_p += 1
+    return n_p

@@ -49,7 +49,8 @@ import math
 
 import numpy as np
 
-from rain_core import checks
+from rain_core import checks, jit
+from rain_core.effects.windshield import kernels
 from rain_core.effects.windshield.arrivals import ArrivalTable
 from rain_core.effects.windshield.constants import (
     BEAD_BINS,
@@ -92,6 +93,7 @@ from rain_core.vehicles import CAR_SPEC, VehicleSpec
 _GRID_O = (-1.0, -0.2)  # grid._GRID_ORIGIN, as floats for the sort key
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 _GRID_O2 = np.array(_GRID_O)
+_NONE_PLACED = np.zeros(0, bool)
 _GRID_TOP2 = np.array([_G0 - 1, _G1 - 1])
 
 
@@ -344,6 +346,11 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         n = min(n_all, MAX_ARRIVALS_PER_SUBSTEP)
         # The reference's three draws of n (the size, then sample_uniform's two) in one: the same numbers.
         u = rng.random(3 * n)
+        if jit.active():
+            m = self._arrive_compiled(u, n)
+            if n_all > n:
+                self._arrive_as_mist(n_all - n, float(np.add.reduce(m) / n))  # (m.mean())
+            return
         d_mm, u_n = self._table.sample(u[:n])
         m = (RHO_WATER * math.pi / 6.0 * 1e-9) * (d_mm * d_mm * d_mm)
         # GlassGeometry.sample_uniform, inlined: its u (across) and x (up) are also the film cell's u and v.
@@ -380,11 +387,51 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         if n_all > n:
             self._arrive_as_mist(n_all - n, float(m.mean()))
 
+    def _arrive_compiled(self, u: np.ndarray, n: int) -> np.ndarray:
+        """``_arrive_fast`` after its draws, by ``kernels.sample_arrivals`` and ``land_arrivals`` (the twin's
+        operations; its sums and cube roots in NumPy); returns the arrivals' masses (kg)."""
+        table = self._table
+        imp = np.empty((7, n))
+        cells = np.empty(n, np.int64)
+        obj = np.empty(n, np.int64)
+        n_obj = kernels.sample_arrivals(u, n, table.cdf, table._coef, table.total, self._w0, self._dw, self._height,
+                                        imp, cells, obj)
+        self.arrived += float(np.add.reduce(imp[4]))
+        self.arrival_count += n
+        room = max(self._budget - self._n, 0)
+        placed = _NONE_PLACED
+        if n_obj > room:
+            # A full glass: the surplus lands on (joins) a drop already in its cell, or else the film.
+            over = obj[room:n_obj]
+            placed = self._give_to_drops(cells.take(over), imp[5].take(over))
+        kernels.land_arrivals(self.film.ravel(), self._scratch().total, cells, imp, n, obj, n_obj, room, placed)
+        obj = obj[: min(n_obj, room)]
+        keep = imp[5].take(obj)
+        a_obj = drop_radius(keep)
+        self._impacts.append((imp[0], imp[1], imp[2], imp[3], obj, a_obj, imp[6]))
+        if len(obj):
+            self._append_at_rest(imp[0].take(obj), imp[1].take(obj), keep, a_obj)
+        return imp[4]
+
     def _give_to_drops(self, cells: np.ndarray, mass: np.ndarray) -> np.ndarray:
         """Add each mass (kg) to a random drop of its film cell; returns which ones found a drop."""
         placed = np.zeros(len(cells), bool)
         n = self._n
         if n == 0 or len(cells) == 0:
+            return placed
+        if jit.active():
+            ks = self._scratch()
+            k = len(cells)
+            c, first = np.empty(k, np.int64), np.empty(k, np.int64)
+            kernels.drops_in_cells(self._buf, n, self._w0, self._dw, self._height, cells.astype(np.int64, copy=False),
+                                   ks.cell_mark, ks.cell_count, ks.cell_start, ks.members, c, first)
+            placed = c > 0
+            if np.count_nonzero(placed):
+                picks = np.empty(k, np.int64)
+                n_p = kernels.give_to_drops(self._buf, self._fresh_buf, ks.members, first, c,
+                                            self.rng.integers(0, c[placed]), mass, picks)
+                picks = picks[:n_p]
+                self._buf[picks, _A] = drop_radius(self._buf[picks, _M])
             return placed
         d = self._buf[:n]
         # The drops in those cells (a table marks the cells), grouped by cell in index order.
