@@ -10,6 +10,7 @@ coarse level is the cell mean), so the picture never shows water the bookkeeping
 from __future__ import annotations
 
 import math
+import struct
 
 import moderngl
 import numpy as np
@@ -84,6 +85,7 @@ class WindshieldEffect(Effect):
         self.seed = int(seed)
         self.sim = WindshieldSim(spec, seed)
         self.glass = self.sim.glass
+        self._right_up = (self.glass.right.tolist(), self.glass.up.tolist())  # the glass's axes, car-local
         self._centre_local = self.glass.local_points(np.array([[0.0, 0.5 * self.glass.height]]))[0].tolist()
         self._shelter_memo = None  # ((world, x, z), roof height m) of the last _sheltered lookup
         self.film_prog = self.shaders.program("common/fullscreen.vert", "windshield/film.frag")
@@ -111,6 +113,10 @@ class WindshieldEffect(Effect):
             u_lens=DROP_LENS,
             u_highlight=DROP_HIGHLIGHT,
         )
+        # Each program's OwnedUniforms, looked up once (owned_uniforms keeps one per program while it lives).
+        self._film_u, self._splat_u, self._normals_u, self._glass_u, self._drop_u = (
+            owned_uniforms(p) for p in (self.film_prog, self.drop_splat_prog, self.normals_prog, self.glass_prog,
+                                        self.drop_prog))
         self._film_vao = fullscreen_triangle(ctx, self.film_prog)
         self._normals_vao = fullscreen_triangle(ctx, self.normals_prog)
         pos, nrm, uv, tris = windshield_surface(spec, 48, 24)
@@ -377,12 +383,15 @@ class WindshieldEffect(Effect):
             self._head_memo = (self._inputs, max(float(self._inputs.relative_air_local()[2]), 0.0) * 0.65)
         head = self._head_memo[1]
         residue_um = RESIDUE_M * (1.0 + 4.0 * self._inputs.blade_wear) * 1e6
-        sweeps = [(sweep[0], sweep[1], 1.0, residue_um) if sweep else (0.0, 0.0, 0.0, 0.0)
-                  for sweep in self.sim.frame_sweeps()]
+        sweeps = []
+        for sweep in self.sim.frame_sweeps():
+            sweeps += (sweep[0], sweep[1], 1.0, residue_um) if sweep else (0.0, 0.0, 0.0, 0.0)
         blades = self._blades_bytes()
+        texel_m = self._texel_m()
         # Our programs' own uniforms go through owned_uniforms: a value that did not change is not written again;
         # those that change only with the resolution are not even looked at in between (update_for).
-        owned_uniforms(self.film_prog).update_for("static", (self._token, n, blades), lambda: dict(
+        film_u = self._film_u
+        film_u.update_for("static", (self._token, n, blades), lambda: dict(
             u_film=_UNIT_A,
             u_coarse=_UNIT_B,
             u_coarse_lod=lod,
@@ -390,27 +399,26 @@ class WindshieldEffect(Effect):
             u_blade=blades,
             u_seed=self.seed % 100000,
         ))
-        owned_uniforms(self.film_prog).update(dict(
-            u_diffusion=min(FILM_DIFFUSION_M2_S * dt / self._texel_m() ** 2, 0.2),
+        # Those of the frame's step: made again only when the step's length or the head wind changes.
+        film_u.update_for("step", (self._token, n, dt, head), lambda: dict(
+            u_diffusion=min(FILM_DIFFUSION_M2_S * dt / texel_m ** 2, 0.2),
             u_dry_um=FILM_EVAP_KG_M2_S * (1.0 + head / EVAP_AIR_M_S) * dt / RHO_WATER * 1e6,
             u_bead_mix=1.0 - math.exp(-FILM_BEAD_RATE_PER_S * dt),
-            u_sweep=np.array(sweeps, np.float32).tobytes(),
             u_bead_dry=dt / BEAD_LIFE_S,
         ))
+        film_u.set("u_sweep", struct.pack(f"{len(sweeps)}f", *sweeps))  # float32 as NumPy's cast rounds
         dst.fbo.use()
         self._film_vao.render(moderngl.TRIANGLES, vertices=3)
         # 2. deposits: wet trails and splash speckle, added (the blending the splats of 2 and 3 share, set once).
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.ONE, moderngl.ONE)
         ctx.blend_equation = moderngl.FUNC_ADD
-        self._draw_splats(0, self._film_builder.rows(self.sim, self._texel_m()))
+        self._draw_splats(0, self._film_builder.rows(self.sim, texel_m))
         dst.color.build_mipmaps()
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()
         self._drops.fbo.clear(0.0, 0.0, 0.0, 0.0)
-        owned_uniforms(self.drop_splat_prog).update_for("static", (self._token, n), lambda: dict(
-            u_min_radius=0.75 * self._texel_m(),
-        ))
+        self._splat_u.update_for("static", (self._token, n), lambda: dict(u_min_radius=0.75 * texel_m))
         rows = self._drop_builder.rows(self.sim)
         self._drop_rows = len(rows)
         ctx.blend_equation = moderngl.MAX
@@ -421,7 +429,7 @@ class WindshieldEffect(Effect):
         self._drops.color.use(_UNIT_A)
         dst.color.use(_UNIT_B)
         self._coarse[cur].use(_UNIT_C)
-        owned_uniforms(self.normals_prog).update_for("static", (self._token, n), lambda: dict(
+        self._normals_u.update_for("static", (self._token, n), lambda: dict(
             u_drops=_UNIT_A,
             u_film=_UNIT_B,
             u_coarse=_UNIT_C,
@@ -443,11 +451,13 @@ class WindshieldEffect(Effect):
         copy.color.build_mipmaps()
         prog = self.glass_prog
         rc.set_frame_uniforms(prog)
-        model = frame.ego.model_matrix().copy()
-        model[2, 3] -= rc.shift_z
-        rot = model[:3, :3]
+        # The car's uniforms in Python floats (a few NumPy calls on 3- and 4-vectors cost more than the arithmetic).
+        model = frame.ego.model_matrix().tolist()
+        model[2][3] -= rc.shift_z
         lighting = frame.lighting
-        cabin = 0.02 * 0.5 * (np.asarray(lighting.sky_zenith) + np.asarray(lighting.sky_horizon)) * lighting.exposure
+        exposure = float(lighting.exposure)
+        cabin = tuple(0.02 * 0.5 * (float(z) + float(h)) * exposure
+                      for z, h in zip(lighting.sky_zenith, lighting.sky_horizon, strict=True))
         camera = frame.camera
         blades = self._blades_bytes()
         refraction = float(settings.windshield.refraction) if settings is not None else 1.0
@@ -468,11 +478,12 @@ class WindshieldEffect(Effect):
                 u_depth=_UNIT_C,
             )
 
+        right, up = self._right_up
         moving = dict(
-            u_model=mat4_bytes(model),
-            u_axis_s=tuple(rot @ self.glass.right),
-            u_axis_t=tuple(rot @ self.glass.up),
-            u_cabin=tuple(float(c) for c in cabin),
+            u_model=struct.pack("16f", *(row[c] for c in range(4) for row in model)),  # mat4_bytes: column-major
+            u_axis_s=tuple(r0 * right[0] + r1 * right[1] + r2 * right[2] for r0, r1, r2, _ in model[:3]),
+            u_axis_t=tuple(r0 * up[0] + r1 * up[1] + r2 * up[2] for r0, r1, r2, _ in model[:3]),
+            u_cabin=cabin,
         )
 
         def glass_values() -> dict:
@@ -486,10 +497,11 @@ class WindshieldEffect(Effect):
             )
             return values
 
-        owned_uniforms(prog).update_for("static", view_key, glass_values)
-        owned = owned_uniforms(prog)
+        owned = self._glass_u
+        owned.update_for("static", view_key, glass_values)
         owned.update(moving)
-        owned.set("u_blade_angle", np.array(self.sim.blade_angles(), np.float32).tobytes())
+        angles = self.sim.blade_angles()
+        owned.set("u_blade_angle", struct.pack(f"{len(angles)}f", *angles))
         self._water.color.use(_UNIT_A)
         copy.color.use(_UNIT_B)
         copy.depth.use(_UNIT_C)
@@ -511,12 +523,12 @@ class WindshieldEffect(Effect):
         prog = self.drop_prog
         rc.set_frame_uniforms(prog)
         lighting = frame.lighting
-        sky = np.asarray(lighting.sky_zenith, np.float64) * lighting.exposure
+        exposure = float(lighting.exposure)
         pixel_rad = math.radians(frame.camera.fov_y_deg) / rc.size[1]
-        owned_uniforms(prog).update_for("static", view_key, lambda: {**view_values(), "u_pixel_rad": pixel_rad})
-        owned = owned_uniforms(prog)
+        owned = self._drop_u
+        owned.update_for("static", view_key, lambda: {**view_values(), "u_pixel_rad": pixel_rad})
         owned.update(moving)
-        owned.set("u_sky_light", tuple(float(c) for c in sky))
+        owned.set("u_sky_light", tuple(float(c) * exposure for c in lighting.sky_zenith))
         self._drop_vao.render(moderngl.TRIANGLES, vertices=6, instances=self._drop_rows)
 
     def _blades_bytes(self) -> bytes:
