@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rain_core import checks, layout, physics
+from rain_core import checks, jit, layout, physics
+from rain_core.effects.spray import kernels
 from rain_core.effects.spray.body import body_hit_time, body_hit_time_fast
 from rain_core.effects.spray.flight import (
     flight_position,
@@ -55,6 +56,7 @@ MIN_MIST_CAPACITY = 64
 MAX_BUDGET = 200_000  # droplet parcels (settings.spray.budget's range): the rings' size, so the work per step
 MAX_STRENGTH = 100.0  # × the physical flux (settings allow 4)
 _MIST_VT_M_S = physics.terminal_velocity(MIST_D_MM)  # m/s, every mist puff's drops are MIST_D_MM
+_NO_DRAWS = np.zeros((0, 4, 1))  # a ring that spawns nothing this step: no draws (kernels.tally)
 REBASE_S = 1000.0  # s of effect clock: then the clock restarts at 0 so float32 births keep 0.1 ms resolution
 
 
@@ -310,6 +312,9 @@ class SprayEmitter:
         st.thrown_kg += float(rates.sum()) * elapsed
         acc, wheel_thrown_kg, wheel_emitted_kg = self._book(vehicles)
         acc += rates * elapsed
+        if jit.active() and not self.reference:
+            self._spawn_compiled(frame, geo, acc, rates, wheel_thrown_kg, wheel_emitted_kg, elapsed, now, wind)
+            return
         counts = np.zeros(acc.shape, dtype=np.int64)
         for ring, buckets in ((0, slice(0, 5)), (1, slice(5, 6))):
             mass = acc[..., buckets]
@@ -346,6 +351,30 @@ class SprayEmitter:
             counts.sum(axis=(0, 1)).cumsum(out=bounds[1:])  # bucket k is rows bounds[k]:bounds[k + 1]
             spawn_parcels_fast(self, frame, geo, int(bounds[5]), (vi * 4 + wi).repeat(reps), bounds, mass,
                                now - age_now, age_now, now, wind, body_hit_time_fast)
+
+    def _spawn_compiled(self, frame, geo, acc, rates, wheel_thrown_kg, wheel_emitted_kg, elapsed: float, now: float,
+                        wind: np.ndarray) -> None:
+        """:meth:`_spawn`'s counts, accounts and rows by ``kernels.tally`` (the twin's sums of each ring's mass,
+        draws and emitted mass stay NumPy's calls, in its order), then the fast path's spawn."""
+        rng = self.rng
+        ring_args = []
+        for ring, buckets in ((0, slice(0, 5)), (1, slice(5, 6))):
+            mass = acc[..., buckets]
+            total = float(mass.sum())
+            capacity = self.rings[ring].capacity
+            if total <= 0.0 or capacity == 0:
+                ring_args += [False, 0.0, 1.0, _NO_DRAWS]
+                continue
+            rate = capacity / max(self._life_q90[ring], 0.05)  # parcels per second
+            ring_args += [True, min(rate * elapsed, float(capacity)), total, rng.random(mass.shape)]
+        cell_mass, cell_reps, w, mass, bounds = kernels.tally(acc, rates, elapsed, *ring_args, wheel_thrown_kg,
+                                                              wheel_emitted_kg)
+        if not len(mass):
+            return
+        self.stats.emitted_kg += float(cell_mass @ cell_reps)
+        age_now = elapsed * rng.random(len(mass))  # how long before now each parcel left the tyre
+        spawn_parcels_fast(self, frame, geo, int(bounds[5]), w, bounds, mass, now - age_now, age_now, now, wind,
+                           body_hit_time_fast)
 
     def _book(self, vehicles: list):
         """The per-wheel accounts of this frame's vehicles, (V, 4, 6) kg not yet emitted and (V, 4) kg thrown and

@@ -568,3 +568,66 @@ def wheel_water(signed, wheel, depth, planing_speed, bands, consts):
         depth_part = min(max(((d * 1e-3) * 1e3 - drain_lo) / drain_span, 0.0), 1.0)
         risk[i] = speed_part * depth_part
     return depth_out, available, allocated, thrown, buckets, risk, throwing
+
+
+@jit.kernel
+def tally(acc, rates, elapsed, on_drop, scale_drop, total_drop, draws_drop, on_mist, scale_mist, total_mist,
+          draws_mist, wheel_thrown, wheel_emitted):
+    """``SprayEmitter._spawn``'s accounts: how many parcels each (vehicle, wheel, bucket) cell of ``acc`` (V, 4, 6)
+    kg not yet emitted gets this step — per ring (droplets: buckets 0–4, mist: 5), if ``on``, its share of
+    ``scale`` parcels (the ring's rate × the step, capped) by its mass over the ring's ``total`` kg, the fraction
+    rounded up where its uniform ``draws`` (NumPy's, the twin's call) fall below it. The emitted cells' mass
+    leaves ``acc`` (into ``wheel_emitted`` (V, 4) kg); ``wheel_thrown`` (V, 4) kg grows by ``rates`` (V, 4, 6)
+    kg/s × ``elapsed`` s. Returns the emitted cells bucket-major (as ``counts.transpose(2, 0, 1).nonzero()``:
+    each cell's parcel mass kg and count), one row per parcel (its flat wheel and mass kg) and ``bounds`` (7,)
+    (bucket k in rows bounds[k]:bounds[k + 1])."""
+    nv = acc.shape[0]
+    counts = np.zeros((nv, 4, 6), np.int64)
+    for v in range(nv):
+        for k in range(4):
+            for b in range(6):
+                if b < 5:
+                    if not on_drop:
+                        continue
+                    expected = scale_drop * (acc[v, k, b] / total_drop)
+                    draw = draws_drop[v, k, b]
+                else:
+                    if not on_mist:
+                        continue
+                    expected = scale_mist * (acc[v, k, b] / total_mist)
+                    draw = draws_mist[v, k, 0]
+                whole = math.floor(expected)
+                counts[v, k, b] = int(whole + (1.0 if draw < expected - whole else 0.0))
+    n_cells, n_rows = 0, 0
+    bounds = np.zeros(7, np.int64)
+    for v in range(nv):
+        for k in range(4):
+            emitted, thrown = 0.0, 0.0
+            for b in range(6):
+                c = counts[v, k, b]
+                emitted += acc[v, k, b] if c > 0 else 0.0
+                thrown += rates[v, k, b]
+                if c > 0:
+                    n_cells += 1
+                    n_rows += c
+                    bounds[b + 1] += c
+            wheel_emitted[v, k] += emitted
+            wheel_thrown[v, k] += thrown * elapsed
+    for b in range(6):
+        bounds[b + 1] += bounds[b]
+    cell_mass, cell_reps = np.empty(n_cells), np.empty(n_cells, np.int64)
+    rows_w, rows_mass = np.empty(n_rows, np.int64), np.empty(n_rows)
+    j, r = 0, 0
+    for b in range(6):
+        for v in range(nv):
+            for k in range(4):
+                c = counts[v, k, b]
+                if c > 0:
+                    m = acc[v, k, b] / c
+                    acc[v, k, b] = 0.0
+                    cell_mass[j], cell_reps[j] = m, c
+                    j += 1
+                    for _ in range(c):
+                        rows_w[r], rows_mass[r] = 4 * v + k, m
+                        r += 1
+    return cell_mass, cell_reps, rows_w, rows_mass, bounds

@@ -88,7 +88,13 @@ def test_kernel_emitter_writes_the_twins_parcels():
     (twin, twin_landed), (comp, comp_landed) = runs
     assert comp.stats.parcels == twin.stats.parcels > 10_000 and comp.stats.mist_puffs == twin.stats.mist_puffs > 0
     assert np.allclose(comp.stats.fates, twin.stats.fates, rtol=1e-12)
-    assert comp.stats.emitted_kg == twin.stats.emitted_kg
+    for name in ("emitted_kg", "thrown_kg", "available_kg", "parcels", "mist_puffs"):
+        assert getattr(comp.stats, name) == getattr(twin.stats, name), name
+    for comp_book, twin_book in ((comp._acc, twin._acc), (comp.stats.wheel_thrown_kg, twin.stats.wheel_thrown_kg),
+                                 (comp.stats.wheel_emitted_kg, twin.stats.wheel_emitted_kg)):
+        assert len(comp_book) == len(twin_book) == 4
+        for a, b in zip(comp_book.values(), twin_book.values(), strict=True):
+            assert np.array_equal(a, b)
     for rc, rt in zip(comp.rings, twin.rings, strict=True):
         assert rc.head == rt.head
         assert np.array_equal(rc.birth, rt.birth)
