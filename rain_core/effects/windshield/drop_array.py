@@ -60,6 +60,14 @@ class KernelScratch:
         self.cell_count = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)
         self.cell_start = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)
         self.members = np.empty(cap, np.int64)
+        self.drop = np.empty(cap, bool)  # shed_rows
+        self.shed_m = np.empty(cap)
+        self.hist = np.empty(512, np.int64)  # sort_rows
+        self.order = np.empty(2 * cap, np.int64)
+        self.tmp = np.empty((cap, _COLS))
+        self.tmp_fresh = np.empty(cap, bool)
+        self.film_loss = np.empty(FILM_CELLS * FILM_CELLS)  # evaporate_film
+        self.thick = np.empty(FILM_CELLS * FILM_CELLS, np.int64)
 
 
 class DropArray:
@@ -188,6 +196,9 @@ class DropArray:
 
     def _keep(self, keep: np.ndarray) -> None:
         n = self._n
+        if jit.active():
+            self._n = kernels.compact_rows(self._buf, self._fresh_buf, n, ~keep)
+            return
         first = int(keep.argmin())  # the rows before the first one removed stay where they are
         if keep[first]:
             return
@@ -218,6 +229,10 @@ class DropArray:
             self._flush_placed()
         n = self._n
         if n < 2:
+            return
+        if jit.active():
+            ks = self._scratch()
+            kernels.sort_rows(self._buf, self._fresh_buf, n, ks.hist, ks.order, ks.tmp, ks.tmp_fresh)
             return
         keys = self._buf[:n, _KEY]
         if not np.count_nonzero(keys[1:] < keys[:-1]):

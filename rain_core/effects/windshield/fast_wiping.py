@@ -186,7 +186,7 @@ class FastWiping:
             if offk[b]:
                 self.wiped += float(np.add.reduce(offv[b, : offk[b]]))
         if n_gone:
-            self._keep(~gone[:n])
+            self._n = kernels.compact_rows(self._buf, self._fresh_buf, n, gone)
         if seg.event is not None:
             for b, blade in enumerate(self.blades):
                 self._end_of_stroke(b, blade, float(blade.angle(seg.p_end)), seg.event)

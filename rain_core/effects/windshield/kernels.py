@@ -757,3 +757,105 @@ def give_to_drops(buf, fresh, members, first, c, draw, mass, picks):
             picks[n_p] = i
             n_p += 1
     return n_p
+
+
+@jit.kernel
+def compact_rows(buf, fresh, n, drop):
+    """``DropArray._keep``: remove the rows [:n] marked in ``drop`` (bool), the others keeping their order (and
+    their ``fresh`` flag); returns the new count."""
+    k = 0
+    for i in range(n):
+        if drop[i]:
+            continue
+        if k != i:
+            buf[k] = buf[i]
+            fresh[k] = fresh[i]
+        k += 1
+    return k
+
+
+@jit.kernel
+def shed_rows(buf, fresh, n, test_all, gone, flat, w0, dw, height, drop, shed_m):
+    """``WindshieldSim._shed_outside``: of rows [:n], those off the glass (every one if ``test_all``, else those
+    placed this sub-step: KEY DIRTY) are shed (their masses, kg, in row order into ``shed_m``), those below half
+    the object size become film (``flat``, kg per cell) where they are, and the rows ``gone`` (joined into others
+    by the merge) go too: one compaction. ``drop``: bool scratch over the rows. Returns (new count, shed)."""
+    for i in range(n):
+        drop[i] = False
+    for g in gone:
+        drop[g] = True
+    n_shed = 0
+    for i in range(n):
+        if drop[i]:
+            continue
+        if (test_all or buf[i, KEY] == _DIRTY) and not inside(buf[i, S], buf[i, T], w0, dw, height):
+            shed_m[n_shed] = buf[i, M]
+            n_shed += 1
+            drop[i] = True
+    for i in range(n):
+        if not drop[i] and buf[i, M] < 0.5 * M_OBJECT_MIN:
+            flat[film_cell(buf[i, S], buf[i, T], w0, dw, height)] += buf[i, M]
+            drop[i] = True
+    return compact_rows(buf, fresh, n, drop), n_shed
+
+
+@jit.kernel
+def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
+    """``DropArray._sort_drops`` (after the position columns are written): rows [:n] in stable order of their
+    merge-grid KEY (integers below 2^18: two 9-bit passes of a radix sort), only the span of rows that change
+    places rewritten. ``hist``: int64 scratch of 512, ``order`` int64 and ``tmp`` (rows), ``tmp_fresh`` scratch
+    over 2n rows. Returns whether the rows moved."""
+    ordered = True
+    for i in range(1, n):
+        if buf[i, KEY] < buf[i - 1, KEY]:
+            ordered = False
+            break
+    if ordered:
+        return False
+    src = order[:n]
+    dst = order[n : 2 * n]
+    for i in range(n):
+        src[i] = i
+    for shift in (0, 9):
+        hist[:] = 0
+        for i in range(n):
+            hist[(int(buf[src[i], KEY]) >> shift) & 511] += 1
+        at = 0
+        for b in range(512):
+            c = hist[b]
+            hist[b] = at
+            at += c
+        for i in range(n):
+            b = (int(buf[src[i], KEY]) >> shift) & 511
+            dst[hist[b]] = src[i]
+            hist[b] += 1
+        src, dst = dst, src
+    lo = 0
+    while src[lo] == lo:
+        lo += 1
+    hi = n
+    while src[hi - 1] == hi - 1:
+        hi -= 1
+    for j in range(lo, hi):
+        tmp[j] = buf[src[j]]
+        tmp_fresh[j] = fresh[src[j]]
+    for j in range(lo, hi):
+        buf[j] = tmp[j]
+        fresh[j] = tmp_fresh[j]
+    return True
+
+
+@jit.kernel
+def evaporate_film(flat, evap, loss, bead_mass, thick):
+    """``WindshieldSim._film_step``'s drying: each cell of ``flat`` (kg) loses its ``evap`` (kg this sub-step),
+    at most what it has (into ``loss``); the cells then above ``bead_mass`` (kg) go to ``thick`` in order.
+    Returns how many."""
+    k = 0
+    for c in range(flat.shape[0]):
+        lo = min(flat[c], evap[c])
+        loss[c] = lo
+        flat[c] -= lo
+        if flat[c] > bead_mass[c]:
+            thick[k] = c
+            k += 1
+    return k

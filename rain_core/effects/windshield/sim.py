@@ -94,6 +94,7 @@ _GRID_O = (-1.0, -0.2)  # grid._GRID_ORIGIN, as floats for the sort key
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 _GRID_O2 = np.array(_GRID_O)
 _NONE_PLACED = np.zeros(0, bool)
+_NO_ROWS = np.zeros(0, np.int64)
 _GRID_TOP2 = np.array([_G0 - 1, _G1 - 1])
 
 
@@ -467,11 +468,17 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             self._evap_of, self._evap_h = evap_kg_s, h
             self._evap_step = evap_kg_s * h
         flat = self.film.ravel()
-        loss = np.minimum(flat, self._evap_step)
-        flat -= loss
-        self.evaporated += float(np.add.reduce(loss))
-        # Beading: a film thicker than the threshold pulls together into a drop somewhere in its cell.
-        thick = (flat > self._bead_mass).nonzero()[0]
+        if jit.active():
+            ks = self._scratch()
+            k = kernels.evaporate_film(flat, self._evap_step, ks.film_loss, self._bead_mass, ks.thick)
+            self.evaporated += float(np.add.reduce(ks.film_loss))
+            thick = ks.thick[:k]
+        else:
+            loss = np.minimum(flat, self._evap_step)
+            flat -= loss
+            self.evaporated += float(np.add.reduce(loss))
+            # Beading: a film thicker than the threshold pulls together into a drop somewhere in its cell.
+            thick = (flat > self._bead_mass).nonzero()[0]
         if len(thick) == 0:
             return
         thick, m = self._beads(flat, thick, max(int(inputs.drop_budget) - self._n, 0))
@@ -519,6 +526,15 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
         gone = self._merged_away
         self._merged_away = None
         if n == 0:
+            return
+        if jit.active():
+            ks = self._scratch()
+            self._n, n_shed = kernels.shed_rows(self._buf, self._fresh_buf, n, self._shed_all,
+                                                _NO_ROWS if gone is None else gone, self.film.ravel(), self._w0,
+                                                self._dw, self._height, ks.drop, ks.shed_m)
+            self._shed_all = False
+            if n_shed:
+                self.shed += float(np.add.reduce(ks.shed_m[:n_shed]))
             return
         d = self._buf[:n]
         if self._shed_all:  # positions were set from outside (the ``pos`` setter): test them all

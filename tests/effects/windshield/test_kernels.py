@@ -145,3 +145,28 @@ def test_place_rows_in_plain_python_is_placed():
     dirty = before[:, KEY] == DIRTY
     assert np.array_equal(d[~dirty], before[~dirty])
     assert np.array_equal(d[dirty][:, PLACED], sim._placed(d[dirty, S], d[dirty, T]))
+
+
+def test_sort_and_removal_of_rows_are_the_twins():
+    # Radix-sorted rows (stable, ties and all) and a compaction, against the twin's argsort and row gathers.
+    import copy
+
+    from rain_core.effects.windshield.drop_rows import KEY
+
+    rng = np.random.default_rng(4)
+    twin = WindshieldSim(seed=4)
+    twin._append(twin.glass.from_uv(rng.uniform(0.0, 1.0, (3000, 2))), np.zeros((3000, 2)), np.full(3000, 1e-6))
+    twin._flush_placed()
+    twin._buf[:3000, KEY] = rng.integers(0, 200_000, 3000).astype(float)
+    twin._buf[:3000:7, KEY] = 1234.0  # ties: their row order is kept
+    twin.fresh[:] = rng.random(3000) < 0.5
+    sim = copy.deepcopy(twin)
+    keep = rng.random(3000) < 0.8
+    for on, s in ((False, twin), (True, sim)):
+        with jit.forced(on):
+            s._sort_drops()
+            s._keep(keep)
+            s._sort_drops()
+    assert sim.count == twin.count == np.count_nonzero(keep)
+    assert np.array_equal(sim._buf[: sim.count], twin._buf[: twin.count])
+    assert np.array_equal(sim.fresh, twin.fresh)
