@@ -211,9 +211,14 @@ class SprayEmitter:
                 cand, self._candidates = self._candidates, np.zeros((0, 4))
                 self._wheels, self.geometry = gather_wheels(vehicles, fn, state, extra_xz=cand[:, 1:3],
                                                             build_wheels=False)
-                wet = self.geometry.extra_depth_mm >= STANDING_WATER_MM
-                if wet.any():
-                    self._pending = np.concatenate([self._pending, cand[wet]])
+                if jit.active():
+                    if len(cand):
+                        depth = np.ascontiguousarray(self.geometry.extra_depth_mm, dtype=np.float64)
+                        self._pending = kernels.add_wet_landings(self._pending, cand, depth, STANDING_WATER_MM)
+                else:
+                    wet = self.geometry.extra_depth_mm >= STANDING_WATER_MM
+                    if wet.any():
+                        self._pending = np.concatenate([self._pending, cand[wet]])
             self._vehicles = vehicles
             self._wheels_time = frame.time_s
 
@@ -297,7 +302,9 @@ class SprayEmitter:
         self.dirty = [[(0, r.capacity)] if r.capacity else [] for r in self.rings]
 
     def _pop_landings(self, now: float) -> None:
-        if len(self._pending):
+        if len(self._pending) and jit.active():
+            self._landed, self._pending = kernels.due_landings(self._pending, now)
+        elif len(self._pending):
             done = self._pending[:, 0] <= now
             self._landed = self._pending[done, 1:]  # (emit emptied _landed; this is the frame's only source)
             self._pending = self._pending[~done]

@@ -631,3 +631,44 @@ def tally(acc, rates, elapsed, on_drop, scale_drop, total_drop, draws_drop, on_m
                         rows_w[r], rows_mass[r] = 4 * v + k, m
                         r += 1
     return cell_mass, cell_reps, rows_w, rows_mass, bounds
+
+
+@jit.kernel
+def add_wet_landings(pending, candidates, depth_mm, standing_mm):
+    """``pending`` (k, 4) landings in standing water still in flight (time s, x m, z m, momentum kg·m/s), with
+    the ``candidates`` (m, 4) whose film ``depth_mm`` (m,) is at least ``standing_mm`` appended in order (a NaN
+    depth is dry): a new array (``SprayEmitter.observe_only``)."""
+    k = pending.shape[0]
+    wet = 0
+    for j in range(candidates.shape[0]):
+        if depth_mm[j] >= standing_mm:
+            wet += 1
+    out = np.empty((k + wet, 4))
+    out[:k] = pending
+    r = k
+    for j in range(candidates.shape[0]):
+        if depth_mm[j] >= standing_mm:
+            out[r] = candidates[j]
+            r += 1
+    return out
+
+
+@jit.kernel
+def due_landings(pending, now):
+    """Split ``pending`` (k, 4) landings (time s, x m, z m, momentum) at ``now`` (s): those due (time ≤ now) as
+    (x, z, momentum) rows, and the rest, both in order (``SprayEmitter._pop_landings``)."""
+    due = 0
+    for j in range(pending.shape[0]):
+        if pending[j, 0] <= now:
+            due += 1
+    landed = np.empty((due, 3))
+    rest = np.empty((pending.shape[0] - due, 4))
+    a, b = 0, 0
+    for j in range(pending.shape[0]):
+        if pending[j, 0] <= now:
+            landed[a, 0], landed[a, 1], landed[a, 2] = pending[j, 1], pending[j, 2], pending[j, 3]
+            a += 1
+        else:
+            rest[b] = pending[j]
+            b += 1
+    return landed, rest

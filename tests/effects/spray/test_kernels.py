@@ -172,3 +172,20 @@ def test_wheels_equal_the_twins(depth_mm):
         for name in ("available", "allocated", "thrown", "buckets"):
             assert np.array_equal(getattr(a.budget, name), getattr(b.budget, name)), name
     assert twin.throwing == (depth_mm > 0.0)  # a real test: water is thrown where there is some
+
+
+def test_landing_bookkeeping_equals_the_twins():
+    """Wet candidates join the landings in flight, due ones leave them: the twins' boolean masks, row for row
+    (dry, NaN and exactly-standing depths; due times on both sides of now, one exactly at it)."""
+    rng = np.random.default_rng(5)
+    pending, cand = rng.random((50, 4)), rng.random((40, 4))
+    depth = rng.uniform(0.0, 4.0, 40)
+    depth[:3] = (np.nan, 2.0, np.nextafter(2.0, 0.0))
+    got = kernels.add_wet_landings(pending, cand, depth, 2.0)
+    assert np.array_equal(got, np.concatenate([pending, cand[depth >= 2.0]]))
+    assert 0 < (depth >= 2.0).sum() < 40
+    now = float(pending[7, 0])
+    landed, rest = kernels.due_landings(pending, now)
+    done = pending[:, 0] <= now
+    assert np.array_equal(landed, pending[done, 1:]) and np.array_equal(rest, pending[~done])
+    assert 0 < done.sum() < 50
