@@ -155,7 +155,7 @@ class WindshieldEffect(Effect):
             tex.repeat_x = tex.repeat_y = False
             tex.write(np.zeros((FILM_CELLS, FILM_CELLS), np.float16).tobytes())
         self._coarse_index = 0
-        self._coarse_scratch = None  # (float64, float32 and uint16 arrays) of _coarse_bits
+        self._coarse_scratch = None  # (float64, float32 and uint16 arrays, flat views) of _coarse_bits
         self._frame_copy = None
         self._last_time: float | None = None
         self._inputs = GlassInputs()
@@ -330,14 +330,19 @@ class WindshieldEffect(Effect):
         """The CPU film's mean thickness per cell (µm, at most 6e4: half floats end at 65504) as float16 bits
         (NumPy's float16 cast is slow), (FILM_CELLS, FILM_CELLS) uint16: ``film_thickness_m`` × 1e6, in arrays kept
         from frame to frame."""
-        shape = self.sim.film.shape
+        sim = self.sim
+        shape = sim.film.shape
         if self._coarse_scratch is None or self._coarse_scratch[0].shape != shape:
-            self._coarse_scratch = (np.empty(shape), np.empty(shape, np.float32), np.empty(shape, np.uint16))
-        f64, f32, bits16 = self._coarse_scratch
-        self.sim.film_thickness_m(out=f64)
-        if jit.active():  # the rest in one pass
-            render_kernels.coarse_half_bits(f64.ravel(), f32.ravel(), f32.view(np.uint32).ravel(), bits16.ravel())
+            f32 = np.empty(shape, np.float32)
+            # + the flat views the kernel writes: f32, its bits, the result's
+            self._coarse_scratch = (np.empty(shape), f32, np.empty(shape, np.uint16), f32.ravel(),
+                                    f32.view(np.uint32).ravel())
+        f64, f32, bits16, f32_flat, u32_flat = self._coarse_scratch
+        if jit.active():  # all of it in one pass
+            render_kernels.coarse_half_bits(sim.film.ravel(), sim.cell_areas.ravel(), RHO_WATER, f32_flat, u32_flat,
+                                            bits16.ravel())
             return bits16
+        sim.film_thickness_m(out=f64)
         f64 *= 1e6
         np.minimum(f64, 6e4, out=f64)
         f32[...] = f64

@@ -2,9 +2,10 @@
 uploads every frame, instead of a chain of small NumPy calls.
 
 Their NumPy twins stay the fallback and the oracle: ``splats.DropRows.rows`` (:func:`drop_rows`),
-``splats.film_splats`` (:func:`film_rows`) and the effect's coarse film bits, ``film_thickness_m`` × 1e6 through
-``splats.half_bits`` (:func:`coarse_half_bits`). The same float64 operations in the same order, each rounded to
-float32 once where the twin casts: the same bits (tests/effects/windshield/test_render_kernels.py). Units: m, m/s.
+``splats.film_splats`` (:func:`film_rows`) and the effect's coarse film bits, ``film_thickness_m`` × 1e6
+through ``splats.half_bits`` (:func:`coarse_half_bits`, which divides by ρ × area itself). The same float64
+operations in the same order, each rounded to float32 once where the twin casts: the same bits
+(tests/effects/windshield/test_render_kernels.py). Units: m, m/s, kg.
 """
 
 from __future__ import annotations
@@ -93,12 +94,13 @@ def film_rows(trails, impacts, min_width_m, trail_um, min_splash_m, max_splashes
 
 
 @jit.kernel
-def coarse_half_bits(thickness_m, f32, u32, out):
+def coarse_half_bits(film_kg, area_m2, rho, f32, u32, out):
     """The coarse film as the float16 bits (``out`` uint16) of its thickness in µm, at most 6e4 (half floats end
-    at 65504): ``thickness_m`` (m, float64) × 1e6, rounded to float32 in ``f32`` and then to the nearest half as
-    ``splats.half_bits`` does on ``u32``, f32's bits (the same memory). All four flat, of one length."""
-    for i in range(thickness_m.shape[0]):
-        f32[i] = min(thickness_m[i] * 1e6, 6e4)
+    at 65504): ``film_thickness_m``'s film_kg / (rho kg/m³ × area_m2) m, × 1e6, rounded to float32 in ``f32`` and
+    then to the nearest half as ``splats.half_bits`` does on ``u32``, f32's bits (the same memory). All six flat,
+    of one length. (The twin's (rho × area) table is a new array a frame, cold in the cache: here it is not.)"""
+    for i in range(film_kg.shape[0]):
+        f32[i] = min(film_kg[i] / (rho * area_m2[i]) * 1e6, 6e4)
         bits = (int(u32[i]) + 4096) >> 13  # half of the 13 dropped bits rounds to nearest (int: no wrapping)
         half = bits - _HALF_BIAS
         out[i] = half if half > 0 else 0

@@ -9,6 +9,7 @@ from rain_core.effects.windshield import render_kernels
 from rain_core.effects.windshield.inputs import GlassInputs
 from rain_core.effects.windshield.sim import WindshieldSim
 from rain_core.effects.windshield.splats import DROP_ROW, DropRows, FilmRows, film_splats, half_bits
+from rain_core.physics import RHO_WATER
 
 needs_numba = pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed (pip install 'rainroad[fast]')")
 
@@ -19,12 +20,12 @@ def _twin_coarse(thickness_m: np.ndarray) -> np.ndarray:
     return half_bits(f32).astype(np.uint16)
 
 
-def _kernel_coarse(thickness_m: np.ndarray, kernel=render_kernels.coarse_half_bits) -> np.ndarray:
-    flat = np.ascontiguousarray(thickness_m, np.float64).ravel()
+def _kernel_coarse(film_kg: np.ndarray, area_m2: np.ndarray, kernel=render_kernels.coarse_half_bits) -> np.ndarray:
+    flat = np.ascontiguousarray(film_kg, np.float64).ravel()
     f32 = np.empty(len(flat), np.float32)
     out = np.empty(len(flat), np.uint16)
-    kernel(flat, f32, f32.view(np.uint32), out)
-    return out.reshape(thickness_m.shape)
+    kernel(flat, np.ascontiguousarray(area_m2, np.float64).ravel(), RHO_WATER, f32, f32.view(np.uint32), out)
+    return out.reshape(film_kg.shape)
 
 
 @needs_numba
@@ -49,7 +50,7 @@ def test_rows_and_film_bits_are_the_twins_bits_frame_after_frame():
         assert film.dtype == np.float32 and film.shape == want_film.shape
         assert film.tobytes() == want_film.tobytes()
         thickness = sim.film_thickness_m()
-        assert np.array_equal(_kernel_coarse(thickness), _twin_coarse(thickness))
+        assert np.array_equal(_kernel_coarse(sim.film, sim.cell_areas), _twin_coarse(thickness))
         seen["beads"] += int(np.count_nonzero(sim.beads) > 0)
         seen["trails"] += int(len(sim.frame_trails()) > 0)
         seen["impacts"] += int(len(sim.frame_impacts()) > 0)
@@ -89,17 +90,19 @@ def test_coarse_bits_match_numpys_float16_over_the_range():
     # version (small input) where Numba is missing or not.
     um = np.concatenate([[0.0, 1e-9, 3e-5, 6.1e-5, 6.2e-5, 1.0, 1.00048828125, 2047.5, 59999.0, 6e4, 7e4, 1e9],
                          np.random.default_rng(0).uniform(0, 300, 200)])
-    thickness = um * 1e-6
+    area = np.random.default_rng(1).uniform(1e-4, 3e-4, len(um))  # m², a film cell's
+    film = um * 1e-6 * (RHO_WATER * area)  # kg
+    thickness = film / (RHO_WATER * area)  # film_thickness_m
     kernel = getattr(render_kernels.coarse_half_bits, "py_func", render_kernels.coarse_half_bits)
-    got = _kernel_coarse(thickness, kernel)
+    got = _kernel_coarse(film, area, kernel)
     assert np.array_equal(got, _twin_coarse(thickness))
-    f32 = np.minimum(um, 6e4).astype(np.float32)
+    f32 = np.minimum(thickness * 1e6, 6e4).astype(np.float32)
     # half_bits's floor is the smallest normal half (no subnormals), and its ties go up (NumPy's to even).
     plain = (f32 >= 6.2e-5) & ((f32.view(np.uint32) & 0x1FFF) != 0x1000)
     assert np.count_nonzero(~plain) == 6  # four below the floor, two ties (1.00048828125, 2047.5)
     assert np.array_equal(got[plain], f32.astype(np.float16).view(np.uint16)[plain])
     if jit.AVAILABLE:
-        assert np.array_equal(_kernel_coarse(thickness), got)
+        assert np.array_equal(_kernel_coarse(film, area), got)
 
 
 def test_drop_rows_kernel_logic_in_plain_python():
@@ -119,3 +122,23 @@ def test_drop_rows_kernel_logic_in_plain_python():
     w0, w1 = min(np.sqrt(1e-4 * 0.5), 0.01), min(np.sqrt(2e-3 * 2.0), 0.01)
     np.testing.assert_allclose(out[2], [0.7, -0.1, 0.8, -0.1, -w0], rtol=1e-6)
     np.testing.assert_allclose(out[3], [-0.5, 0.3, -0.5, 0.4, -w1], rtol=1e-6)
+
+
+@needs_numba
+def test_the_effects_coarse_film_bits_are_the_twins(gl_ctx, shaders):
+    # WindshieldEffect._coarse_bits, the film texture's upload, both ways on a film that builds up and is wiped.
+    from rain_core.effects.windshield.effect import WindshieldEffect
+
+    effect = WindshieldEffect(gl_ctx, seed=8, shaders=shaders)
+    inputs = GlassInputs.for_speed(40.0, 25.0, wiper_mode="low")
+    wet = 0
+    for _ in range(60):
+        effect.sim.step(1 / 30, inputs)
+        with jit.forced(True):
+            got = effect._coarse_bits().copy()
+        with jit.forced(False):
+            want = effect._coarse_bits().copy()
+        assert got.dtype == np.uint16 and np.array_equal(got, want)
+        wet += int(np.count_nonzero(want) > 100)
+    assert wet > 30
+    effect.release()
