@@ -54,6 +54,11 @@ def run_headless(args, settings) -> int:
     except GLUnavailableError as exc:
         _say(f"rainroad: {exc}")
         return 1
+    from rain_core import jit
+
+    if jit.active() and jit.cold():  # the scene's effects (and their kernels) exist now
+        _say("rainroad: compiling the CPU kernels on first use (about a minute, once: they are cached; "
+             f"{jit.ENV_VAR}=0 runs without them, python -m rain_core.warmup compiles them ahead)")
     with sim:
         return _run(args, sim, DatasetWriter)
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from app.cameras import CameraModes
 from app.controls import KeyboardDriver, reset_to_lane
 from app.recording import save_png
+from rain_core import jit
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
 from rain_core.scene import Scene
 
@@ -63,6 +64,8 @@ class RainroadApp:
         self.screenshot_dir = screenshot_dir
         # GPU timing starts off; the Rain Manager turns it on while its performance table is open.
         self.scene = Scene(self.ctx, self.render_size(settings), settings=settings, seed=seed, gpu_timing=False)
+        # A cold start compiles the CPU kernels in a child process while the NumPy twins run (no frozen window).
+        self.warmup = jit.WarmUp.start()
         self.driver = KeyboardDriver()
         self.cameras = CameraModes(settings.camera.mode)
         self.panel = RainManagerPanel(self.ctx, wnd.size, self.scene, framebuffer_size=wnd.buffer_size)
@@ -146,6 +149,8 @@ class RainroadApp:
         return path
 
     def render(self, time_s: float, frame_time_s: float):
+        if self.warmup is not None and self.warmup.poll():  # the kernels are compiled: they run from now on
+            self.warmup = None
         now = time.perf_counter()
         dt = now - self._last
         self._last = now

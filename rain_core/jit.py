@@ -13,9 +13,13 @@ their module, so later processes load them.
 
 from __future__ import annotations
 
+import hashlib
 import os
+import subprocess
+import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import TypeVar
 
 try:
@@ -27,6 +31,7 @@ F = TypeVar("F", bound=Callable)
 
 ENV_VAR = "RAINROAD_JIT"
 AVAILABLE: bool = numba is not None
+_KERNELS: list = []  # every compiled dispatcher made so far (``cold`` looks at their disk caches)
 
 
 def _from_environment() -> bool:
@@ -72,13 +77,98 @@ def kernel(fn: F) -> F:
     ``kernel.py_func`` with it) on small inputs, so a kernel's logic is checked even where Numba is missing."""
     if numba is None:
         return fn
-    return numba.njit(cache=True, nogil=True)(fn)
+    dispatcher = numba.njit(cache=True, nogil=True)(fn)
+    _KERNELS.append(dispatcher)
+    return dispatcher
 
 
 def describe() -> str:
-    """One line for benchmark headers: which path runs and why."""
+    """One line for benchmark headers and the Rain Manager: which path runs and why."""
     if _active:
         return f"compiled kernels (Numba {numba.__version__})"
     if not AVAILABLE:
         return "NumPy (Numba not installed)"
+    if _warming is not None:
+        return "NumPy while the kernels compile (first start; a minute at most)"
     return f"NumPy ({ENV_VAR}=0 or turned off)"
+
+
+# --- a cold start without a frozen window --------------------------------------------------------------------
+# Compiling every kernel takes ~40 s on a small machine; lazily, the window's first frame would hang that long.
+# The window instead runs the NumPy twins while a child process (``python -m rain_core.warmup``) compiles the
+# kernels into Numba's disk cache, and turns them on when it is done: their first calls then load from the cache.
+
+_warming: WarmUp | None = None
+
+
+def _loads_from_disk(dispatcher) -> bool:
+    """Whether Numba's disk cache holds a current compilation of ``dispatcher`` (Numba's FunctionCache internals;
+    any surprise reads as "no", which costs at most one needless warm-up)."""
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except Exception:  # noqa: BLE001 - a Numba without these internals: assume cold
+        return False
+
+
+def _stamp_path() -> Path | None:
+    """A file saying a warm-up finished for these kernel sources, this Numba and this Python: a kernel the
+    warm-up scene never calls would otherwise make every start look cold."""
+    if not _KERNELS:
+        return None
+    digest = hashlib.sha1(f"{numba.__version__} {sys.version}".encode())
+    files = sorted({d.py_func.__code__.co_filename for d in _KERNELS})
+    for name in files:
+        digest.update(Path(name).read_bytes())
+    try:
+        folder = sorted(d._cache._cache_path for d in _KERNELS)[0]
+    except Exception:  # noqa: BLE001 - no cache folder known: no stamp
+        return None
+    return Path(folder) / f"rainroad-kernels-{digest.hexdigest()[:16]}.warm"
+
+
+def cold() -> bool:
+    """Whether the kernels defined so far would compile on their first call (nothing current on disk and no
+    warm-up has finished for these sources)."""
+    if not AVAILABLE or not _KERNELS:
+        return False
+    stamp = _stamp_path()
+    if stamp is not None and stamp.exists():
+        return False
+    return not all(_loads_from_disk(d) for d in _KERNELS)
+
+
+def mark_warm() -> None:
+    """Record that the kernels of these sources are compiled on disk (the warm-up's last step)."""
+    stamp = _stamp_path()
+    if stamp is not None:
+        stamp.write_text("compiled by python -m rain_core.warmup\n")
+
+
+class WarmUp:
+    """The kernels compiling in a child process while this one runs their NumPy twins; ``poll`` each frame."""
+
+    def __init__(self, process: subprocess.Popen):
+        self.process = process
+
+    @classmethod
+    def start(cls) -> WarmUp | None:
+        """Start a warm-up when the kernels are on and cold (call after the effects are imported); None when there
+        is nothing to do. The kernels stay off until ``poll`` sees the child finish."""
+        global _warming
+        if not _active or not cold():
+            return None
+        process = subprocess.Popen([sys.executable, "-m", "rain_core.warmup"], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
+        _warming = cls(process)
+        set_active(False)
+        return _warming
+
+    def poll(self) -> bool:
+        """True once the child has ended; the kernels are then on (also when it failed: they compile lazily)."""
+        global _warming
+        if self.process.poll() is None:
+            return False
+        if _warming is self:
+            _warming = None
+            set_active(True)
+        return True

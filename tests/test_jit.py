@@ -47,3 +47,66 @@ def test_kernel_runs_compiled_or_plain():
     plain = getattr(_dot, "py_func", _dot)
     assert plain(a, a) == 30.0
     assert isinstance(jit.describe(), str)
+
+
+class _FakeProcess:
+    def __init__(self, *args, **kwargs):
+        self.args = args
+        self.done = False
+
+    def poll(self):
+        return 0 if self.done else None
+
+
+def test_a_cold_start_runs_the_twins_until_the_warm_up_ends(monkeypatch):
+    monkeypatch.setattr(jit, "AVAILABLE", True)
+    monkeypatch.setattr(jit, "_active", True)
+    monkeypatch.setattr(jit, "cold", lambda: True)
+    monkeypatch.setattr(jit.subprocess, "Popen", _FakeProcess)
+    warm = jit.WarmUp.start()
+    try:
+        assert warm is not None and warm.process.args[0][1:] == ["-m", "rain_core.warmup"]
+        assert not jit.active() and "compile" in jit.describe()
+        assert not warm.poll() and not jit.active()
+        warm.process.done = True
+        assert warm.poll() and jit.active()
+    finally:
+        jit._warming = None
+
+
+def test_no_warm_up_when_warm_or_off(monkeypatch):
+    monkeypatch.setattr(jit.subprocess, "Popen", _FakeProcess)
+    monkeypatch.setattr(jit, "cold", lambda: False)
+    assert jit.WarmUp.start() is None
+    monkeypatch.setattr(jit, "cold", lambda: True)
+    with jit.forced(False):
+        assert jit.WarmUp.start() is None
+
+
+@pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed")
+def test_cold_reads_the_disk_cache_and_the_stamp(monkeypatch, tmp_path):
+    monkeypatch.setattr(jit, "_KERNELS", [_dot])
+    _dot(np.ones(2), np.ones(2))  # compiled (or loaded) and saved: current on disk
+    monkeypatch.setattr(jit, "_loads_from_disk", lambda d: False)
+    stamp = tmp_path / "k.warm"
+    monkeypatch.setattr(jit, "_stamp_path", lambda: stamp)
+    assert jit.cold()
+    jit.mark_warm()
+    assert stamp.exists() and not jit.cold()
+
+
+@pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed")
+def test_the_stamp_names_the_sources():
+    assert jit._KERNELS  # this module's _dot at least
+    path = jit._stamp_path()
+    assert path is not None and path.name.startswith("rainroad-kernels-") and path.suffix == ".warm"
+
+
+def test_warm_up_scene_runs():
+    from rain_core import warmup
+
+    with jit.forced(jit.AVAILABLE):
+        if not jit.AVAILABLE:
+            pytest.skip("Numba not installed")
+        loadable, total = warmup.warm_up(frames_at_speed=3, frames_parked=2)
+    assert 0 < total and 0 <= loadable <= total
