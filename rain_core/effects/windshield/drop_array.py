@@ -63,7 +63,7 @@ class KernelScratch:
         self.drop = np.empty(cap, bool)  # shed_rows
         self.shed_m = np.empty(cap)
         self.hist = np.empty(512, np.int64)  # sort_rows
-        self.order = np.empty(2 * cap, np.int64)
+        self.order = np.empty(4 * cap, np.int64)
         self.tmp = np.empty((cap, _COLS))
         self.tmp_fresh = np.empty(cap, bool)
         self.film_loss = np.empty(FILM_CELLS * FILM_CELLS)  # evaporate_film

@@ -803,8 +803,8 @@ def shed_rows(buf, fresh, n, test_all, gone, flat, w0, dw, height, drop, shed_m)
 def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
     """``DropArray._sort_drops`` (after the position columns are written): rows [:n] in stable order of their
     merge-grid KEY (integers below 2^18: two 9-bit passes of a radix sort), only the span of rows that change
-    places rewritten. ``hist``: int64 scratch of 512, ``order`` int64 and ``tmp`` (rows), ``tmp_fresh`` scratch
-    over 2n rows. Returns whether the rows moved."""
+    places rewritten. ``hist``: int64 scratch of 512, ``order`` int64 scratch of 4n, ``tmp`` (rows) and
+    ``tmp_fresh`` scratch over the rows. Returns whether the rows moved."""
     ordered = True
     for i in range(1, n):
         if buf[i, KEY] < buf[i - 1, KEY]:
@@ -812,35 +812,54 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
             break
     if ordered:
         return False
+    keys = order[2 * n : 3 * n]
+    keys2 = order[3 * n : 4 * n]
     src = order[:n]
     dst = order[n : 2 * n]
     for i in range(n):
-        src[i] = i
-    for shift in (0, 9):
-        hist[:] = 0
-        for i in range(n):
-            hist[(int(buf[src[i], KEY]) >> shift) & 511] += 1
-        at = 0
-        for b in range(512):
-            c = hist[b]
-            hist[b] = at
-            at += c
-        for i in range(n):
-            b = (int(buf[src[i], KEY]) >> shift) & 511
-            dst[hist[b]] = src[i]
-            hist[b] += 1
-        src, dst = dst, src
+        keys[i] = int(buf[i, KEY])
+    # Pass 1: by the low 9 bits, from row order (stable).
+    hist[:] = 0
+    for i in range(n):
+        hist[keys[i] & 511] += 1
+    at = 0
+    for b in range(512):
+        c = hist[b]
+        hist[b] = at
+        at += c
+    for i in range(n):
+        b = keys[i] & 511
+        dst[hist[b]] = i
+        keys2[hist[b]] = keys[i]
+        hist[b] += 1
+    # Pass 2: by the high bits, keeping pass 1's order within each.
+    hist[:] = 0
+    for i in range(n):
+        hist[keys2[i] >> 9] += 1
+    at = 0
+    for b in range(512):
+        c = hist[b]
+        hist[b] = at
+        at += c
+    for i in range(n):
+        b = keys2[i] >> 9
+        src[hist[b]] = dst[i]
+        hist[b] += 1
     lo = 0
     while src[lo] == lo:
         lo += 1
     hi = n
     while src[hi - 1] == hi - 1:
         hi -= 1
+    cols = buf.shape[1]
     for j in range(lo, hi):
-        tmp[j] = buf[src[j]]
-        tmp_fresh[j] = fresh[src[j]]
+        r = src[j]
+        for c in range(cols):
+            tmp[j, c] = buf[r, c]
+        tmp_fresh[j] = fresh[r]
     for j in range(lo, hi):
-        buf[j] = tmp[j]
+        for c in range(cols):
+            buf[j, c] = tmp[j, c]
         fresh[j] = tmp_fresh[j]
     return True
 
