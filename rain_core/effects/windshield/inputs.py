@@ -36,6 +36,12 @@ _SETTING_OF = {
     "blade_wear": "wipers.blade_wear",
 }
 _RANGES = {name: (field_info(path).range, field_info(path).unit, path) for name, path in _SETTING_OF.items()}
+# The fields that come from the settings alone: a moving car makes new inputs every frame with the same ones.
+_SETTINGS_FIELDS = tuple(name for name in _SETTING_OF if name != "rate_mm_h")
+_PLAIN = (float, int)
+# (the types and values of _SETTINGS_FIELDS last checked, as given; and as checked): the same plain numbers pass
+# the same checks, so they are not checked again (what differs in value or type is).
+_settings_memo: list = [None, None]
 
 
 def _scalar(name: str, value) -> float:
@@ -45,8 +51,25 @@ def _scalar(name: str, value) -> float:
     return checks.number(f"GlassInputs.{name} ({path})", value, lo, hi, unit=unit)
 
 
-def _frozen(values: list[float], shape: tuple[int, ...]) -> np.ndarray:
-    arr = np.array(values, dtype=np.float64).reshape(shape)
+def _settings(given: tuple) -> tuple:
+    """``given``, the values of _SETTINGS_FIELDS in order, checked: as floats, drop_budget as an int."""
+    key = (tuple(map(type, given)), given)  # types first: 1 and True, 1.0 and np.float64(1.0) differ
+    if key == _settings_memo[0]:
+        return _settings_memo[1]
+    checked = [_scalar(name, value) for name, value in zip(_SETTINGS_FIELDS, given, strict=True)]
+    budget = checked[_SETTINGS_FIELDS.index("drop_budget")]
+    if budget != int(budget):
+        raise ValueError(f"GlassInputs.drop_budget (windshield.drop_budget) must be an integer, got {budget!r}")
+    checked[_SETTINGS_FIELDS.index("drop_budget")] = int(budget)
+    checked = tuple(checked)
+    if all(t in _PLAIN for t in key[0]):  # (an array's == is not a truth value: only plain numbers are kept)
+        _settings_memo[:] = [key, checked]
+    return checked
+
+
+def _frozen(arr: np.ndarray) -> np.ndarray:
+    """A read-only float64 copy of ``arr`` (the caller's array stays as it is)."""
+    arr = arr.copy()  # C-contiguous, whatever arr was (a view of the car's 4×4, say)
     arr.flags.writeable = False
     return arr
 
@@ -65,7 +88,7 @@ def _vector(name: str, value, max_norm: float) -> np.ndarray:
         raise ValueError(
             f"GlassInputs.{name} must be finite with a length in [0, {max_norm:g}] m/s, got {checks.quote(value)}"
         )
-    return _frozen([x, y, z], (3,))
+    return _frozen(arr)
 
 
 def _rotation(value) -> np.ndarray:
@@ -88,7 +111,7 @@ def _rotation(value) -> np.ndarray:
             "GlassInputs.car_rotation must be a finite rotation (orthonormal, det +1, within "
             f"{ROTATION_TOLERANCE:g}), got |RᵀR − I| = {off:.3g}, det = {det:.6g}"
         )
-    return _frozen([v for row in r for v in row], (3, 3))
+    return _frozen(rot)
 
 
 @dataclass(frozen=True)
@@ -116,12 +139,10 @@ class GlassInputs:
 
     def __post_init__(self):
         put = object.__setattr__  # frozen: the checked values replace the given ones once, here
-        for name in _SETTING_OF:
-            put(self, name, _scalar(name, getattr(self, name)))
-        budget = self.drop_budget
-        if budget != int(budget):
-            raise ValueError(f"GlassInputs.drop_budget (windshield.drop_budget) must be an integer, got {budget!r}")
-        put(self, "drop_budget", int(budget))
+        put(self, "rate_mm_h", _scalar("rate_mm_h", self.rate_mm_h))
+        checked = _settings(tuple(getattr(self, name) for name in _SETTINGS_FIELDS))
+        for name, value in zip(_SETTINGS_FIELDS, checked, strict=True):
+            put(self, name, value)
         put(self, "car_velocity_m_s", _vector("car_velocity_m_s", self.car_velocity_m_s, MAX_CAR_SPEED_M_S))
         put(self, "wind_m_s", _vector("wind_m_s", self.wind_m_s, MAX_WIND_M_S))
         put(self, "car_rotation", _rotation(self.car_rotation))

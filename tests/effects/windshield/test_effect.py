@@ -351,3 +351,23 @@ def test_drop_rows_are_the_drops_as_they_are_and_the_beads_along_the_blades(kern
         assert np.all(lines["radius"] < 0)
         row += len(keep)
     assert len(builder.rows(sim)) == len(rows)  # the kept array, rewritten
+
+
+def test_glass_inputs_check_the_settings_again_whenever_they_differ():
+    # The settings' fields of the last inputs made are not checked again for the same plain numbers (a moving car
+    # makes inputs every frame); anything else is: another value, a bool, an array, NaN, a fractional budget.
+    from rain_core.effects.windshield.inputs import GlassInputs
+
+    good = GlassInputs(drop_scale=1.0, drop_budget=6000)
+    again = GlassInputs(drop_scale=1.0, drop_budget=6000)
+    assert again.drop_scale == good.drop_scale == 1.0 and type(again.drop_budget) is int
+    for bad in (True, math.nan, np.array([1.0, 1.0]), -1.0):
+        with pytest.raises(ValueError, match="drop_scale"):
+            GlassInputs(drop_scale=bad, drop_budget=6000)
+        assert GlassInputs(drop_scale=1.0, drop_budget=6000).drop_scale == 1.0
+    with pytest.raises(ValueError, match="drop_budget"):
+        GlassInputs(drop_budget=6000.5)
+    numpy_scale = GlassInputs(drop_scale=np.float64(0.5), drop_budget=np.int64(300))
+    assert type(numpy_scale.drop_scale) is float and numpy_scale.drop_budget == 300
+    assert type(numpy_scale.drop_budget) is int
+    assert GlassInputs(drop_budget=300.0).drop_budget == 300 and type(GlassInputs(drop_budget=300.0).drop_budget) is int
