@@ -672,3 +672,21 @@ def due_landings(pending, now):
             rest[b] = pending[j]
             b += 1
     return landed, rest
+
+
+@jit.kernel
+def quantile_90(x):
+    """``spawn.quantile_90``: np.quantile(x, 0.9) with linear interpolation (s), from the same order
+    statistics."""
+    n = x.shape[0]
+    pos = 0.9 * (n - 1)
+    lo = int(pos)
+    hi = min(lo + 1, n - 1)
+    part = np.partition(x, lo)
+    upper = part[lo]
+    if hi > lo:
+        upper = part[hi]
+        for j in range(hi + 1, n):  # the next order statistic: the least above the lo-th's slot
+            if part[j] < upper:
+                upper = part[j]
+    return part[lo] + (pos - lo) * (upper - part[lo])

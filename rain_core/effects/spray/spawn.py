@@ -121,9 +121,10 @@ def _horizons(q90: list, life: np.ndarray, nd: int) -> tuple[float, float]:
     """Each ring's horizon (s): the running 90th percentile of its parcels' lives (``q90``, updated in place with
     this frame's droplets [:nd] and mist [nd:]), at least 50 ms."""
     out = [0.0, 0.0]
+    quantile = kernels.quantile_90 if jit.active() else quantile_90
     for ring, sl in ((0, slice(0, nd)), (1, slice(nd, len(life)))):
         if sl.stop > sl.start:
-            q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile_90(life[sl]), 0.05)
+            q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile(life[sl]), 0.05)
             out[ring] = max(q90[ring], 0.05)
     return out[0], out[1]
 

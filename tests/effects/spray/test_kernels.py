@@ -189,3 +189,14 @@ def test_landing_bookkeeping_equals_the_twins():
     done = pending[:, 0] <= now
     assert np.array_equal(landed, pending[done, 1:]) and np.array_equal(rest, pending[~done])
     assert 0 < done.sum() < 50
+
+
+def test_quantile_equals_the_twins():
+    """The horizons' 90th percentile: the same order statistics, so the same value (ties and one or two
+    elements included)."""
+    rng = np.random.default_rng(6)
+    for n in (1, 2, 3, 10, 11, 400, 1001):
+        x = rng.random(n)
+        if n > 3:
+            x[: n // 3] = x[0]  # ties
+        assert kernels.quantile_90(x) == spawn.quantile_90(x) == pytest.approx(np.quantile(x, 0.9), rel=1e-15)
