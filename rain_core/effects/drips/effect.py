@@ -14,7 +14,8 @@ import math
 import moderngl
 import numpy as np
 
-from rain_core import layout, physics
+from rain_core import jit, layout, physics
+from rain_core.effects.drips import kernels
 from rain_core.effects.drips.edges import DripSites, find_drip_sites
 from rain_core.effects.drips.flow import (
     MAX_PERIOD_S,
@@ -65,6 +66,7 @@ class DripsEffect(Effect):
         self._world = None
         self._diam: np.ndarray | None = None
         self._drop_m3 = self._t_fall = self._momentum = self._ground = None  # per site, made with the sites
+        self._kernel_args = None  # the kernels' contiguous per-site and per-roof arrays and outputs, made with them
         self._tex: dict[str, moderngl.Texture] = {}
         self._prog: moderngl.Program | None = None
         self._vao: moderngl.VertexArray | None = None
@@ -91,6 +93,7 @@ class DripsEffect(Effect):
             self._ground = self.sites.land_y < 0.5
             self.roofs = RoofReservoirs(self.sites.area_m2, self.sites.drain_s)
             self.roofs.settle(rate)  # a scene that starts in rain starts dripping
+            self._kernel_args = None
             self._release_textures()
             self._seen_s = frame.time_s
             return
@@ -112,17 +115,24 @@ class DripsEffect(Effect):
         z = self.sites.z
         period = layout.PERIOD_M
         base = math.floor(camera_z / period) * period
+        offsets = (-period, 0.0, period)
+        bounds = []
+        for offset in offsets:
+            bounds += (camera_z - reach_m - base - offset, camera_z + reach_m - base - offset)
+        ends = np.searchsorted(z, bounds).tolist()  # one call for the three tiles
         out = []
-        for offset in (-period, 0.0, period):
-            lo, hi = camera_z - reach_m - base - offset, camera_z + reach_m - base - offset
-            a, b = np.searchsorted(z, [lo, hi])
+        for k, offset in enumerate(offsets):
+            a, b = ends[2 * k], ends[2 * k + 1]
             if b > a:
-                out.append((int(a), int(b - a), base + offset))
+                out.append((a, b - a, base + offset))
         return out
 
     def update(self, frame: Frame, rc: RenderContext) -> None:
         sec = self._section(frame)
         self._ranges = self._visible_ranges(float(frame.camera.position[2]), sec.reach_m)
+        if jit.active():
+            self._update_compiled(frame, rc)
+            return
         flux = self.roofs.outflow_m3_s / np.maximum(self.sites.edges, 1)
         self._upload(flux)
         # Drops landing now on the ground: the ripples ring where it stands in water.
@@ -142,6 +152,32 @@ class DripsEffect(Effect):
         self.landed = int(sum(len(i) for i in impacts))
         if impacts:
             mine = np.concatenate(impacts)
+            prev = rc.shared.droplet_impacts
+            rc.shared.droplet_impacts = mine if prev is None or len(prev) == 0 else np.concatenate([prev, mine])
+
+    def _update_compiled(self, frame: Frame, rc: RenderContext) -> None:
+        """``update``'s flux, upload and landings by the compiled kernels (kernels.roof_flux, landing_impacts)."""
+        args = self._kernel_args
+        if args is None:
+            s = self.sites
+            per_site = [np.ascontiguousarray(a, np.float64) for a in (self._drop_m3, s.phase, self._t_fall, s.x, s.z,
+                                                                          self._momentum)]
+            roofs = len(s.area_m2)
+            args = self._kernel_args = (
+                np.ascontiguousarray(self._ground, np.bool_), np.ascontiguousarray(s.roof, np.int64), per_site,
+                np.ascontiguousarray(s.edges, np.int64), np.empty(roofs), np.empty(roofs, np.float32),
+                np.empty((3 * len(s), 3)))  # the landings: each site at most once a tile, three tiles
+        ground, roof, (drop_m3, phase, t_fall, x, z, momentum), edges, flux, flux32, out = args
+        roofs = self.roofs
+        kernels.roof_flux(roofs.storage_m3, roofs.drain_s, edges, flux, flux32)
+        self._upload(flux32)
+        ranges = np.array(self._ranges, np.float64).reshape(-1, 3)
+        t0, t1 = float(frame.time_s - frame.dt_s), float(frame.time_s)  # (as Python floats: one signature)
+        k = kernels.landing_impacts(ranges, t0, t1, float(MAX_PERIOD_S), ground, drop_m3, flux, roof, phase, t_fall, x,
+                                    z, momentum, out)
+        self.landed = k
+        if k:
+            mine = out[:k].copy()  # the ripples' (the kept array is rewritten next frame)
             prev = rc.shared.droplet_impacts
             rc.shared.droplet_impacts = mine if prev is None or len(prev) == 0 else np.concatenate([prev, mine])
 
