@@ -26,7 +26,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from rain_core import checks, layout
+from rain_core import checks, jit, layout
 from rain_core.gutter import gutter_depth_mm
 from rain_core.world import HEIGHTMAP_TEXEL_M, sample_heightmap
 
@@ -195,6 +195,11 @@ class _PackedGrids:
         # Row of cell (i = −1, j = 0) of each grid in the one table.
         self.offset = col([1.0, 1.0 + len(tables[0])])
         self.table = np.concatenate(tables)
+        # The same constants for the compiled sampler (_sample_kernel): one row per grid.
+        self.kernel_constants = np.ascontiguousarray(np.concatenate(
+            [self.half_x, self.ext_x, self.ext_z, self.nx, self.nz, self.top_col, self.offset], axis=1))
+        self.kernel_ints = np.ascontiguousarray(np.concatenate([self.nz_int, self.row_len_int], axis=1))
+        self._kernel_scratch = (np.empty(0), np.empty((2, 0), np.int64))
         self._maps = (*grids[0], grids[1][0], extents[0])  # for dry_floors, built on first use
         self._floors = None
 
@@ -220,6 +225,14 @@ class _PackedGrids:
         top = texels[:, :, 0] * ux + texels[:, :, 1] * tx
         bot = texels[:, :, 2] * ux + texels[:, :, 3] * tx
         return top * uz + bot * tz
+
+    def kernel_scratch(self, size: int) -> tuple[np.ndarray, np.ndarray]:
+        """(float64 (≥ size,), int64 (2, ≥ size)) scratch of the compiled sampler, grown by doubling and kept (the
+        ripples ask for strips of ~10⁴ points every frame: no fresh pages each time)."""
+        if self._kernel_scratch[0].size < size:
+            size = max(size, 2 * self._kernel_scratch[0].size)
+            self._kernel_scratch = (np.empty(size), np.empty((2, size), np.int64))
+        return self._kernel_scratch
 
     def dry_floors(self) -> np.ndarray | None:
         """(2, nz·nx) float64 on the puddle-map grid (row-major, cell (j, i) covers z ∈ [j, j + 1)·cell,
@@ -297,16 +310,134 @@ def _packed_grids(seed: int, world) -> _PackedGrids:
     return _PackedGrids(seed, world)
 
 
+_NO_INDEX = np.zeros(0, np.int64)  # _standing_points' index when it samples every point
+
+
+# --- compiled twins (rain_core.jit) of the sampling below: the same IEEE operations point by point, so the
+# same bits (no transcendentals); the NumPy code stays the fallback and the oracle.
+
+@jit.kernel
+def _clamp01(v):
+    """np.minimum(np.maximum(v, 0.0), 1.0) of one float64 (NaN kept, as NumPy's)."""
+    v = v if (v >= 0.0 or v != v) else 0.0
+    return v if (v <= 1.0 or v != v) else 1.0
+
+
+@jit.kernel
+def _wrap(i, size):
+    """i mod size (the floor modulo of NumPy's int64 %) of an integer-valued float64, as a float: one float
+    division instead of an integer one (several times slower), exact below 2^52; beyond, int64's own %, and for
+    NaN and ±inf that of the int64 NumPy casts them to, so a row index is always inside the table."""
+    if abs(i) < 4503599627370496.0:
+        r = i - math.floor(i / size) * size
+        if r < 0.0:
+            r += size
+        elif r >= size:
+            r -= size
+        return r
+    if abs(i) < 9223372036854775808.0:
+        return float(np.int64(i) % np.int64(size))
+    # What NumPy's astype(int64) gives beyond int64 and for NaN on x86 (the samples there are NaN or meaningless,
+    # but a row inside the table all the same).
+    return float(np.int64(-9223372036854775807 - 1) % np.int64(size))
+
+
+@jit.kernel
+def _texel_cell(x, z, half_x, ext_x, ext_z, nx, nz, top_col, offset, row_len):
+    """(table row, tx, tz) of a bilinear sample at x, z (m) on one grid: ``_PackedGrids.sample``'s arithmetic
+    (x on the asphalt: finite)."""
+    fx = (x + half_x) / ext_x * nx - 0.5
+    fz = z / ext_z * nz - 0.5
+    i0 = np.floor(fx)
+    j0 = np.floor(fz)
+    column = np.int64(min(max(i0, -1.0), top_col) + offset)
+    return np.int64(_wrap(j0, nz)) * row_len + column, fx - i0, fz - j0
+
+
+@jit.kernel
+def _lerp(t0, t1, t2, t3, tx, tz):
+    """The bilinear blend of four float32 taps with float64 weights, in the twin's order."""
+    ux = 1.0 - tx
+    top = np.float64(t0) * ux + np.float64(t1) * tx
+    bot = np.float64(t2) * ux + np.float64(t3) * tx
+    return top * (1.0 - tz) + bot * tz
+
+
+@jit.kernel
+def _standing_points(table, fc, fi, x, z, index, m, crack_at, puddle_at, standing, shelter):
+    """``_road_depths`` before the kerb streams at on-road points x, z (float64 m): the standing water (mm) and the
+    shelter into ``standing`` and ``shelter``, at points ``index[:m]`` (all points when m < 0). Both grids of
+    ``_PackedGrids.sample`` (constants ``fc``, ``fi`` by grid) and the formulas, the twin's operations in its
+    order (the helpers take scalars only: one taking arrays costs more per call than a point)."""
+    count = x.size if m < 0 else m
+    for j in range(count):
+        k = j if m < 0 else index[j]
+        xk = x[k]
+        zk = z[k]
+        a, tx, tz = _texel_cell(xk, zk, fc[0, 0], fc[0, 1], fc[0, 2], fc[0, 3], fc[0, 4], fc[0, 5], fc[0, 6],
+                                fi[0, 1])
+        h = _lerp(table[a, 0], table[a, 1], table[a, 2], table[a, 3], tx, tz)
+        h_smooth = _lerp(table[a, 4], table[a, 5], table[a, 6], table[a, 7], tx, tz)
+        b, tx, tz = _texel_cell(xk, zk, fc[1, 0], fc[1, 1], fc[1, 2], fc[1, 3], fc[1, 4], fc[1, 5], fc[1, 6],
+                                fi[1, 1])
+        n = _lerp(table[b, 0], table[b, 1], table[b, 2], table[b, 3], tx, tz)
+        sh = _lerp(table[b, 4], table[b, 5], table[b, 6], table[b, 7], tx, tz)
+        crack = CRACK_MAX_MM * _clamp01((crack_at - h) / CRACK_DEPTH_SPAN)
+        ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
+        puddle = PUDDLE_MAX_MM * _clamp01((puddle_at - ground) / PUDDLE_DEPTH_SPAN)
+        wet = crack if (crack >= puddle or crack != crack) else puddle
+        standing[k] = wet * (1.0 - sh)
+        shelter[k] = sh
+
+
+@jit.kernel
+def _standing_where_wet_kernel(table, fc, fi, floors, crack_at, puddle_at, kerb, row_scale, col_scale, cols,
+                               cells, max_rows, x, z, out, shelter, scratch):
+    """``_standing_where_wet`` before the kerb streams: standing water (mm) into ``out`` (zeros on entry) at the
+    points of x, z (float64 (k,) m) that the dry-cell table does not rule out; the indices of the on-road points
+    beyond ``kerb`` (m, where the kerb streams may run) into ``scratch[1]``. Returns how many, or −1 when an
+    on-road point lies beyond ``max_rows`` puddle-map rows of z = 0 (the caller then samples everything).
+    ``shelter``: float64 scratch of ≥ k; ``scratch``: int64 (2, ≥ k)."""
+    maybe = scratch[0]
+    near = scratch[1]
+    m = 0
+    wet = 0
+    for k in range(x.size):
+        xk = x[k]
+        ax = abs(xk)
+        if not ax <= ROAD_HALF_WIDTH_M:
+            continue
+        rows = z[k] * row_scale
+        if not (-max_rows < rows and rows < max_rows):
+            return -1
+        col = min(math.floor((xk + ROAD_HALF_WIDTH_M) * col_scale), cols - 1.0)
+        cell = np.int64(_wrap(math.floor(rows) * cols + col, cells))
+        if ax > kerb:
+            near[m] = k
+            m += 1
+        elif not (floors[0, cell] < crack_at or floors[1, cell] < puddle_at):
+            continue
+        maybe[wet] = k
+        wet += 1
+    _standing_points(table, fc, fi, x, z, maybe, wet, crack_at, puddle_at, out, shelter)
+    return m
+
+
 def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
     """Standing water (mm) and the shelter at on-road points x, z (float64 (k,) m): ``_standing_water_mm`` and
     the gutter streams as ``water_depths_mm`` computes them. crack_at = cracks·CRACK_LEVEL, puddle_at = the
     puddle level (Python floats)."""
-    (h, h_smooth), (n, shelter) = grids.sample(x, z)
-    # np.clip's values, without its Python-level wrapper (two ufuncs: the same numbers, NaN included).
-    crack = CRACK_MAX_MM * np.minimum(np.maximum((crack_at - h) / CRACK_DEPTH_SPAN, 0.0), 1.0)
-    ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
-    puddle = PUDDLE_MAX_MM * np.minimum(np.maximum((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0), 1.0)
-    standing = np.maximum(crack, puddle) * (1.0 - shelter)
+    if jit.active():
+        standing, shelter = np.empty(x.size), np.empty(x.size)
+        _standing_points(grids.table, grids.kernel_constants, grids.kernel_ints, np.ascontiguousarray(x),
+                         np.ascontiguousarray(z), _NO_INDEX, -1, crack_at, puddle_at, standing, shelter)
+    else:
+        (h, h_smooth), (n, shelter) = grids.sample(x, z)
+        # np.clip's values, without its Python-level wrapper (two ufuncs: the same numbers, NaN included).
+        crack = CRACK_MAX_MM * np.minimum(np.maximum((crack_at - h) / CRACK_DEPTH_SPAN, 0.0), 1.0)
+        ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
+        puddle = PUDDLE_MAX_MM * np.minimum(np.maximum((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0), 1.0)
+        standing = np.maximum(crack, puddle) * (1.0 - shelter)
     if gutter_k > 0.0:
         if x.size < KERB_BAND_MIN_POINTS:
             return np.maximum(standing, gutter_depth_mm(x, z, gutter_k)), shelter
@@ -391,6 +522,20 @@ def _standing_where_wet(grids, floors, levels, kerb, scale, x, z, crack_at, pudd
     (``_PackedGrids.dry_floors``) allows a crack or a puddle (h or g below its level) or near the kerbs where the
     gutter may run (|x| > kerb); +0 elsewhere, which is what sampling gives there (the maps' bilinear samples stay
     within their taps' range to a few ulps, so the clamps give +0 crack and puddle, and the gutter is +0)."""
+    if jit.active():  # one loop over the points; the kerb streams (a power law) stay in NumPy
+        flat_x, flat_z = np.ascontiguousarray(x).reshape(-1), np.ascontiguousarray(z).reshape(-1)
+        out = np.zeros(x.shape)
+        shelter, scratch = grids.kernel_scratch(flat_x.size)
+        m = _standing_where_wet_kernel(grids.table, grids.kernel_constants, grids.kernel_ints, floors,
+                                       levels[0, 0], levels[1, 0], kerb, *scale, DRY_TEST_MAX_ROWS, flat_x, flat_z,
+                                       out.reshape(-1), shelter, scratch)
+        if m < 0:
+            return fallback(x, z)
+        if m and gutter_k > 0.0:
+            index, flat = scratch[1, :m], out.reshape(-1)
+            flat[index] = np.maximum(flat.take(index), gutter_depth_mm(flat_x.take(index), flat_z.take(index),
+                                                                      gutter_k))
+        return out
     flat_x, flat_z = x.reshape(-1), z.reshape(-1)
     ax = np.abs(flat_x)
     on = (ax <= ROAD_HALF_WIDTH_M).nonzero()[0]

@@ -41,7 +41,7 @@ def _points(rng, n):
 
 @pytest.mark.parametrize("levels", [(1.0, 1.0, 1.0, 0, 1.0, 0.2), (0.4, 0.7, 0.5, 3, 0.3, 0.0),
                                     (0.0, 0.0, 0.5, 1, 0.0, 0.05), (1.0, 0.2, 0.9, 0, 1.0, 0.0)])
-def test_fast_paths_give_the_references_bits(levels):
+def test_fast_paths_give_the_references_bits(levels, kernel_path):
     cracks, puddles, amount, seed, wetness, gutter_k = levels
     world = water_film.default_world()
     x, z = _points(np.random.default_rng(seed + 5), 6000)
@@ -59,7 +59,7 @@ def test_fast_paths_give_the_references_bits(levels):
     assert np.array_equal(sampler(off, np.array([1.0, 2.0])), np.zeros(2))
 
 
-def test_shapes_and_scalars_are_kept():
+def test_shapes_and_scalars_are_kept(kernel_path):
     world = water_film.default_world()
     standing, film = water_film.water_depths_mm(1.75, np.array([[10.0, 20.0], [30.0, 40.0]]), 1.0, 1.0,
                                                 world=world, wetness=1.0)
@@ -73,3 +73,22 @@ def test_the_sampler_checks_its_arguments_once():
         water_film.film_depth_sampler(0.5, 1.5)
     with pytest.raises(ValueError, match="wetness"):
         water_film.film_depth_sampler(0.5, 0.5, wetness=-0.1)
+
+
+def test_kernels_give_the_twins_bits_at_far_and_non_finite_z():
+    """The compiled sampler's row arithmetic (a float modulo below 2^52 rows, int64's beyond, none for NaN and
+    ±inf) gives the twin's depths, NaN included, and reads no row outside its table."""
+    from rain_core import jit
+
+    if not jit.AVAILABLE:
+        pytest.skip("Numba not installed")
+    world = water_film.default_world()
+    x = np.array([1.0, 2.0, 3.0, 1.5, -4.0, 6.9, 0.3])
+    z = np.array([np.nan, np.inf, -np.inf, 1e17, -3e14, 2.5e8, -1e300])
+    got, want = [], []
+    for on, out in ((True, got), (False, want)):
+        with jit.forced(on), np.errstate(invalid="ignore"):
+            out.extend(water_film.water_depths_mm(x, z, 1.0, 1.0, wetness=0.5, world=world, gutter_k=0.1))
+            out.append(water_film.film_depth_sampler(1.0, 1.0, world=world, gutter_k=0.1)(x, z))
+    for g, w in zip(got, want, strict=True):
+        assert g.tobytes() == w.tobytes()

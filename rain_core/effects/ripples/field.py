@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 
-from rain_core import checks
+from rain_core import checks, jit, physics
+from rain_core.effects.ripples import kernels
 from rain_core.effects.ripples.constants import (
     BACKENDS,
     CAPILLARY_SPEED_M_S,
@@ -36,6 +37,8 @@ from rain_core.effects.ripples.solver_f32 import WaveSolverF32
 from rain_core.effects.ripples.wheels import FilmDepthFn, WheelBatch
 from rain_core.effects.ripples.window import field_grid
 
+# The raindrop kernel's stand-in for "every cell is water" (one compiled signature: float32 (1, 1)).
+_NO_WATER = np.ones((1, 1), np.float32)
 # The solvers that need no OpenGL context, by backend name.
 CPU_SOLVERS = {"reference": WaveSolver, "numpy32": WaveSolverF32}
 # Raindrop candidates per frame are at most this many times max_drops_per_frame (a window with little water
@@ -115,6 +118,7 @@ class RippleField:
         self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
         self._batch: list | None = None  # the frame's bumps while ``update`` gathers them
         self._law: DropLaw | None = None  # the arriving drops' law at the last rain rate (see _drop_law)
+        self._rain_out, self._rain_wet = np.empty((4, 0)), np.empty(0, bool)  # the raindrop kernel's output
         self.version = 0
 
     # -- geometry --
@@ -465,7 +469,18 @@ class RippleField:
         if queue is not None:  # the GPU makes them: a few uniforms, no sampling, no upload
             queue(batch)
             return round(batch.count * self._rain_water_fraction())
-        _, xs, zs, radii, dents = raindrops(batch, self.n, self.cell_m, self.solver.water_mask)
+        water = self.solver.water_mask
+        if jit.active() and self.solver.mask_dtype is np.float32:  # the float32 solver: one loop
+            if self._rain_out.shape[1] < batch.count:  # the candidates are capped: this grows a few times at most
+                self._rain_out, self._rain_wet = np.empty((4, batch.count)), np.empty(batch.count, bool)
+            law = batch.law
+            count = kernels.raindrop_bumps(
+                batch.key, batch.count, self.n, self.cell_m, _NO_WATER if water is None else water, water is not None,
+                law.cdf, law.grid, law.p_d, law.dp_d, physics.D_MIN_MM, physics.D_MAX_MM, batch.crater_m_per_mm,
+                batch.peak_per_momentum, self._rain_out, self._rain_wet)
+            xs, zs, radii, dents = self._rain_out[:, :count]  # views: the solver or the batch copies them now
+        else:
+            _, xs, zs, radii, dents = raindrops(batch, self.n, self.cell_m, water)
         if xs.size:
             self._emit(xs, zs, radii, dents)
         return int(xs.size)

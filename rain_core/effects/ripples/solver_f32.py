@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from rain_core import jit
+from rain_core.effects.ripples import kernels
+from rain_core.effects.ripples.constants import FOOTPRINT_BATCH_CELLS, MIN_FOOTPRINT_CELLS
 from rain_core.effects.ripples.solver import WaveSolver
+
+# The kernels' stand-in for "no mask" (a fixed (1, 1) float32 array: one compiled signature).
+_NO_MASK = np.ones((1, 1), np.float32)
 
 
 class WaveSolverF32(WaveSolver):
@@ -21,8 +27,20 @@ class WaveSolverF32(WaveSolver):
         # One scratch row block for the stencil, flat: rows 1 … n − 2 whole (see _advance).
         self._scratch = np.zeros(self.n * (self.n - 2), np.float32)
         self._scratch4 = np.zeros(self.n * (self.n - 2), np.float32)
+        # The deposit kernel's per-bump scratch (grown as batches grow) and its reach histogram (reach ≤ n + 1).
+        self._bump_scratch = np.empty((2, 1024))
+        self._bump_order = np.empty((2, 1024), np.int64)
+        self._reach_starts = np.empty(self.n + 3, np.int64)
+
+    def _kernel_mask(self) -> tuple[np.ndarray, bool]:
+        return (_NO_MASK, False) if self._mask is None else (self._mask, True)
 
     def _advance(self, k: int, alpha: float, kc2: float):
+        if jit.active():  # all k sub-steps in one fused loop (the twin below makes ~12 passes over n² a step)
+            mask, use_mask = self._kernel_mask()
+            if kernels.leapfrog(self._z, self._zp, mask, use_mask, k, alpha, kc2):
+                self._z, self._zp = self._zp, self._z
+            return
         # The stencil runs over rows 1 … n − 2 as one flat, contiguous range (edge columns included): NumPy
         # walks a 2-D interior view row by row, and that per-row overhead cost several times the arithmetic.
         # A neighbour one cell left or right in the flat range is the cell beside it, except at the edge
@@ -55,6 +73,30 @@ class WaveSolverF32(WaveSolver):
             zp[1:-1, -1] = 0.0
             z, zp = zp, z
         self._z, self._zp = z, zp
+
+    def add_impulses_unchecked(self, xs: np.ndarray, zs: np.ndarray, radii: np.ndarray, amounts: np.ndarray):
+        if not jit.active():
+            super().add_impulses_unchecked(xs, zs, radii, amounts)
+            return
+        if xs.size == 0:
+            return
+        # _bumps, _footprint and _deposit in one loop: the same values added in the same order.
+        f64 = np.float64
+        mask, use_mask = self._kernel_mask()
+        if self._bump_scratch.shape[1] < xs.size:  # grown by doubling: a frame's batch reallocates rarely
+            size = max(xs.size, 2 * self._bump_scratch.shape[1])
+            self._bump_scratch, self._bump_order = np.empty((2, size)), np.empty((2, size), np.int64)
+        cells = kernels.deposit_bumps(self._z, self._zp, mask, use_mask, np.ascontiguousarray(xs, f64),
+                                      np.ascontiguousarray(zs, f64), np.ascontiguousarray(radii, f64),
+                                      np.ascontiguousarray(amounts, f64), self.cell_m,
+                                      MIN_FOOTPRINT_CELLS * self.cell_m, self.length_m, FOOTPRINT_BATCH_CELLS,
+                                      self._bump_scratch, self._bump_order, self._reach_starts)
+        if cells < 0:  # bumps wider than the span: outside the kernel's contract, the twin copes
+            with jit.forced(False):
+                super().add_impulses_unchecked(xs, zs, radii, amounts)
+        elif cells:
+            self._sourced = True
+            self._asleep = False
 
     def _footprint_group(self, xs, zs, r_eff, amounts, reach: int, flats: list, values: list) -> None:
         """The reference's footprint of bumps of one reach: the same values in the same order (so the same

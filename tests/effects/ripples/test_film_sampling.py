@@ -90,7 +90,7 @@ def test_several_maps_sample_exactly_as_each_alone():
 
 
 @pytest.mark.parametrize("levels", [(1.0, 1.0, 0.5, 0, 0.0), (0.4, 0.7, 0.9, 3, 1.0), (0.0, 0.6, 0.3, 1, 0.5)])
-def test_water_depths_are_bit_identical_to_sampling_each_map_alone(levels):
+def test_water_depths_are_bit_identical_to_sampling_each_map_alone(levels, kernel_path):
     cracks, puddles, amount, seed, wetness = levels
     world = default_world()
     x, z = points(np.random.default_rng(seed + 11), 20_000)
@@ -101,7 +101,7 @@ def test_water_depths_are_bit_identical_to_sampling_each_map_alone(levels):
     assert (got[0] > 0).any()
 
 
-def test_water_depths_on_the_asphalt_only_and_in_any_shape():
+def test_water_depths_on_the_asphalt_only_and_in_any_shape(kernel_path):
     """Points all on the asphalt (the wheels) take the path without gather and scatter: still bit-identical, in
     the input's shape (a 2-D grid, a scalar)."""
     world = default_world()
@@ -138,7 +138,7 @@ def edge_points(rng, count):
 
 @pytest.mark.parametrize("levels", [(1.0, 1.0, 0.5, 0, 0.17), (0.4, 0.7, 0.9, 3, 0.0), (0.0, 0.3, 0.3, 1, 0.4),
                                     (1.0, 0.0, 0.5, 0, 0.0), (0.0, 0.0, 0.5, 2, 0.05)])
-def test_the_sampler_without_film_skips_only_dry_cells(levels):
+def test_the_sampler_without_film_skips_only_dry_cells(levels, kernel_path):
     """Without the wet film (the road's film function) the sampler samples only where the dry-cell table allows
     standing water or a kerb stream: the same bits as sampling every map at every point (zeros' signs too), for
     flat points, the ripples' strips (rows × columns, with the wheels' few points), texel edges and far z."""

@@ -1,0 +1,236 @@
+"""Compiled kernels of the ripples' CPU work (rain_core.jit): each replaces a chain of NumPy calls of the float32
+solver (``solver_f32.WaveSolverF32``) or the raindrop twin (``raindrops.raindrops``) with one loop.
+
+Their NumPy twins stay the fallback and the oracle: ``WaveSolverF32._advance`` (:func:`leapfrog`),
+``WaveSolver._bumps`` + ``_footprint`` + ``_deposit`` of the float32 solver (:func:`deposit_bumps`) and
+``raindrops.raindrops`` (:func:`raindrop_bumps`). The same operations in the same order: the stencil and the
+raindrops are exact (integer hashes, + − × ÷ and float32 rounding as NumPy's); the footprints use libm's cos,
+which may differ from NumPy's by an ulp (tests/effects/ripples/test_kernels.py states the tolerances).
+Units: m, cells (ints), m for heights; grids are (n, n) [iz, ix], C-contiguous.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rain_core import jit
+
+_M32 = 0xFFFFFFFF
+
+
+@jit.kernel
+def leapfrog(z, zp, mask, use_mask, k, alpha, kc2):
+    """``k`` leapfrog sub-steps of the float32 (n, n) levels ``z`` (current) and ``zp`` (previous), in place:
+    zp ← z + α(z − zp) + k_c²(Σ 4 neighbours − 4z) on the interior (× ``mask``, float32 0/1, where
+    ``use_mask``), then the two swap roles. The twin's float32 operations in its order. Returns whether the
+    levels ended swapped (k odd: the new current level is in the array passed as ``zp``)."""
+    n = z.shape[0]
+    a = np.float32(alpha)
+    kk = np.float32(kc2)
+    four = np.float32(4.0)
+    zero = np.float32(0.0)
+    cur, prev = z, zp
+    for _ in range(k):
+        for i in range(1, n - 1):
+            up = cur[i - 1]
+            row = cur[i]
+            down = cur[i + 1]
+            out = prev[i]
+            for j in range(1, n - 1):
+                c = row[j]
+                p = c - out[j]
+                p = p * a
+                p = p + c
+                s = up[j] + down[j]
+                s = s + row[j - 1]
+                s = s + row[j + 1]
+                s = s - c * four
+                s = s * kk
+                p = p + s
+                if use_mask:
+                    p = p * mask[i, j]
+                out[j] = p
+            out[0] = zero
+            out[n - 1] = zero
+        cur, prev = prev, cur
+    return k % 2 == 1
+
+
+@jit.kernel
+def deposit_bumps(z, zp, mask, use_mask, xs, zs, radii, amounts, cell_m, min_radius_m, length_m, batch_cells,
+                  scratch, order, starts):
+    """Raised-cosine bumps (centres ``xs``, ``zs`` m from cell (0, 0), radii m, peaks m) added to both float32
+    levels ``z`` and ``zp`` (n, n) on the interior cells (× ``mask`` where ``use_mask``): the float32 solver's
+    ``_bumps`` (widened to ``min_radius_m`` with the volume kept, off-grid and zero bumps dropped), its
+    footprint (bumps by reach, stably; each bump's cells row by row; values ½(1 + cos πd/r)·peak in float64)
+    and its deposit (each value rounded to float32 and added in that order: the twin's sums). ``batch_cells``:
+    the twin's bound on a batch (bumps wider than it are clipped to the grid there: the same cells). Returns
+    the number of cells that got a nonzero value before the mask (the twin's footprint size). Scratch (no
+    allocation per call): ``scratch`` float64 (2, ≥ K), ``order`` int64 (2, ≥ K), ``starts`` int64 (≥ n + 2);
+    −1, with nothing added, when the reaches span more levels than ``starts`` holds."""
+    n = z.shape[0]
+    h = cell_m
+    count = xs.size
+    r_eff = scratch[0]
+    peak = scratch[1]
+    reach = order[1]
+    lo_reach, hi_reach = 1 << 62, -1
+    for b in range(count):
+        r = max(radii[b], min_radius_m)
+        q = radii[b] / r
+        a = amounts[b] * (q * q)
+        r_eff[b] = r
+        peak[b] = a
+        x, y = xs[b], zs[b]
+        if x > -r and x < length_m + r and y > -r and y < length_m + r and a != 0.0:
+            reach[b] = np.int64(math.ceil(r / h))
+            lo_reach = min(lo_reach, reach[b])
+            hi_reach = max(hi_reach, reach[b])
+        else:
+            reach[b] = -1
+    if hi_reach < 0:
+        return 0
+    # A stable counting sort by reach (the twin's argsort(kind="stable")).
+    levels = hi_reach - lo_reach + 1
+    if levels + 1 > starts.size:  # radii beyond the span (the callers' contract): the caller takes the twin
+        return -1
+    starts[:levels + 1] = 0
+    for b in range(count):
+        if reach[b] >= 0:
+            starts[reach[b] - lo_reach + 1] += 1
+    for v in range(levels):
+        starts[v + 1] += starts[v]
+    kept = starts[levels]
+    sorted_bumps = order[0]
+    for b in range(count):
+        if reach[b] >= 0:
+            slot = reach[b] - lo_reach
+            sorted_bumps[starts[slot]] = b
+            starts[slot] += 1
+    deposited = 0
+    pi = np.pi
+    zf = z.reshape(-1)
+    pf = zp.reshape(-1)
+    mf = mask.reshape(-1)
+    for o in range(kept):
+        b = sorted_bumps[o]
+        x, y, r, a, w = xs[b], zs[b], r_eff[b], peak[b], reach[b]
+        c0 = np.int64(math.floor(x / h))
+        r0 = np.int64(math.floor(y / h))
+        if (2 * w + 1) * (2 * w + 1) > batch_cells:  # the twin's clipped window: the cells the rim can reach
+            col_lo, col_hi = max(1, math.floor((x - r) / h)), min(n - 2, math.ceil((x + r) / h))
+            row_lo, row_hi = max(1, math.floor((y - r) / h)), min(n - 2, math.ceil((y + r) / h))
+        else:
+            col_lo, col_hi = max(1, c0 - w), min(n - 2, c0 + w)
+            row_lo, row_hi = max(1, r0 - w), min(n - 2, r0 + w)
+        near = r * r * (1.0 + 1e-9)  # the reference's pre-test: sqrt and ÷ only for cells about inside the rim
+        for row in range(row_lo, row_hi + 1):
+            dz = row * h - y
+            dz2 = dz * dz
+            for col in range(col_lo, col_hi + 1):
+                dx = col * h - x
+                d2 = dx * dx + dz2
+                if d2 > near:
+                    continue
+                rel = math.sqrt(d2) / r
+                if rel < 1.0:
+                    v = 0.5 * (1.0 + math.cos(pi * rel)) * a
+                    if v != 0.0:
+                        deposited += 1
+                        cell = row * n + col
+                        if use_mask:
+                            v = v * mf[cell]
+                        f = np.float32(v)
+                        zf[cell] += f
+                        pf[cell] += f
+    return deposited
+
+
+@jit.kernel
+def _pcg(v):
+    """The PCG hash of one uint32 held in an int64 (``raindrops.pcg_int``; every product fits in 63 bits)."""
+    state = (v * 747796405 + 2891336453) & _M32
+    word = (((state >> ((state >> 28) + 4)) ^ state) * 277803737) & _M32
+    return (word >> 22) ^ word
+
+
+@jit.kernel
+def _interior_cell(hsh, n):
+    """``raindrops._interior_cell`` of one hash: 1 + ⌊k·(n − 2) / 2^24⌋, k its top 24 bits."""
+    k = hsh >> 8
+    m = n - 2
+    q = ((k >> 12) * m + (((k & 0xFFF) * m) >> 12)) & _M32
+    return (q >> 12) + 1
+
+
+@jit.kernel
+def raindrop_bumps(key, count, n, cell_m, water, use_water, cdf, grid, p_d, dp_d, d_min_mm, d_max_mm,
+                   crater_m_per_mm, peak_per_momentum, out, wet):
+    """``raindrops.raindrops`` of a batch without its index: the rows of ``out`` (float64 (4, ≥ count)) take
+    (x m, z m, crater radius m, dent m) of the candidates 0 … count − 1 of stream ``key`` whose centre's cell
+    holds water (``water`` (n, n) float32 > 0.5, where ``use_water``), in index order; returns how many. The
+    same integer hashes, np.interp's inverse CDF (``cdf`` → ``grid``, mm) and the momentum table (``p_d``,
+    ``dp_d`` kg·m/s over [d_min_mm, d_max_mm]), operation for operation. ``wet``: bool scratch of ≥ count."""
+    xs = out[0]
+    zs = out[1]
+    radii = out[2]
+    dents = out[3]
+    wf = water.reshape(-1)
+    nodes = cdf.size
+    per_mm = (p_d.size - 1) / (d_max_mm - d_min_mm)
+    top = p_d.size - 2
+    scale = 1.0 / (1 << 12)
+    half = 1 << 11
+    # First which candidates land on water, without a branch: the mask's reads (scattered over n² cells) then
+    # overlap instead of waiting one by one behind a mispredicted branch.
+    wet[:count] = True
+    if use_water:
+        for index in range(count):
+            h0 = _pcg((index & _M32) ^ key)
+            h2 = _pcg(_pcg(h0))
+            wet[index] = wf[_interior_cell(h2, n) * n + _interior_cell(_pcg(h0), n)] > 0.5
+    m = 0
+    for index in range(count):
+        if not wet[index]:
+            continue
+        h0 = _pcg((index & _M32) ^ key)
+        h1 = _pcg(h0)
+        h2 = _pcg(h1)
+        ix = _interior_cell(h1, n)
+        iz = _interior_cell(h2, n)
+        h3 = _pcg(h2)
+        x = ix + ((h3 & 0xFFF) - half) * scale
+        z = iz + (((h3 >> 12) & 0xFFF) - half) * scale
+        # np.interp(u, cdf, grid): the last node with cdf ≤ u, then its slope (NumPy's formula and branches).
+        u = (h0 >> 8) * (1.0 / 16777216.0)
+        if u < cdf[0]:
+            diam = grid[0]
+        elif u > cdf[nodes - 1]:
+            diam = grid[nodes - 1]
+        else:
+            lo, hi = 0, nodes - 1
+            if u >= cdf[hi]:
+                lo = hi
+            else:
+                while hi - lo > 1:  # cdf[lo] ≤ u < cdf[hi]
+                    mid = (lo + hi) >> 1
+                    if cdf[mid] <= u:
+                        lo = mid
+                    else:
+                        hi = mid
+            if lo == nodes - 1 or cdf[lo] == u:
+                diam = grid[lo]
+            else:
+                slope = (grid[lo + 1] - grid[lo]) / (cdf[lo + 1] - cdf[lo])
+                diam = slope * (u - cdf[lo]) + grid[lo]
+        t = (diam - d_min_mm) * per_mm
+        i = min(np.int64(t), top)
+        t -= i
+        xs[m] = x * cell_m
+        zs[m] = z * cell_m
+        radii[m] = crater_m_per_mm * diam
+        dents[m] = peak_per_momentum * (p_d[i] + t * dp_d[i])
+        m += 1
+    return m

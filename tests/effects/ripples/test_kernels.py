@@ -1,0 +1,227 @@
+"""The ripples' compiled kernels (rain_core.effects.ripples.kernels) against their NumPy twins: the float32
+stencil and the raindrops exactly (the same float32 / integer operations), the footprints' deposits and whole
+field replays to a stated tolerance (libm's cos against NumPy's may differ by an ulp in float64, which float32
+rounding almost always absorbs)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rain_core import jit, physics
+from rain_core.effects.ripples import kernels
+from rain_core.effects.ripples.field import RippleField
+from rain_core.effects.ripples.raindrops import raindrops
+from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+
+needs_numba = pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed (pip install 'rainroad[fast]')")
+
+# Kernel-vs-twin tolerance of float32 heights, relative to the largest |height|: a cos an ulp apart (float64)
+# moves a deposit by at most an ulp of float32, and the stencil carries it on linearly.
+REPLAY_RTOL = 1e-5
+
+
+def _both(run):
+    """``run()`` with the NumPy twins and with the kernels."""
+    with jit.forced(False):
+        twin = run()
+    with jit.forced(True):
+        kernel = run()
+    return twin, kernel
+
+
+@needs_numba
+@pytest.mark.parametrize("masked", [False, True])
+def test_leapfrog_kernel_gives_the_twins_levels_exactly(masked):
+    """Sub-steps fused in one loop: the twin's float32 levels bit for bit, edges 0, through scrolls, mask blocks,
+    sources and sub-step changes (odd and even sub-step counts, so both swaps)."""
+    n, h = 48, 0.05
+
+    def run():
+        solver = WaveSolverF32(n, h, 0.35, 0.3, sleep_energy=0.0)
+        rng = np.random.default_rng(2)
+        solver.reset(rng.standard_normal((n, n)) * 1e-3)
+        if masked:
+            mask = np.zeros((n, n), bool)
+            mask[:, 8:40] = rng.random((n, 32)) > 0.2
+            solver.set_water_mask(mask)
+        levels = []
+        for frame in range(40):
+            if frame % 5 == 3:
+                solver.shift(int(rng.integers(-2, 3)), 2)
+            if masked:
+                solver.set_water_mask_blocks([(n - 3, 12, rng.random((3, 20)) > 0.4)])
+            with jit.forced(False):  # the sources by the twin on both sides: this test is the stencil's
+                solver.add_impulses(rng.uniform(0.0, 2.3, 4), rng.uniform(0.0, 2.3, 4), 0.08,
+                                    rng.uniform(-1e-3, 1e-3, 4))
+            solver.step([1 / 30, 1 / 60, 1 / 45, 1 / 200][frame % 4])
+            levels.append((solver._z.copy(), solver._zp.copy()))
+        return levels
+
+    twin, kernel = _both(run)
+    for (z0, p0), (z1, p1) in zip(twin, kernel, strict=True):
+        np.testing.assert_array_equal(z1, z0)
+        np.testing.assert_array_equal(p1, p0)
+        assert not z1[:, [0, -1]].any() and not z1[[0, -1], :].any()
+    assert np.abs(twin[-1][0]).max() > 1e-5  # a real test: the water moves
+
+
+@needs_numba
+@pytest.mark.parametrize("masked", [False, True])
+def test_deposit_kernel_equals_the_twins_footprints(masked):
+    """Raindrops of 1.5 cells, wakes, wide bumps and one wider than a footprint batch (clipped to the grid),
+    centres on cell centres, near and beyond the fixed edges, zero peaks: the twin's sums to an ulp, and the
+    solver wakes exactly when the twin's footprint is not empty."""
+    n, h = 64, 0.05
+    rng = np.random.default_rng(9)
+    k = 3000
+    xs, zs = rng.uniform(-0.2, n * h + 0.1, k), rng.uniform(-0.2, n * h + 0.1, k)
+    xs[:200] = np.round(xs[:200] / h) * h
+    zs[:200] = np.round(zs[:200] / h) * h
+    radii = rng.choice((0.002, 0.02, 0.07, 0.1, 0.15, 0.31), k)
+    radii[7] = (n - 1) * h  # a bump as wide as the field
+    amounts = rng.uniform(-1e-3, 1e-3, k)
+    amounts[::97] = 0.0
+    mask = rng.random((n, n)) > 0.3
+
+    def run():
+        solver = WaveSolverF32(n, h, 0.35, sleep_energy=0.0)
+        if masked:
+            solver.set_water_mask(mask)
+        solver.add_impulses(xs, zs, radii, amounts)
+        return solver._z.copy(), solver._zp.copy(), solver.asleep, solver._sourced
+
+    twin, kernel = _both(run)
+    scale = np.abs(twin[0]).max()
+    assert scale > 0.0
+    np.testing.assert_allclose(kernel[0], twin[0], rtol=0.0, atol=REPLAY_RTOL * scale)
+    np.testing.assert_allclose(kernel[1], twin[1], rtol=0.0, atol=REPLAY_RTOL * scale)
+    assert kernel[2:] == twin[2:]
+    if masked:
+        assert not kernel[0][~mask].any()
+
+
+@needs_numba
+def test_deposit_kernel_clips_a_bump_wider_than_a_batch():
+    """A bump whose square window exceeds FOOTPRINT_BATCH_CELLS (the twin's clipped path, a band of rows at a
+    time) and bumps entirely off the grid: the twin's levels."""
+    n, h = 600, 0.05
+
+    def run():
+        solver = WaveSolverF32(n, h, 0.35, sleep_energy=0.0)
+        solver.add_impulses([10.0, -40.0, 15.0], [12.0, 5.0, 15.0], [solver.max_radius_m, 1.0, 0.3],
+                            [1e-3, 1e-3, -2e-3])
+        return solver._z.copy()
+
+    twin, kernel = _both(run)
+    assert np.count_nonzero(twin) > 200_000
+    np.testing.assert_allclose(kernel, twin, rtol=0.0, atol=REPLAY_RTOL * np.abs(twin).max())
+
+
+@needs_numba
+def test_deposit_kernel_of_bumps_that_miss_the_grid_leaves_the_solver_asleep():
+    solver = WaveSolverF32(32, 0.05, 0.35)
+    solver._asleep = True
+    with jit.forced(True):
+        solver.add_impulses([-5.0, 0.5], [0.5, 0.5], 0.1, [1e-3, 0.0])
+    assert solver.asleep and not solver.height.any()
+
+
+@needs_numba
+@pytest.mark.parametrize("n", [64, 513])
+@pytest.mark.parametrize("rate", [2.0, 40.0])
+@pytest.mark.parametrize("masked", [False, True])
+def test_raindrop_kernel_gives_the_twins_drops_exactly(n, rate, masked):
+    """The drops on water, their centres, crater radii and dents: the twin's, bit for bit (integer hashes, the
+    inverse CDF as np.interp computes it, the momentum table)."""
+    field = RippleField(n=n, extent_m=0.05 * (n - 1), seed=3, max_drops_per_frame=50_000)
+    if masked:
+        field.set_water_mask(np.random.default_rng(n).random((n, n)) > 0.6)
+    water = field.solver.water_mask
+    for _ in range(3):
+        batch = field.rain_batch(rate, 1 / 30)
+        law = batch.law
+        _, *want = raindrops(batch, n, field.cell_m, water)
+        out = np.full((4, batch.count + 5), np.nan)
+        count = kernels.raindrop_bumps(batch.key, batch.count, n, field.cell_m,
+                                       np.ones((1, 1), np.float32) if water is None else water, water is not None,
+                                       law.cdf, law.grid, law.p_d, law.dp_d, physics.D_MIN_MM, physics.D_MAX_MM,
+                                       batch.crater_m_per_mm, batch.peak_per_momentum, out,
+                                       np.empty(batch.count, bool))
+        got = out[:, :count]
+        assert np.isnan(out[:, count:]).all()
+        assert want[0].size > 10
+        for g, w in zip(got, want, strict=True):
+            np.testing.assert_array_equal(g, w)
+
+
+def test_raindrop_kernel_inverse_cdf_at_the_nodes_and_ends():
+    """np.interp's inverse CDF in the kernel's own search, on a small table with flat stretches (repeated nodes),
+    through the plain-Python function (so it runs where Numba is missing too)."""
+    cdf = np.array([0.0, 0.0, 0.25, 0.25, 0.5, 1.0])
+    grid = np.array([0.1, 0.2, 0.5, 0.9, 1.5, 6.0])
+    p_d = np.linspace(0.0, 1.0, 9)
+    dp_d = np.diff(p_d)
+    fn = getattr(kernels.raindrop_bumps, "py_func", kernels.raindrop_bumps)
+    out = np.empty((4, 40))
+    assert fn(7, 40, 8, 0.1, np.ones((1, 1), np.float32), False, cdf, grid, p_d, dp_d, 0.1, 6.0, 1.0, 1.0, out,
+              np.empty(40, bool)) == 40
+    radii = out[2]
+    from rain_core.effects.ripples.raindrops import _unit, pcg
+
+    u = _unit(pcg(np.arange(40, dtype=np.uint32) ^ np.uint32(7)))
+    np.testing.assert_array_equal(radii, np.interp(u, cdf, grid))  # crater 1 m per mm: the diameters
+
+
+def _replay(backend_frames: int, seed: int = 4):
+    """A 70-frame drive over a film with puddles: rain (capped drops), two wheels' wakes, spray impacts,
+    scrolls in both directions. Returns the heights after each frame and the reports."""
+    n, extent = 160, 7.95
+
+    def film(x, z):
+        x, z = np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64)
+        return np.maximum(0.0, np.sin(1.1 * x) + np.cos(0.8 * z + 0.3 * x) - 0.2)
+
+    field = RippleField(n=n, extent_m=extent, backend="numpy32", seed=seed, max_drops_per_frame=1500)
+    field.solver.sleep_energy = 0.0
+    heights, reports = [], []
+    for frame in range(backend_frames):
+        x = 0.05 * frame
+        wheels = [((x - 1.0, 0.4 + 0.2 * frame), (x - 0.7, 0.6 + 0.2 * frame), 8.0, None, 0.2),
+                  ((x + 1.0, 0.4 + 0.2 * frame), (x + 1.3, 0.6 + 0.2 * frame), 8.0, 2.0, 0.22)]
+        impacts = np.array([[x + 0.3, 0.2 * frame + 1.0, 2e-5], [x - 0.5, 0.2 * frame - 2.0, 5e-6]])
+        report = field.update([1 / 30, 1 / 33, 1 / 27][frame % 3], center_xz=(x, 0.2 * frame), rate_mm_h=25.0,
+                              wheels=wheels, film_depth_fn=film, impacts=impacts)
+        heights.append(field.height.copy())
+        reports.append(report)
+    return heights, reports
+
+
+@needs_numba
+def test_field_replay_kernels_against_the_twin():
+    """70 frames of the float32 field with every CPU kernel on against the NumPy twins: the same drops, bumps and
+    sub-steps each frame, heights within REPLAY_RTOL of the largest (exactly equal where libm's cos agrees
+    with NumPy's, as it does on most machines)."""
+    (h0, r0), (h1, r1) = _both(lambda: _replay(70))
+    assert r0 == r1
+    scale = max(np.abs(h).max() for h in h0)
+    assert scale > 0.0 and sum(r["drops"] for r in r0) > 1000
+    for a, b in zip(h0, h1, strict=True):
+        np.testing.assert_allclose(b, a, rtol=0.0, atol=REPLAY_RTOL * scale)
+
+
+@needs_numba
+def test_bumps_wider_than_the_span_take_the_twin():
+    """Radii beyond the field's span are outside ``add_impulses_unchecked``'s contract; the kernel declines them
+    (its reach histogram holds n + 3 levels) and the twin lays them, as without the kernels."""
+    n, h = 40, 0.05
+
+    def run():
+        solver = WaveSolverF32(n, h, 0.35, sleep_energy=0.0)
+        solver.add_impulses_unchecked(np.array([1.0, 0.5]), np.array([1.0, 0.7]), np.array([6.0, 0.1]),
+                                      np.array([1e-3, -1e-3]))
+        return solver._z.copy()
+
+    twin, kernel = _both(run)
+    assert twin.any()
+    np.testing.assert_array_equal(kernel, twin)
