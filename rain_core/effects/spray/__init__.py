@@ -28,8 +28,9 @@ is), and spends no work on dead slots. ``SprayEmitter(reference=True)`` runs the
 step (per vehicle water model, masked launches, bisection landing times, the sampled body test): with the same
 body test the two write the same parcels. Where Numba is installed (``rain_core.jit``) the fast path's chains
 — wheels, accounts, launches, flight, body test, filing, landings — run as compiled loops (``kernels``), with
-the NumPy code as their twin (tests/effects/spray/test_kernels.py). The frame is checked where it enters (time, wind, vehicles' state:
-ValueError naming the field), and one step spawns at most about a ring's worth whatever the input.
+the NumPy code as their twin (tests/effects/spray/test_kernels.py). The frame is checked where it enters
+(time, wind, vehicles' state: ValueError naming the field), and one step spawns at most about a ring's worth
+whatever the input.
 
 Shared data: ``SprayEffect.update`` publishes ``rc.shared.droplet_impacts`` ((N, 3) float64: x m, z m world,
 downward momentum kg·m/s of the parcels that landed in standing water this frame), read by the ripples. The
