@@ -209,13 +209,14 @@ class DripsEffect(Effect):
         rc.set_frame_uniforms(prog)
         settings = rc.frame.settings
         shutter = settings.camera.exposure_s if settings is not None else 1.0 / 60.0
-        fov = math.radians(rc.frame.camera.fov_y_deg)
+        fov_y_deg = rc.frame.camera.fov_y_deg
         for i, name in enumerate(("a", "b", "flux")):
             self._tex[name].use(units.DRIPS[i])
-        owned_uniforms(prog).update({
+        # Made and compared only when the shutter, the lens or the frame's height changes.
+        owned_uniforms(prog).update_for("static", (shutter, fov_y_deg, rc.size[1]), lambda: {
             "u_sites_a": units.DRIPS[0], "u_sites_b": units.DRIPS[1], "u_roof_flux": units.DRIPS[2],
             "u_slots": SLOTS, "u_shutter_s": float(shutter), "u_max_period_s": float(MAX_PERIOD_S),
-            "u_pixel_rad": 2.0 * math.tan(fov / 2.0) / rc.size[1]})
+            "u_pixel_rad": 2.0 * math.tan(math.radians(fov_y_deg) / 2.0) / rc.size[1]})
         ctx = self.ctx
         ctx.enable(moderngl.DEPTH_TEST)
         rc.hdr.fbo.depth_mask = False  # test against the scene's depth, never write it
