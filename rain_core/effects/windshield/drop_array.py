@@ -43,11 +43,12 @@ class KernelScratch:
         self.rcol = np.empty((5, cap))
         self.wcol = np.empty((3, 4 * cap))
         self.total = np.zeros(FILM_CELLS * FILM_CELLS)
-        self.col = np.empty((7, cap))  # merge_drops
+        self.gidx = np.full(cap, -1, np.int64)  # merge_drops
         self.active = np.empty(cap, bool)
-        self.deferred = np.empty(cap, bool)
+        self.parent = np.full(cap, -1, np.int64)
+        self.nodes = np.empty(cap, np.int64)
         self.mark = np.zeros(cap, bool)
-        self.parent = np.empty(cap, np.int64)
+        self.sums = np.empty((7, cap))
         self.count = np.zeros(kernels.NEAR_CELLS, np.int64)
         self.head = np.full(kernels.NEAR_CELLS, -1, np.int64)
         entries = max(MERGE_CELLS_MAX, cap)

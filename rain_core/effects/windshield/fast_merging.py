@@ -51,8 +51,8 @@ class FastMerging:
             g[0, :n_go], g[1, :n_go], g[2, :n_go], g[3, :n_go] = s_g, t_g, ds_g, dt_g
             g[4, :n_go] = np.sqrt(ds_g * ds_g + dt_g * dt_g) if step_len is None else step_len
         status, n_roots, n_gone = kernels.merge_drops(
-            self._buf, n, n_moved, self._fresh_buf, n_go, ks.go, ks.gcol, ks.col, ks.active, ks.deferred, ks.mark,
-            ks.parent, ks.count, ks.head, ks.nxt, ks.owner, ks.ekey, ks.out)
+            self._buf, n, n_moved, self._fresh_buf, n_go, ks.go, ks.gcol, ks.gidx, ks.active, ks.parent, ks.nodes,
+            ks.mark, ks.sums, ks.count, ks.head, ks.nxt, ks.owner, ks.ekey, ks.out)
         if status < 0:
             return False
         if n_roots:

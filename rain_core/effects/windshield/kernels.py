@@ -29,6 +29,7 @@ from rain_core.effects.windshield.constants import (
     DROP_EVAP_KG_M_S,
     EVAP_AIR_M_S,
     FILM_CELLS,
+    FILM_EVAP_KG_M2_S,
     FLOW_AT_BOTTOM,
     FLOW_AT_TOP,
     FLOW_SPREAD,
@@ -341,29 +342,52 @@ def _root(parent, x):
 
 
 @jit.kernel
-def _join_if_touching(x, y, col, buf, parent):
-    """Join drops x and y (rows) if they touched during the step: the closest approach of their straight motions
-    (``col`` rows 0–3: start s, t and displacement ds, dt, m) within the sum of their radii (``buf``'s A)."""
-    ps = col[0, x] - col[0, y]
-    pt = col[1, x] - col[1, y]
-    qs = col[2, x] - col[2, y]
-    qt = col[3, x] - col[3, y]
+def _motion(x, buf, gcol, gidx):
+    """Drop x's start s, t and displacement ds, dt (m) this step: ``gcol``'s if it slid (``gidx``), else its row."""
+    g = gidx[x]
+    if g >= 0:
+        return gcol[0, g], gcol[1, g], gcol[2, g], gcol[3, g]
+    return buf[x, S], buf[x, T], 0.0, 0.0
+
+
+@jit.kernel
+def _touch(x, y, buf, gcol, gidx):
+    """Whether drops x and y touched during the step: the closest approach of their straight motions within the
+    sum of their radii (merging.Merging's test, as FastMerging computes it)."""
+    s0x, t0x, dsx, dtx = _motion(x, buf, gcol, gidx)
+    s0y, t0y, dsy, dty = _motion(y, buf, gcol, gidx)
+    ps = s0x - s0y
+    pt = t0x - t0y
+    qs = dsx - dsy
+    qt = dtx - dty
     dd = max(qs * qs + qt * qt, 1e-300)
     tau = min(max(-(ps * qs + pt * qt) / dd, 0.0), 1.0)
     ps += tau * qs
     pt += tau * qt
     rr = buf[x, A] + buf[y, A]
-    if ps * ps + pt * pt <= rr * rr:
-        rx = _root(parent, x)
-        ry = _root(parent, y)
-        if rx < ry:
-            parent[ry] = rx
-        elif ry < rx:
-            parent[rx] = ry
+    return ps * ps + pt * pt <= rr * rr
 
 
 @jit.kernel
-def merge_drops(buf, n, n_moved, fresh, n_go, go, gcol, col, active, deferred, mark, parent, count, head, nxt,
+def _join(x, y, parent, nodes, k):
+    """Union of x and y (the smaller root wins), their entries made on first sight (``nodes``: those seen, ``k``
+    of them); returns the new count."""
+    for z in (x, y):
+        if parent[z] < 0:
+            parent[z] = z
+            nodes[k] = z
+            k += 1
+    rx = _root(parent, x)
+    ry = _root(parent, y)
+    if rx < ry:
+        parent[ry] = rx
+    elif ry < rx:
+        parent[rx] = ry
+    return k
+
+
+@jit.kernel
+def merge_drops(buf, n, n_moved, fresh, n_go, go, gcol, gidx, active, parent, nodes, mark, sums, count, head, nxt,
                 owner, ekey, out):
     """``FastMerging._merge_moves`` (with ``grid.PairFinder``'s search) on rows [:n]: of the first ``n_moved``,
     the ``n_go`` drops in ``go`` moved as ``gcol`` says (``move_drops``), the others stayed. Drops that touched
@@ -374,53 +398,44 @@ def merge_drops(buf, n, n_moved, fresh, n_go, go, gcol, col, active, deferred, m
     near cells around each active one (past MERGE_PAIRS_MAX candidates the remaining lookups are deferred: those
     drops stay fresh); otherwise the drops sharing a near cell of their boxes. If those boxes pass the budget
     (MERGE_CELLS_MAX cells, MERGE_PAIRS_MAX pairs) nothing is changed and the result is -1: the caller runs the
-    twin (its far grid). Scratch: ``col`` (7, ·) floats, ``active``, ``deferred``, ``mark`` bool, ``parent``
-    int64 over the drops; ``count``, ``head`` (int64 over NEAR_CELLS, zeros and -1, left so), ``nxt``,
-    ``owner``, ``ekey`` int64 over the box cells. Writes the groups' rows to ``out``: roots, then the rows joined
-    into them (ascending). Returns (status, roots, joined)."""
+    twin (its far grid). Scratch over the rows: ``gidx``, ``parent`` int64 (-1, left so), ``active`` bool,
+    ``nodes`` int64, ``mark`` bool (False, left so), ``sums`` (7, ·); per near cell ``count`` (0) and ``head``
+    (-1) int64, left so; per box cell ``nxt``, ``owner``, ``ekey`` int64. Writes the groups' rows to ``out``:
+    roots, then the rows joined into them (ascending). Returns (status, roots, joined)."""
     if n < 2:
         for x in range(n):
             fresh[x] = False
         return 0, 0, 0
-    any_active = False
-    for x in range(n):
-        s = buf[x, S]
-        t = buf[x, T]
-        col[0, x] = s
-        col[1, x] = t
-        col[2, x] = 0.0
-        col[3, x] = 0.0
-        col[4, x] = buf[x, A]
-        col[5, x] = s
-        col[6, x] = t
-        active[x] = fresh[x] and x < n_moved
-        deferred[x] = False
-        parent[x] = x
     for g in range(n_go):
-        x = go[g]
-        ds, dt = gcol[2, g], gcol[3, g]
-        col[0, x] = gcol[0, g]
-        col[1, x] = gcol[1, g]
-        col[2, x] = ds
-        col[3, x] = dt
-        if ds != 0.0 or dt != 0.0:
-            active[x] = True
-        col[4, x] = buf[x, A] + 0.5 * gcol[4, g]
-        col[5, x] = gcol[0, g] + 0.5 * ds
-        col[6, x] = gcol[1, g] + 0.5 * dt
+        gidx[go[g]] = g
+    any_active = False
     all_near = True
     for x in range(n):
-        any_active = any_active or active[x]
-        if not col[4, x] <= 0.5 * NEAR_CELL_M:
-            all_near = False
+        g = gidx[x]
+        act = fresh[x] and x < n_moved
+        reach = buf[x, A]
+        if g >= 0:
+            act = act or gcol[2, g] != 0.0 or gcol[3, g] != 0.0
+            reach += 0.5 * gcol[4, g]
+        active[x] = act
+        any_active = any_active or act
+        all_near = all_near and reach <= 0.5 * NEAR_CELL_M
+    status = 0
+    k = 0  # drops in a touching pair
+    n_def = 0  # deferred lookups (their rows, in out's tail)
     if any_active:
         inv = 1.0 / NEAR_CELL_M
         if all_near:
             # Near grid (PairFinder.pairs): every drop in the cell of its centre; each active one looks in the 3 × 3
             # cells around its own, in row order, until the budget runs out.
             for x in range(n):
-                k0 = min(max(int((col[5, x] - _O0) * inv), 0), _N0 - 1)
-                k1 = min(max(int((col[6, x] - _O1) * inv), 0), _N1 - 1)
+                g = gidx[x]
+                ms, mt = buf[x, S], buf[x, T]
+                if g >= 0:
+                    ms = gcol[0, g] + 0.5 * gcol[2, g]
+                    mt = gcol[1, g] + 0.5 * gcol[3, g]
+                k0 = min(max(int((ms - _O0) * inv), 0), _N0 - 1)
+                k1 = min(max(int((mt - _O1) * inv), 0), _N1 - 1)
                 key = k0 * _P1 + (k1 + _P1 + 1)
                 ekey[x] = key
                 nxt[x] = head[key]
@@ -430,6 +445,7 @@ def merge_drops(buf, n, n_moved, fresh, n_go, go, gcol, col, active, deferred, m
             for q in range(n):
                 if not active[q]:
                     continue
+                late = False
                 for di in range(-1, 2):
                     for dj in range(-1, 2):
                         cell = ekey[q] + di * _P1 + dj
@@ -438,110 +454,119 @@ def merge_drops(buf, n, n_moved, fresh, n_go, go, gcol, col, active, deferred, m
                             continue
                         cum += c
                         if cum > MERGE_PAIRS_MAX:
-                            deferred[q] = True
+                            late = True
                             continue
                         f = head[cell]
                         while f >= 0:
-                            if f != q and q < n_moved and f < n_moved:
-                                _join_if_touching(q, f, col, buf, parent)
+                            if f != q and q < n_moved and f < n_moved and _touch(q, f, buf, gcol, gidx):
+                                k = _join(q, f, parent, nodes, k)
                             f = nxt[f]
+                if late:
+                    out[n - 1 - n_def] = q
+                    n_def += 1
             for x in range(n):
                 head[ekey[x]] = -1
                 count[ekey[x]] = 0
         else:
-            # Boxes (PairFinder._box_pairs): every drop in each near cell its box (centre ± reach) touches; drops
-            # sharing a cell are the candidates.
+            # Boxes (PairFinder._box_pairs): every drop in each near cell its box (centre ± reach) touches; an active
+            # drop's candidates are the drops sharing a cell with it.
             total = 0
-            for x in range(n):
-                cs = (col[5, x] - _O0) * inv
-                ct = (col[6, x] - _O1) * inv
-                rc = col[4, x] * inv + _BOX_MARGIN_CELLS
-                lo0 = int(min(max(cs - rc, 0.0), _N0 - 1.0))
-                lo1 = int(min(max(ct - rc, 0.0), _N1 - 1.0))
-                hi0 = int(min(max(cs + rc, 0.0), _N0 - 1.0))
-                hi1 = int(min(max(ct + rc, 0.0), _N1 - 1.0))
-                total += (hi0 - lo0 + 1) * (hi1 - lo1 + 1)
-            if total > MERGE_CELLS_MAX or total > nxt.shape[0]:
-                return -1, 0, 0
-            e = 0
             n_pairs = 0
+            cap = min(MERGE_CELLS_MAX, nxt.shape[0])
             for x in range(n):
-                cs = (col[5, x] - _O0) * inv
-                ct = (col[6, x] - _O1) * inv
-                rc = col[4, x] * inv + _BOX_MARGIN_CELLS
+                g = gidx[x]
+                ms, mt, reach = buf[x, S], buf[x, T], buf[x, A]
+                if g >= 0:
+                    ms = gcol[0, g] + 0.5 * gcol[2, g]
+                    mt = gcol[1, g] + 0.5 * gcol[3, g]
+                    reach += 0.5 * gcol[4, g]
+                cs = (ms - _O0) * inv
+                ct = (mt - _O1) * inv
+                rc = reach * inv + _BOX_MARGIN_CELLS
                 lo0 = int(min(max(cs - rc, 0.0), _N0 - 1.0))
                 lo1 = int(min(max(ct - rc, 0.0), _N1 - 1.0))
                 hi0 = int(min(max(cs + rc, 0.0), _N0 - 1.0))
                 hi1 = int(min(max(ct + rc, 0.0), _N1 - 1.0))
+                if total + (hi0 - lo0 + 1) * (hi1 - lo1 + 1) > cap:
+                    status = -1
+                    break
                 for c0 in range(lo0, hi0 + 1):
                     for c1 in range(lo1, hi1 + 1):
                         key = c0 * _N1 + c1
-                        ekey[e] = key
-                        owner[e] = x
-                        nxt[e] = head[key]
-                        head[key] = e
+                        ekey[total] = key
+                        owner[total] = x
+                        nxt[total] = head[key]
+                        head[key] = total
                         n_pairs += count[key]
                         count[key] += 1
-                        e += 1
-            if n_pairs <= MERGE_PAIRS_MAX:
+                        total += 1
+            if n_pairs > MERGE_PAIRS_MAX:
+                status = -1
+            if status == 0:
                 for e in range(total):
                     x = owner[e]
-                    f = nxt[e]
+                    if not active[x] or x >= n_moved:
+                        continue
+                    f = head[ekey[e]]
                     while f >= 0:
                         y = owner[f]
-                        if (active[x] or active[y]) and x < n_moved and y < n_moved and x != y:
-                            _join_if_touching(x, y, col, buf, parent)
+                        # A pair of active drops is found from the smaller one's side.
+                        if y != x and y < n_moved and not (active[y] and y < x) and _touch(x, y, buf, gcol, gidx):
+                            k = _join(x, y, parent, nodes, k)
                         f = nxt[f]
             for e in range(total):
                 head[ekey[e]] = -1
                 count[ekey[e]] = 0
-            if n_pairs > MERGE_PAIRS_MAX:
-                return -1, 0, 0
+    for g in range(n_go):
+        gidx[go[g]] = -1
+    if status < 0:
+        return -1, 0, 0
     # The twin's bookkeeping of which drops the next merge test looks at.
     for x in range(n):
-        fresh[x] = x >= n_moved or deferred[x]
-    if not any_active:
+        fresh[x] = x >= n_moved
+    for d in range(n_def):
+        fresh[out[n - 1 - d]] = True
+    if k == 0:
         return 0, 0, 0
     # Groups: each joins into its smallest row, the mass-weighted means added in row order (as the twin's
     # bincount and add.at add them).
-    for x in range(n):
+    members = np.sort(nodes[:k])
+    n_roots = 0
+    for x in members:
         r = _root(parent, x)
         parent[x] = r
-        if r != x:
+        if r != x and not mark[r]:
             mark[r] = True
-    n_roots = 0
-    for x in range(n):
-        if mark[x]:
             n_roots += 1
     n_gone = 0
     r_at = 0
-    for x in range(n):
+    for x in members:
         r = parent[x]
         wm = buf[x, M]
         if r == x:
-            if not mark[x]:
-                continue
             out[r_at] = x
             r_at += 1
             for c in range(TRAIL + 1):
-                col[c, x] = 0.0 + buf[x, c] * wm
-            col[6, x] = 0.0 + wm
+                sums[c, x] = 0.0 + buf[x, c] * wm
+            sums[6, x] = 0.0 + wm
         else:
             out[n_roots + n_gone] = x
             n_gone += 1
             for c in range(TRAIL + 1):
-                col[c, r] += buf[x, c] * wm
-            col[6, r] += wm
+                sums[c, r] += buf[x, c] * wm
+            sums[6, r] += wm
     for q in range(n_roots):
         r = out[q]
         mark[r] = False
-        g_mass = col[6, r]
+        g_mass = sums[6, r]
         for c in range(TRAIL + 1):
-            buf[r, c] = col[c, r] / g_mass
+            buf[r, c] = sums[c, r] / g_mass
         buf[r, M] = g_mass
         buf[r, KEY] = _DIRTY
         buf[r, RB] = _INF
         fresh[r] = True
+    for x in members:
+        parent[x] = -1
     return 0, n_roots, n_gone
 
 
@@ -878,3 +903,15 @@ def evaporate_film(flat, evap, loss, bead_mass, thick):
             thick[k] = c
             k += 1
     return k
+
+
+@jit.kernel
+def film_drying(head, cross, cell_up, cell_q, areas, evap):
+    """``WindshieldSim._prepare``'s drying of the film: per cell (factors ``cell_up``, ``cell_q`` of its centre,
+    area ``areas`` m²) the air over it for ``head`` along and ``cross`` across the glass (m/s; airflow's formula)
+    and the film's evaporation in it, kg/s for a wet cell, into ``evap``."""
+    for c in range(evap.shape[0]):
+        up = head * cell_up[c] if head >= 0.0 else head * FLOW_AT_BOTTOM
+        side = abs(up) * FLOW_SPREAD * cell_q[c] + CROSSWIND_GAIN * cross
+        air = math.sqrt(side * side + up * up)
+        evap[c] = FILM_EVAP_KG_M2_S * (1.0 + air / EVAP_AIR_M_S) * areas[c]

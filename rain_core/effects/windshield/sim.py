@@ -294,6 +294,13 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             self._air_key = air_key
             self._air_local = air_local
             head, cross = float(air_local[2]), float(air_local[0])
+            if jit.active():
+                evap = self.__dict__.get("_evap")
+                if evap is None:
+                    evap = self._evap = np.empty(len(self._cell_up))
+                kernels.film_drying(head, cross, self._cell_up, self._cell_q, self._areas_flat, evap)
+                self._evap_of = None  # rewritten in place: _film_step's drying per sub-step is made again
+                return
             up = head * self._cell_up if head >= 0.0 else np.full(len(self._cell_up), head * FLOW_AT_BOTTOM)
             side = np.abs(up) * FLOW_SPREAD * self._cell_q + CROSSWIND_GAIN * cross
             air = np.sqrt(side * side + up * up)  # norm2(air_velocity(...)) of the cell centres
