@@ -1,4 +1,5 @@
-"""Windshield benchmark (issues 8, 13): ``python -m rain_core.bench windshield [--quick] [--cpu-only] [--out DIR]``.
+"""Windshield benchmark (issues 8, 13): ``python -m rain_core.bench windshield [--quick] [--cpu-only] [--jit on|off]
+[--out DIR]``.
 
 1. CPU: milliseconds per frame (1/30 s, one sub-step) of ``WindshieldSim.step`` (the fast path) and of
    ``WindshieldSimReference.step`` (the float64 reference, the algorithm of the code before issue 13) against the
@@ -7,6 +8,8 @@
    many frames, of the main thread's CPU time (``--clock thread``, the default: robust on a shared machine) or of
    wall time (``--clock wall``). Also a light-rain row (2 mm/h, parked): the cost of a glass at rest, and a
    "120~" row at 120 km/h whose speed drifts a little every frame, as the scene's autopilot holds it.
+   ``--jit``: the fast path with its compiled kernels (``kernels``, where Numba is installed) or its NumPy
+   twins (``off``), for before/after on one tree.
    Accuracy: after 30 more frames from that state, the largest distance between a drop of the fast path and the
    same drop of the reference (µm; "diverged" if a rounding flipped one merge and the drop lists differ) and the
    relative difference of the water on the glass.
@@ -268,15 +271,24 @@ def main(argv=None) -> int:
     p.add_argument("--cpu-only", action="store_true", help="the CPU table alone (no GL context)")
     p.add_argument("--clock", choices=tuple(CLOCKS), default="thread",
                    help="thread: the main thread's CPU time (default; robust on a shared machine); wall: wall time")
+    p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
+                   help="the fast path's compiled kernels (auto: on where Numba is installed; off: their NumPy twins)")
     args = p.parse_args(argv)
+    from rain_core import jit
+
+    if args.jit != "auto":
+        try:
+            jit.set_active(args.jit == "on")
+        except RuntimeError as exc:
+            p.error(f"--jit on: {exc}")
     quick = args.quick
     counts = (2000,) if quick else (500, 2000, 5000)
     cpu_rows = cpu_cost(counts, repeat=20 if quick else 60, clock=args.clock)
     md = [
         "# Windshield benchmark",
         "",
-        f"CPU: one step (1/30 s) of the fast path and of the float64 reference from the same glass, wipers low; "
-        f"ms ({args.clock} clock), min and median of the frames; accuracy after 30 more frames.",
+        f"CPU: one step (1/30 s) of the fast path ({jit.describe()}) and of the float64 reference from the same "
+        f"glass, wipers low; ms ({args.clock} clock), min and median of the frames; accuracy after 30 more frames.",
         "",
         markdown_table(
             ("drops", "km/h", "mm/h", "fast min ms", "fast median ms", "reference min ms", "reference median ms",

@@ -15,6 +15,8 @@ times without a GL context:
                beading), ``wiping``
 ``sim``        ``WindshieldSim``: the fast path the effect runs (the same model and state, far fewer NumPy calls,
                work bounded per step; compared with the reference in tests/effects/windshield/test_fast_path.py)
+``kernels``    the fast path's compiled loops (Numba, rain_core.jit; the NumPy code stays their twin and fallback;
+               the same glass bit for bit: tests/effects/windshield/test_kernels.py)
 ``splats``     the instance rows the effect draws from the simulation's state
 ``effect``     ``WindshieldEffect``: the GL side (water textures, the glass)
 

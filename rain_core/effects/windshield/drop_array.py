@@ -65,8 +65,8 @@ class KernelScratch:
         self.shed_m = np.empty(cap)
         self.hist = np.empty(512, np.int64)  # sort_rows
         self.order = np.empty(4 * cap, np.int64)
-        self.tmp = np.empty((cap, _COLS))
-        self.tmp_fresh = np.empty(cap, bool)
+        self.tmp = np.zeros((cap, _COLS))  # (the shapes of the drop array: sort_rows may swap them)
+        self.tmp_fresh = np.zeros(cap, bool)
         self.film_loss = np.empty(FILM_CELLS * FILM_CELLS)  # evaporate_film
         self.thick = np.empty(FILM_CELLS * FILM_CELLS, np.int64)
 
@@ -233,7 +233,11 @@ class DropArray:
             return
         if jit.active():
             ks = self._scratch()
-            kernels.sort_rows(self._buf, self._fresh_buf, n, ks.hist, ks.order, ks.tmp, ks.tmp_fresh)
+            if kernels.sort_rows(self._buf, self._fresh_buf, n, ks.hist, ks.order, ks.tmp, ks.tmp_fresh) == 2:
+                # The sorted rows are in the scratch: it becomes the drop array, the old array the scratch.
+                self._buf, ks.tmp = ks.tmp, self._buf
+                self._fresh_buf, ks.tmp_fresh = ks.tmp_fresh, self._fresh_buf
+                self._rows = self._buf.view(_ROW).ravel()
             return
         keys = self._buf[:n, _KEY]
         if not np.count_nonzero(keys[1:] < keys[:-1]):

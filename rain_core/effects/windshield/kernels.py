@@ -829,14 +829,16 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
     """``DropArray._sort_drops`` (after the position columns are written): rows [:n] in stable order of their
     merge-grid KEY (integers below 2^18: two 9-bit passes of a radix sort), only the span of rows that change
     places rewritten. ``hist``: int64 scratch of 512, ``order`` int64 scratch of 4n, ``tmp`` (rows) and
-    ``tmp_fresh`` scratch over the rows. Returns whether the rows moved."""
+    ``tmp_fresh`` scratch of the shapes of ``buf`` and ``fresh``. Returns 0 (in order already), 1 (sorted in
+    place) or 2 (most rows move: the sorted rows [:n] are in ``tmp`` and ``tmp_fresh``, for the caller to swap
+    with ``buf`` and ``fresh``: one pass over the rows instead of two)."""
     ordered = True
     for i in range(1, n):
         if buf[i, KEY] < buf[i - 1, KEY]:
             ordered = False
             break
     if ordered:
-        return False
+        return 0
     keys = order[2 * n : 3 * n]
     keys2 = order[3 * n : 4 * n]
     src = order[:n]
@@ -877,6 +879,14 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
     while src[hi - 1] == hi - 1:
         hi -= 1
     cols = buf.shape[1]
+    if 2 * (hi - lo) > n:
+        # Most rows move: all of them are written in order into tmp once, and the caller swaps the arrays.
+        for j in range(n):
+            r = src[j]
+            for c in range(cols):
+                tmp[j, c] = buf[r, c]
+            tmp_fresh[j] = fresh[r]
+        return 2
     for j in range(lo, hi):
         r = src[j]
         for c in range(cols):
@@ -886,7 +896,7 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
         for c in range(cols):
             buf[j, c] = tmp[j, c]
         fresh[j] = tmp_fresh[j]
-    return True
+    return 1
 
 
 @jit.kernel
@@ -915,3 +925,17 @@ def film_drying(head, cross, cell_up, cell_q, areas, evap):
         side = abs(up) * FLOW_SPREAD * cell_q[c] + CROSSWIND_GAIN * cross
         air = math.sqrt(side * side + up * up)
         evap[c] = FILM_EVAP_KG_M2_S * (1.0 + air / EVAP_AIR_M_S) * areas[c]
+
+
+@jit.kernel
+def sensor_masses(buf, n, s_lo, s_hi, t_lo, t_hi, out):
+    """The masses (kg) of the drops among rows [:n] inside the rain sensor's box (s, t within the bounds, m), in
+    row order into ``out``; returns how many (the caller sums them as the twin does)."""
+    k = 0
+    for i in range(n):
+        s = buf[i, S]
+        t = buf[i, T]
+        if s >= s_lo and s <= s_hi and t >= t_lo and t <= t_hi:
+            out[k] = buf[i, M]
+            k += 1
+    return k

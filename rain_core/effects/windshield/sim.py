@@ -32,9 +32,14 @@ class extends; it computes the same state with far fewer NumPy calls (issue 13: 
 * **Wiping a sector, not the glass**. A blade's sweep first keeps the drops inside its wedge (two half-planes),
   then tests those exactly as the reference does; film cells come from a per-blade table sorted by angle.
 
+* **Compiled kernels** where Numba is installed (``rain_core.jit``): each chain of NumPy calls of a sub-step
+  (arrivals, motion and runs, the merge test, shedding, a wiper stroke, drying, the sort) is one loop over the
+  rows in ``kernels``, the same operations in the same order; the NumPy code stays as their twin (the fallback
+  without Numba, and the oracle: ``tests/effects/windshield/test_kernels.py`` compares the glass bit for bit).
+
 Modules: ``drop_rows`` (the array's columns), ``drop_array`` (the array itself), ``arrivals`` (the bucket
 table), ``fast_motion``, ``fast_merging`` and ``fast_wiping`` (mixins ahead of the reference's ``dynamics``,
-``merging`` and ``wiping``).
+``merging`` and ``wiping``), ``kernels`` (the compiled loops).
 
 Work bounds per sub-step (``constants``): MAX_ARRIVALS_PER_SUBSTEP arrivals, MERGE_CELLS_MAX / MERGE_PAIRS_MAX
 merge work, the drop budget of the inputs. ``tests/effects/windshield/test_fast_path.py`` compares this class
@@ -180,11 +185,16 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
 
     def sensor_reading(self) -> float:
         """The reference's ``sensor_reading`` on the drop array's columns (the same drops, the same sums)."""
-        d = self._buf[: self._n]
-        s, t = d[:, _S], d[:, _T]
         lo, hi = self._sensor_box
-        inside = (s >= lo[0]) & (s <= hi[0]) & (t >= lo[1]) & (t <= hi[1])
-        drops = float(d[inside, _M].sum()) / self._sensor_area
+        if jit.active():
+            m = self._scratch().shed_m  # (free outside _shed_outside)
+            k = kernels.sensor_masses(self._buf, self._n, lo[0], hi[0], lo[1], hi[1], m)
+            drops = float(np.add.reduce(m[:k])) / self._sensor_area
+        else:
+            d = self._buf[: self._n]
+            s, t = d[:, _S], d[:, _T]
+            inside = (s >= lo[0]) & (s <= hi[0]) & (t >= lo[1]) & (t <= hi[1])
+            drops = float(d[inside, _M].sum()) / self._sensor_area
         film = float(self.film.ravel()[self._sensor_cells].sum()) / max(self._sensor_cell_area, 1e-12)
         return drops + film
 
