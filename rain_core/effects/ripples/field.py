@@ -361,6 +361,14 @@ class RippleField:
     def _wakes(self, wheels: np.ndarray) -> np.ndarray:
         """``add_wheel_sweep`` for W valid wheels at once: rows (x0, z0, x1, z1 world m, speed m/s, film depth
         mm, tyre width m). Returns the bumps laid per wheel (trough and crests)."""
+        if jit.active():  # the clip, the bumps and the crests in one loop
+            ox, oz = self.origin_xz
+            xs, zs, radii, peaks, counts = kernels.wake_bumps(
+                np.ascontiguousarray(wheels, np.float64), ox, oz, self.solver.length_m, self.cell_m,
+                self.solver.max_radius_m, self.wake_gain, MIN_FOOTPRINT_CELLS * self.cell_m, WAKE_REF_SPEED_M_S)
+            if xs.size:
+                self._emit(xs, zs, radii, peaks)
+            return counts
         x0, z0, x1, z1, speed, depth_mm, width = wheels.T
         radius = np.minimum(0.5 * width, self.solver.max_radius_m)
         trough = self.wake_gain * depth_mm * 1e-3 * speed / WAKE_REF_SPEED_M_S

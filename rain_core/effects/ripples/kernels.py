@@ -234,3 +234,82 @@ def raindrop_bumps(key, count, n, cell_m, water, use_water, cdf, grid, p_d, dp_d
         dents[m] = peak_per_momentum * (p_d[i] + t * dp_d[i])
         m += 1
     return m
+
+
+@jit.kernel
+def wake_bumps(wheels, ox, oz, length_m, cell_m, max_radius_m, wake_gain, min_radius_m, wake_ref_m_s):
+    """``RippleField._wakes`` (with ``_clip_segments``) of W wheels, rows (x0, z0, x1, z1 world m, speed m/s, film
+    depth mm, tyre width m), for a window whose cell (0, 0) is at world (ox, oz) m: the trough bumps of every
+    wheel, then the crests on one side, then the other (the twin's order), as (x m, z m from cell (0, 0),
+    radius m, peak m), and the bumps laid per wheel. The twin's operations in its order (np.hypot is libm's)."""
+    w = wheels.shape[0]
+    seg = np.empty((w, 10))  # ax, az, dx, dz, length, radius, peak, nx, nz, count (of the live wheels)
+    counts = np.zeros(w, np.int64)
+    troughs = 0
+    crests = 0
+    for i in range(w):
+        radius = min(0.5 * wheels[i, 6], max_radius_m)
+        trough = wake_gain * wheels[i, 5] * 1e-3 * wheels[i, 4] / wake_ref_m_s
+        ax, az = wheels[i, 0] - ox, wheels[i, 1] - oz
+        bx, bz = wheels[i, 2] - ox, wheels[i, 3] - oz
+        # Liang–Barsky against the window grown by radius + 2 cells (the twin's four edges, flat ones included).
+        pad = radius + 2.0 * cell_m
+        lo, hi = -pad, length_m + pad
+        dx, dz = bx - ax, bz - az
+        t0, t1 = 0.0, 1.0
+        inside = True
+        for e in range(4):
+            if e == 0:
+                p, q = -dx, ax - lo
+            elif e == 1:
+                p, q = dx, hi - ax
+            elif e == 2:
+                p, q = -dz, az - lo
+            else:
+                p, q = dz, hi - az
+            if p == 0.0:
+                if q < 0.0:
+                    inside = False
+            elif p < 0.0:
+                t0 = max(t0, q / p)
+            else:
+                t1 = min(t1, q / p)
+        if not (inside and t0 <= t1) or trough == 0.0:
+            continue
+        ax, az, bx, bz = ax + t0 * dx, az + t0 * dz, ax + t1 * dx, az + t1 * dz
+        dx, dz = bx - ax, bz - az
+        length = math.hypot(dx, dz)
+        count = max(1, np.int64(math.ceil(length / cell_m)))
+        moving = length > 0.0
+        spacing = length / count if moving else radius
+        peak = -trough * min(spacing / radius, 1.0)
+        reach = max(radius, min_radius_m)
+        nx = (-dz / length if moving else 0.0) * 2.0 * reach
+        nz = (dx / length if moving else 0.0) * 2.0 * reach
+        seg[i, 0], seg[i, 1], seg[i, 2], seg[i, 3], seg[i, 4] = ax, az, dx, dz, length
+        seg[i, 5], seg[i, 6], seg[i, 7], seg[i, 8], seg[i, 9] = radius, peak, nx, nz, count
+        counts[i] = count * (3 if moving else 1)
+        troughs += count
+        if moving:
+            crests += count
+    total = troughs + 2 * crests
+    xs, zs, radii, peaks = np.empty(total), np.empty(total), np.empty(total), np.empty(total)
+    k = 0
+    c = troughs
+    for i in range(w):
+        if counts[i] == 0:
+            continue
+        ax, az, dx, dz, length = seg[i, 0], seg[i, 1], seg[i, 2], seg[i, 3], seg[i, 4]
+        radius, peak, nx, nz, count = seg[i, 5], seg[i, 6], seg[i, 7], seg[i, 8], seg[i, 9]
+        moving = length > 0.0
+        for b in range(np.int64(count)):
+            t = (b + 0.5) / count
+            x, z = ax + t * dx, az + t * dz
+            xs[k], zs[k], radii[k], peaks[k] = x, z, radius, peak
+            k += 1
+            if moving:
+                crest = -0.5 * peak
+                xs[c], zs[c], radii[c], peaks[c] = x + nx, z + nz, radius, crest
+                xs[c + crests], zs[c + crests], radii[c + crests], peaks[c + crests] = x - nx, z - nz, radius, crest
+                c += 1
+    return xs, zs, radii, peaks, counts
