@@ -32,6 +32,21 @@ class ArrivalTable:
         self.first = None
         self._searched = False  # a sample searched already: the next one builds the table
 
+    @classmethod
+    def from_law(cls, closing: np.ndarray, cdf: np.ndarray, coef: np.ndarray) -> ArrivalTable:
+        """The table of (closing, cdf) whose interpolation rows ``coef`` (``_coef``'s) were made elsewhere (the
+        windshield's ``kernels.arrival_law``, the same operations as ``__init__``)."""
+        table = cls.__new__(cls)
+        table.total = float(cdf[-1])
+        table.cdf = cdf
+        table.d_slope = coef[:, 0]
+        table.c_slope = coef[:, 3]
+        table.closing = closing
+        table._coef = coef
+        table.first = None
+        table._searched = False
+        return table
+
     def _build_buckets(self) -> None:
         cdf = self.cdf
         edges = np.arange(_CDF_BUCKETS + 1) * (self.total / _CDF_BUCKETS)

@@ -64,6 +64,7 @@ _INV_MASS_PER_A3 = 1.0 / (RHO_WATER * VOLUME_PER_RADIUS3)
 _WET_PER_AREA = RHO_WATER * TRAIL_FILM_M
 _KG_PER_MM3 = RHO_WATER * math.pi / 6.0 * 1e-9  # a raindrop's mass over its diameter (mm) cubed
 _SPLASH_LO, _SPLASH_HI = SPLASH_SPEED_M_S
+_SLICES = 1024  # sample_arrivals: slices of the CDF, each starting a short walk to a sample's interval
 _O0, _O1 = float(_GRID_ORIGIN[0]), float(_GRID_ORIGIN[1])
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 _N0, _N1 = _grid_shape(NEAR_CELL_M)
@@ -687,11 +688,27 @@ def sample_arrivals(u, n, cdf, coef, total, w0, dw, height, imp, cells, obj):
     fraction, mass and kept mass (kg), the film cell of each to ``cells`` and the rows of those that are
     objects (kept mass ≥ M_OBJECT_MIN) to ``obj``; returns how many are."""
     dwh = dw * height
-    last = len(cdf) - 2
+    n_cdf = len(cdf)
+    last = n_cdf - 2
+    # ArrivalTable.sample's interval: the last grid point at or below x (cdf.searchsorted(x, "right") − 1), found
+    # by a walk from the interval at the left edge of x's slice of the CDF (a table of _SLICES, made per call):
+    # the walk goes down as well as up, so the answer is the search's whatever the rounding of the slice.
+    slice_j = np.empty(_SLICES, np.int64)
+    j = 0
+    for b in range(_SLICES):
+        edge = b * (total / _SLICES)
+        while j + 1 < n_cdf and cdf[j + 1] <= edge:
+            j += 1
+        slice_j[b] = j
     n_obj = 0
     for k in range(n):
         x = u[k] * total
-        j = min(np.searchsorted(cdf, x, "right") - 1, last)  # ArrivalTable.sample's interval
+        j = slice_j[min(int(u[k] * _SLICES), _SLICES - 1)]
+        while j > 0 and cdf[j] > x:
+            j -= 1
+        while j + 1 < n_cdf and cdf[j + 1] <= x:
+            j += 1
+        j = min(j, last)
         d = (x - coef[j, 1]) * coef[j, 0] + coef[j, 2]
         closing = (d - coef[j, 2]) * coef[j, 3] + coef[j, 4]
         m = _KG_PER_MM3 * (d * d * d)
@@ -939,3 +956,27 @@ def sensor_masses(buf, n, s_lo, s_hi, t_lo, t_hi, out):
             out[k] = buf[i, M]
             k += 1
     return k
+
+
+@jit.kernel
+def arrival_law(d_grid, v_grid, shape, n_up, a, closing, cdf, coef):
+    """``WindshieldSimReference.arrival_rate_per_s``'s law and ``ArrivalTable``'s interpolation table in one loop
+    over the diameter grid ``d_grid`` (mm; terminal speeds ``v_grid`` m/s, the size law's ``shape`` per diameter):
+    for the glass's world normal's up component ``n_up`` and the air's closing offset ``a`` (m/s), the closing
+    speed per diameter (m/s) into ``closing``, the flux-weighted CDF (trapezoid rule) into ``cdf``, and per grid
+    interval the rows of ArrivalTable._coef into ``coef``."""
+    k = d_grid.shape[0]
+    for i in range(k):
+        closing[i] = max(v_grid[i] * n_up - a, 0.0)
+    cdf[0] = 0.0
+    for i in range(k - 1):
+        x = 0.5 * (shape[i + 1] * closing[i + 1] + shape[i] * closing[i]) * (d_grid[i + 1] - d_grid[i])
+        cdf[i + 1] = x if i == 0 else cdf[i] + x
+    for i in range(k - 1):
+        dd = d_grid[i + 1] - d_grid[i]
+        dc = cdf[i + 1] - cdf[i]
+        coef[i, 0] = dd / dc if dc != 0.0 else _INF  # (a flat stretch: never selected)
+        coef[i, 1] = cdf[i]
+        coef[i, 2] = d_grid[i]
+        coef[i, 3] = (closing[i + 1] - closing[i]) / dd
+        coef[i, 4] = closing[i]

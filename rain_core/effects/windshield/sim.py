@@ -54,7 +54,7 @@ import math
 
 import numpy as np
 
-from rain_core import checks, jit
+from rain_core import checks, jit, physics
 from rain_core.effects.windshield import kernels
 from rain_core.effects.windshield.arrivals import ArrivalTable
 from rain_core.effects.windshield.constants import (
@@ -91,7 +91,7 @@ from rain_core.effects.windshield.fast_motion import FastMotion
 from rain_core.effects.windshield.fast_wiping import FastWiping
 from rain_core.effects.windshield.grid import GRID_CELL_M, PairFinder, _grid_shape
 from rain_core.effects.windshield.inputs import GlassInputs
-from rain_core.effects.windshield.reference import WindshieldSimReference, _check_inputs
+from rain_core.effects.windshield.reference import _D_GRID_MM, _V_GRID_M_S, WindshieldSimReference, _check_inputs
 from rain_core.physics import G_M_S2, RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
@@ -295,9 +295,12 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             inputs.wind_m_s.tobytes(),
         )
         if self._rate_cache is None or self._rate_cache[0] != key:
-            rate, closing, cdf = self.arrival_rate_per_s(inputs)
+            if jit.active():
+                rate, closing, cdf, self._table = self._arrival_law(inputs)
+            else:
+                rate, closing, cdf = self.arrival_rate_per_s(inputs)
+                self._table = ArrivalTable(closing, cdf) if rate > 0 else None
             self._rate_cache = (key, (rate, closing, cdf))
-            self._table = ArrivalTable(closing, cdf) if rate > 0 else None
         air_local = inputs.relative_air_local()
         air_key = air_local.tobytes()
         if air_key != self._air_key:
@@ -315,6 +318,26 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             side = np.abs(up) * FLOW_SPREAD * self._cell_q + CROSSWIND_GAIN * cross
             air = np.sqrt(side * side + up * up)  # norm2(air_velocity(...)) of the cell centres
             self._evap = FILM_EVAP_KG_M2_S * (1.0 + air / EVAP_AIR_M_S) * self._areas_flat
+
+    def _arrival_law(self, inputs: GlassInputs) -> tuple:
+        """``arrival_rate_per_s`` and its ``ArrivalTable``, the per-diameter part by ``kernels.arrival_law`` (the
+        same operations): (drops per second, closing speeds, CDF, table or None)."""
+        if inputs.rate_mm_h <= 0.0 or inputs.sheltered or inputs.drop_scale <= 0.0:
+            zeros = np.zeros_like(_D_GRID_MM)
+            return 0.0, zeros, zeros, None
+        n_world = np.asarray(inputs.car_rotation, float) @ self.glass.normal
+        wind = np.asarray(inputs.wind_m_s, float).copy()
+        wind[1] = 0.0
+        a = float((wind - np.asarray(inputs.car_velocity_m_s, float)) @ n_world)
+        if self._n0_cache[0] != inputs.rate_mm_h:
+            shape = np.exp(-physics.mp_slope_per_mm(inputs.rate_mm_h) * _D_GRID_MM)
+            self._n0_cache = (inputs.rate_mm_h, float(physics.effective_n0(inputs.rate_mm_h)), shape)
+        _, n0, shape = self._n0_cache
+        k = len(_D_GRID_MM)
+        closing, cdf, coef = np.empty(k), np.empty(k), np.empty((k - 1, 5))
+        kernels.arrival_law(_D_GRID_MM, _V_GRID_M_S, shape, float(n_world[1]), a, closing, cdf, coef)
+        rate = self.glass.area_m2 * n0 * float(cdf[-1]) * inputs.drop_scale
+        return rate, closing, cdf, ArrivalTable.from_law(closing, cdf, coef) if rate > 0 else None
 
     # --- the step -------------------------------------------------------------------------------------------
     def step(self, dt_s: float, inputs: GlassInputs) -> None:

@@ -170,3 +170,27 @@ def test_sort_and_removal_of_rows_are_the_twins():
     assert sim.count == twin.count == np.count_nonzero(keep)
     assert np.array_equal(sim._buf[: sim.count], twin._buf[: twin.count])
     assert np.array_equal(sim.fresh, twin.fresh)
+
+
+@pytest.mark.parametrize("speed_kmh, rate_mm_h, wind", [(0.0, 8.0, 0.0), (100.0, 30.0, 5.0), (-20.0, 2.0, -8.0),
+                                                         (250.0, 120.0, 0.0)])
+def test_arrival_law_and_table_are_the_twins(speed_kmh, rate_mm_h, wind):
+    from rain_core.effects.windshield.arrivals import ArrivalTable
+
+    sim = WindshieldSim(seed=1)
+    inputs = GlassInputs.for_speed(speed_kmh, rate_mm_h, wind_m_s=np.array([wind, 0.0, 1.0]))
+    rate, closing, cdf = sim.arrival_rate_per_s(inputs)
+    table = ArrivalTable(closing, cdf)
+    k_rate, k_closing, k_cdf, k_table = sim._arrival_law(inputs)
+    assert k_rate == rate > 0.0
+    assert np.array_equal(k_closing, closing) and np.array_equal(k_cdf, cdf)
+    assert np.array_equal(k_table._coef, table._coef) and k_table.total == table.total
+    u = np.random.default_rng(0).random(3 * 5000)  # and it samples the same (searched, then by buckets)
+    u[:20], u[20:40] = 0.0, np.nextafter(1.0, 0.0)  # the ends of the law
+    for _ in range(2):
+        assert np.array_equal(np.array(k_table.sample(u[:5000])), np.array(table.sample(u[:5000])))
+    # The arrivals kernel finds each sample's interval by its own walk: the same diameters.
+    imp, cells, obj = np.empty((7, 5000)), np.empty(5000, np.int64), np.empty(5000, np.int64)
+    kernels.sample_arrivals(u, 5000, k_table.cdf, k_table._coef, k_table.total, sim._w0, sim._dw, sim._height, imp,
+                            cells, obj)
+    assert np.array_equal(imp[2], table.sample(u[:5000])[0])
