@@ -313,3 +313,23 @@ def wake_bumps(wheels, ox, oz, length_m, cell_m, max_radius_m, wake_gain, min_ra
                 xs[c + crests], zs[c + crests], radii[c + crests], peaks[c + crests] = x - nx, z - nz, radius, crest
                 c += 1
     return xs, zs, radii, peaks, counts
+
+
+@jit.kernel
+def shift_rows(a, dz):
+    """``scroll.shift_in_place(a, 0, dz, fill)`` of a C-contiguous 2-D array before the fill: a[iz] = a[iz + dz]
+    for the rows that stay, row by row in the direction that reads each row before it is overwritten (NumPy
+    copies an overlapping move through a temporary: a fresh n² buffer every scroll)."""
+    n_z, n_x = a.shape
+    if dz > 0:
+        for i in range(n_z - dz):
+            src = a[i + dz]
+            dst = a[i]
+            for j in range(n_x):
+                dst[j] = src[j]
+    elif dz < 0:
+        for i in range(n_z - 1, -dz - 1, -1):
+            src = a[i + dz]
+            dst = a[i]
+            for j in range(n_x):
+                dst[j] = src[j]

@@ -6,6 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from rain_core import jit
+from rain_core.effects.ripples import kernels
+
+# The dtypes the row-moving kernel is compiled for (the solvers' levels and masks, the field's bookkeeping).
+_KERNEL_DTYPES = (np.dtype(np.float32), np.dtype(np.bool_))
+
 
 def shifted(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
     """out[iz, ix] = a[iz + dz, ix + dx] where that exists, else ``fill``."""
@@ -25,7 +31,9 @@ def shift_in_place(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
         a[...] = fill
         return a
     # NumPy copies overlapping views as if through a temporary, so the move is exact in either direction.
-    if dx == 0 and a.flags.c_contiguous:  # whole rows: one contiguous move (the car drives along z)
+    if dx == 0 and a.flags.c_contiguous and a.ndim == 2 and a.dtype in _KERNEL_DTYPES and jit.active():
+        kernels.shift_rows(a, dz)  # whole rows, in place: no temporary
+    elif dx == 0 and a.flags.c_contiguous:  # whole rows: one contiguous move (the car drives along z)
         flat, k = a.reshape(-1), abs(dz) * n_x
         if dz > 0:
             flat[:flat.size - k] = flat[k:]

@@ -9,7 +9,7 @@ from rain_core.effects.ripples.scroll import shift_in_place, shifted
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32, bool])
-def test_shift_in_place_equals_shifted(dtype):
+def test_shift_in_place_equals_shifted(dtype, kernel_path):
     rng = np.random.default_rng(2)
     for dx, dz in [(0, 19), (0, -19), (3, 0), (-2, 5), (7, -11), (0, 0), (0, 40), (-40, 1), (1, 40)]:
         a = (rng.random((40, 33)) > 0.5).astype(dtype) if dtype is bool else rng.random((40, 33)).astype(dtype)
