@@ -13,10 +13,12 @@ On Mesa's llvmpipe the "GPU" is the CPU emulating one: compare ratios there, quo
 from __future__ import annotations
 
 import math
+import sys
 import time
 
 import numpy as np
 
+from rain_core import jit
 from rain_core.bench._common import markdown_table, parser, write_output
 from rain_core.effects.ripples.backend import choose_backend, make_field
 from rain_core.effects.ripples.constants import CAPILLARY_SPEED_M_S, DEFAULT_DAMPING_PER_S
@@ -332,7 +334,17 @@ def _plot(path, series: dict[str, list[tuple[int, float, float]]], ref_slope_poi
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parser("ripples", __doc__.splitlines()[0]).parse_args(argv)
+    p = parser("ripples", __doc__.splitlines()[0])
+    p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
+                   help="the CPU paths' compiled kernels (auto: on where Numba is installed; off: their NumPy "
+                        "twins, for before/after on one tree)")
+    args = p.parse_args(argv)
+    if args.jit != "auto":
+        try:
+            jit.set_active(args.jit == "on")
+        except RuntimeError as exc:
+            print(f"--jit on: {exc}", file=sys.stderr)
+            return 2
     sizes = [64, 128, 256] if args.quick else [64, 128, 256, 512, 1024]
     try:
         from rain_core.gl import create_headless_context
@@ -342,7 +354,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # no GL: the CPU paths still run
         ctx, renderer = None, f"none ({exc})"
     backends = ["reference", "numpy32"] + (["gpu"] if ctx is not None else [])
-    print(f"GL renderer: {renderer}")
+    print(f"GL renderer: {renderer}; CPU paths: {jit.describe()}")
 
     cost_rows = []
     for n in sizes:
@@ -409,7 +421,8 @@ def main(argv: list[str] | None = None) -> int:
         plot_path = out_dir / "ripples.png"
     md = "\n\n".join([
         "# Ripples: wave solver cost and accuracy",
-        f"GL renderer: {renderer}. Field L = {EXTENT_M:g} m, s = {CAPILLARY_SPEED_M_S} m/s. "
+        f"GL renderer: {renderer}. CPU paths: {jit.describe()}. "
+        f"Field L = {EXTENT_M:g} m, s = {CAPILLARY_SPEED_M_S} m/s. "
         "On llvmpipe the GPU column is the CPU emulating a GPU.",
         "## Cost per step (one sub-step, N×N cells)", cost,
         f"## Accuracy: mode {MODE} from rest, C² = {COURANT2}, to T = {T_END_S:.4g} s", acc,
