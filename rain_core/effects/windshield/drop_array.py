@@ -61,6 +61,7 @@ class KernelScratch:
         self.cell_count = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)
         self.cell_start = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)
         self.members = np.empty(cap, np.int64)
+        self.hits = np.empty((2, cap), np.int64)
         self.drop = np.empty(cap, bool)  # shed_rows
         self.shed_m = np.empty(cap)
         self.hist = np.empty(512, np.int64)  # sort_rows

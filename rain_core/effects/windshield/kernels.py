@@ -752,17 +752,26 @@ def land_arrivals(flat, acc, cells, imp, n, obj, n_obj, room, placed):
 
 
 @jit.kernel
-def drops_in_cells(buf, n, w0, dw, height, cells, mark, per_cell, start, members, c_out, first_out):
+def drops_in_cells(buf, n, any_dirty, w0, dw, height, cells, mark, per_cell, start, hits, members, c_out, first_out):
     """For ``WindshieldSim._give_to_drops``: the drops among rows [:n] in each of the film ``cells`` (flat
     indices), grouped by cell in row order into ``members``; per query its cell's count ``c_out`` and where its
-    group starts ``first_out``. ``mark``, ``per_cell``, ``start``: zeroed scratch per cell, left zeroed."""
+    group starts ``first_out``. The film cell of a row is its CELL column, or for a row placed this sub-step (KEY
+    DIRTY; only looked at if ``any_dirty``) computed. ``mark``, ``per_cell``, ``start``: zeroed scratch per cell,
+    left zeroed; ``hits`` (2, ·) int64 scratch over the rows."""
     k = len(cells)
     for q in range(k):
         mark[cells[q]] = 1
+    m = 0  # the rows in a marked cell, in order, and their cells
     for i in range(n):
-        c = film_cell(buf[i, S], buf[i, T], w0, dw, height) if buf[i, KEY] == _DIRTY else int(buf[i, CELL])
+        if any_dirty and buf[i, KEY] == _DIRTY:
+            c = film_cell(buf[i, S], buf[i, T], w0, dw, height)
+        else:
+            c = int(buf[i, CELL])
         if mark[c]:
             per_cell[c] += 1
+            hits[0, m] = i
+            hits[1, m] = c
+            m += 1
     at = 0
     for q in range(k):
         c = cells[q]
@@ -772,11 +781,10 @@ def drops_in_cells(buf, n, w0, dw, height, cells, mark, per_cell, start, members
             at += per_cell[c]
         c_out[q] = per_cell[c]
         first_out[q] = start[c]
-    for i in range(n):
-        c = film_cell(buf[i, S], buf[i, T], w0, dw, height) if buf[i, KEY] == _DIRTY else int(buf[i, CELL])
-        if mark[c]:
-            members[start[c]] = i
-            start[c] += 1
+    for h in range(m):
+        c = hits[1, h]
+        members[start[c]] = hits[0, h]
+        start[c] += 1
     for q in range(k):
         c = cells[q]
         mark[c] = 0

@@ -464,8 +464,9 @@ class WindshieldSim(FastMotion, FastMerging, FastWiping, DropArray, WindshieldSi
             ks = self._scratch()
             k = len(cells)
             c, first = np.empty(k, np.int64), np.empty(k, np.int64)
-            kernels.drops_in_cells(self._buf, n, self._w0, self._dw, self._height, cells.astype(np.int64, copy=False),
-                                   ks.cell_mark, ks.cell_count, ks.cell_start, ks.members, c, first)
+            kernels.drops_in_cells(self._buf, n, self._dirty, self._w0, self._dw, self._height,
+                                   cells.astype(np.int64, copy=False), ks.cell_mark, ks.cell_count, ks.cell_start,
+                                   ks.hits, ks.members, c, first)
             placed = c > 0
             if np.count_nonzero(placed):
                 picks = np.empty(k, np.int64)
