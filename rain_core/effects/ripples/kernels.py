@@ -123,8 +123,11 @@ def deposit_bumps(z, zp, mask, use_mask, xs, zs, radii, amounts, cell_m, min_rad
             col_lo, col_hi = max(1, math.floor((x - r) / h)), min(n - 2, math.ceil((x + r) / h))
             row_lo, row_hi = max(1, math.floor((y - r) / h)), min(n - 2, math.ceil((y + r) / h))
         else:
-            col_lo, col_hi = max(1, c0 - w), min(n - 2, c0 + w)
-            row_lo, row_hi = max(1, r0 - w), min(n - 2, r0 + w)
+            # The cell w before the centre's lies ≥ w cells off: outside a rim clearly inside w cells (the float32
+            # twin's 2·w window; a rim within rounding of w cells keeps the reference's 2·w + 1).
+            first = w if r > (w - 1e-6) * h else w - 1
+            col_lo, col_hi = max(1, c0 - first), min(n - 2, c0 + w)
+            row_lo, row_hi = max(1, r0 - first), min(n - 2, r0 + w)
         near = r * r * (1.0 + 1e-9)  # the reference's pre-test: sqrt and ÷ only for cells about inside the rim
         for row in range(row_lo, row_hi + 1):
             dz = row * h - y
