@@ -1,0 +1,127 @@
+"""Kernels of the drop array's bookkeeping: removing, shedding and sorting rows (``drop_array``'s twins).
+Units: m, kg."""
+
+from __future__ import annotations
+
+from rain_core import jit
+from rain_core.effects.windshield.constants import (
+    M_OBJECT_MIN,
+)
+from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
+from rain_core.effects.windshield.drop_rows import KEY, M, S, T
+from rain_core.effects.windshield.kernels.common import film_cell, inside
+
+
+@jit.kernel
+def compact_rows(buf, fresh, n, drop):
+    """``DropArray._keep``: remove the rows [:n] marked in ``drop`` (bool), the others keeping their order (and
+    their ``fresh`` flag); returns the new count."""
+    k = 0
+    for i in range(n):
+        if drop[i]:
+            continue
+        if k != i:
+            buf[k] = buf[i]
+            fresh[k] = fresh[i]
+        k += 1
+    return k
+
+
+@jit.kernel
+def shed_rows(buf, fresh, n, test_all, gone, flat, w0, dw, height, drop, shed_m):
+    """``WindshieldSim._shed_outside``: of rows [:n], those off the glass (every one if ``test_all``, else those
+    placed this sub-step: KEY DIRTY) are shed (their masses, kg, in row order into ``shed_m``), those below half
+    the object size become film (``flat``, kg per cell) where they are, and the rows ``gone`` (joined into others
+    by the merge) go too: one compaction. ``drop``: bool scratch over the rows. Returns (new count, shed)."""
+    for i in range(n):
+        drop[i] = False
+    for g in gone:
+        drop[g] = True
+    n_shed = 0
+    for i in range(n):
+        if drop[i]:
+            continue
+        if (test_all or buf[i, KEY] == _DIRTY) and not inside(buf[i, S], buf[i, T], w0, dw, height):
+            shed_m[n_shed] = buf[i, M]
+            n_shed += 1
+            drop[i] = True
+    for i in range(n):
+        if not drop[i] and buf[i, M] < 0.5 * M_OBJECT_MIN:
+            flat[film_cell(buf[i, S], buf[i, T], w0, dw, height)] += buf[i, M]
+            drop[i] = True
+    return compact_rows(buf, fresh, n, drop), n_shed
+
+
+@jit.kernel
+def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
+    """``DropArray._sort_drops`` (after the position columns are written): rows [:n] in stable order of their
+    merge-grid KEY (integers below 2^18: two 9-bit passes of a radix sort), only the span of rows that change
+    places rewritten. ``hist``: int64 scratch of 512, ``order`` int64 scratch of 4n, ``tmp`` (rows) and
+    ``tmp_fresh`` scratch of the shapes of ``buf`` and ``fresh``. Returns 0 (in order already), 1 (sorted in
+    place) or 2 (most rows move: the sorted rows [:n] are in ``tmp`` and ``tmp_fresh``, for the caller to swap
+    with ``buf`` and ``fresh``: one pass over the rows instead of two)."""
+    ordered = True
+    for i in range(1, n):
+        if buf[i, KEY] < buf[i - 1, KEY]:
+            ordered = False
+            break
+    if ordered:
+        return 0
+    keys = order[2 * n : 3 * n]
+    keys2 = order[3 * n : 4 * n]
+    src = order[:n]
+    dst = order[n : 2 * n]
+    for i in range(n):
+        keys[i] = int(buf[i, KEY])
+    # Pass 1: by the low 9 bits, from row order (stable).
+    hist[:] = 0
+    for i in range(n):
+        hist[keys[i] & 511] += 1
+    at = 0
+    for b in range(512):
+        c = hist[b]
+        hist[b] = at
+        at += c
+    for i in range(n):
+        b = keys[i] & 511
+        dst[hist[b]] = i
+        keys2[hist[b]] = keys[i]
+        hist[b] += 1
+    # Pass 2: by the high bits, keeping pass 1's order within each.
+    hist[:] = 0
+    for i in range(n):
+        hist[keys2[i] >> 9] += 1
+    at = 0
+    for b in range(512):
+        c = hist[b]
+        hist[b] = at
+        at += c
+    for i in range(n):
+        b = keys2[i] >> 9
+        src[hist[b]] = dst[i]
+        hist[b] += 1
+    lo = 0
+    while src[lo] == lo:
+        lo += 1
+    hi = n
+    while src[hi - 1] == hi - 1:
+        hi -= 1
+    cols = buf.shape[1]
+    if 2 * (hi - lo) > n:
+        # Most rows move: all of them are written in order into tmp once, and the caller swaps the arrays.
+        for j in range(n):
+            r = src[j]
+            for c in range(cols):
+                tmp[j, c] = buf[r, c]
+            tmp_fresh[j] = fresh[r]
+        return 2
+    for j in range(lo, hi):
+        r = src[j]
+        for c in range(cols):
+            tmp[j, c] = buf[r, c]
+        tmp_fresh[j] = fresh[r]
+    for j in range(lo, hi):
+        for c in range(cols):
+            buf[j, c] = tmp[j, c]
+        fresh[j] = tmp_fresh[j]
+    return 1
