@@ -14,6 +14,25 @@ def parser(name: str, description: str) -> argparse.ArgumentParser:
     return p
 
 
+def add_jit_argument(p: argparse.ArgumentParser) -> None:
+    """``--jit {auto,on,off}``: the CPU simulations' compiled kernels (rain_core.jit) or their NumPy twins, for
+    before/after on one tree; ``apply_jit_argument`` sets it once the arguments are parsed."""
+    p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
+                   help="the CPU simulations' compiled kernels (auto: on where Numba is installed; off: their NumPy "
+                        "twins, for before/after on one tree)")
+
+
+def apply_jit_argument(p: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Turn the kernels on or off as ``--jit`` says (an error naming the flag where ``on`` finds no Numba)."""
+    from rain_core import jit
+
+    if args.jit != "auto":
+        try:
+            jit.set_active(args.jit == "on")
+        except RuntimeError as exc:
+            p.error(f"--jit on: {exc}")
+
+
 def time_call(fn, repeat: int = 5, warmup: int = 1) -> float:
     """Median wall time of fn() in seconds."""
     for _ in range(warmup):

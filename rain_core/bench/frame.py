@@ -449,11 +449,17 @@ def summary_table(results: list[dict]) -> str:
 
 def header(args, overhead_ns: float) -> str:
     import rain_core
-    from rain_core import jit
+
+    try:
+        from rain_core import jit
+
+        path = jit.describe()
+    except ImportError:  # an older tree, measured by running this file
+        path = "NumPy (no rain_core.jit in this tree)"
 
     return (f"# Whole frames at heavy rain ({RAIN_MM_H:g} mm/h, wetness/cracks/puddles 1, driver camera, noon), "
             f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}\n\n"
-            f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {jit.describe()}\n\n"
+            f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
             "framebuffer binds, uniform writes, context state, object creation, timer queries) are wrapped by "
             "counters of calls, bytes written and time inside; CPU outside GL = the pass's CPU time (measured around "
@@ -499,12 +505,20 @@ def parse_args(argv=None) -> argparse.Namespace:
                    help="thread: the main thread's CPU time (default; robust on a shared machine); wall: wall time")
     p.add_argument("--ripples-backend", choices=("auto", "numpy32", "gpu", "reference"), default="auto",
                    help="the ripples solver (auto: timed at start; on llvmpipe numpy32 wins)")
+    # Inline, not bench._common's: this file also measures older trees (run as a file), whose rain_core lacks it.
     p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
                    help="the CPU simulations' compiled kernels (auto: on where Numba is installed; off: their NumPy "
                         "twins, for before/after on one tree)")
     p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
                    help="leave the renderer's timer queries off (no llvmpipe %% column)")
     args = p.parse_args(argv)
+    if args.jit != "auto":
+        try:
+            from rain_core import jit
+
+            jit.set_active(args.jit == "on")
+        except (ImportError, RuntimeError) as exc:  # an older tree has no kernels at all
+            p.error(f"--jit {args.jit}: {exc}")
     args.budgets = args.budgets or ((10_000, 1_000_000) if args.quick else BUDGETS)
     args.speeds = tuple(float(v) for v in args.speeds.split(",")) if args.speeds else SPEEDS_KMH
     args.frames = args.frames or (6 if args.quick else 30)
@@ -518,14 +532,6 @@ def main(argv=None) -> int:
     from rain_core.gl import create_headless_context
 
     args = parse_args(argv)
-    if args.jit != "auto":
-        from rain_core import jit
-
-        try:
-            jit.set_active(args.jit == "on")
-        except RuntimeError as exc:
-            print(f"--jit on: {exc}", file=sys.stderr)
-            return 2
     ctx = create_headless_context()
     results = []
     with GLCounter(args.clock) as counter:

@@ -13,13 +13,12 @@ On Mesa's llvmpipe the "GPU" is the CPU emulating one: compare ratios there, quo
 from __future__ import annotations
 
 import math
-import sys
 import time
 
 import numpy as np
 
 from rain_core import jit
-from rain_core.bench._common import markdown_table, parser, write_output
+from rain_core.bench._common import add_jit_argument, apply_jit_argument, markdown_table, parser, write_output
 from rain_core.effects.ripples.backend import choose_backend, make_field
 from rain_core.effects.ripples.constants import CAPILLARY_SPEED_M_S, DEFAULT_DAMPING_PER_S
 from rain_core.effects.ripples.field import RippleField
@@ -335,16 +334,9 @@ def _plot(path, series: dict[str, list[tuple[int, float, float]]], ref_slope_poi
 
 def main(argv: list[str] | None = None) -> int:
     p = parser("ripples", __doc__.splitlines()[0])
-    p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
-                   help="the CPU paths' compiled kernels (auto: on where Numba is installed; off: their NumPy "
-                        "twins, for before/after on one tree)")
+    add_jit_argument(p)
     args = p.parse_args(argv)
-    if args.jit != "auto":
-        try:
-            jit.set_active(args.jit == "on")
-        except RuntimeError as exc:
-            print(f"--jit on: {exc}", file=sys.stderr)
-            return 2
+    apply_jit_argument(p, args)
     sizes = [64, 128, 256] if args.quick else [64, 128, 256, 512, 1024]
     try:
         from rain_core.gl import create_headless_context

@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from rain_core.bench._common import markdown_table, parser, write_output
+from rain_core.bench._common import add_jit_argument, apply_jit_argument, markdown_table, parser, write_output
 
 FPS = 30.0
 RATE_MM_H = 8.0  # heavy rain
@@ -271,16 +271,10 @@ def main(argv=None) -> int:
     p.add_argument("--cpu-only", action="store_true", help="the CPU table alone (no GL context)")
     p.add_argument("--clock", choices=tuple(CLOCKS), default="thread",
                    help="thread: the main thread's CPU time (default; robust on a shared machine); wall: wall time")
-    p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
-                   help="the fast path's compiled kernels (auto: on where Numba is installed; off: their NumPy twins)")
+    add_jit_argument(p)
     args = p.parse_args(argv)
+    apply_jit_argument(p, args)
     from rain_core import jit
-
-    if args.jit != "auto":
-        try:
-            jit.set_active(args.jit == "on")
-        except RuntimeError as exc:
-            p.error(f"--jit on: {exc}")
     quick = args.quick
     counts = (2000,) if quick else (500, 2000, 5000)
     cpu_rows = cpu_cost(counts, repeat=20 if quick else 60, clock=args.clock)
