@@ -15,6 +15,7 @@ import time
 
 from app.recording import Progress, describe_duration, is_video_path, labels_folder, open_recorder, save_png
 from rain_core.gl import GLUnavailableError
+from rain_core.interrupts import CtrlC
 
 LONG_RUN_FRAMES = 300  # above this many frames a run on a terminal says how long it will take
 PACE_FRAMES = 4  # frames after the first one that set the estimate
@@ -88,8 +89,11 @@ def _run(args, sim, DatasetWriter) -> int:
     status = 0
     done = 0
     first_done = time.perf_counter()
+    ctrl_c = CtrlC()
     try:
+        ctrl_c.__enter__()
         for index in range(frames):
+            ctrl_c.check()  # a Ctrl-C a finaliser dropped (while Numba loaded a kernel) stops the run here
             sim.step(dt, subframes=subframes)
             if panel is not None:
                 panel.draw(dt, sim.scene.renderer.ldr)
@@ -117,6 +121,7 @@ def _run(args, sim, DatasetWriter) -> int:
         _say(f"rainroad: cannot write a frame: {exc.strerror or exc}")
         status = 1
     finally:
+        ctrl_c.__exit__()
         progress.finish()
         _close_all(recorder, writer)  # finalises the video: every frame written so far decodes
         if panel is not None:

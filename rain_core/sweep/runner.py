@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+from rain_core.interrupts import CtrlC
 from rain_core.sweep.manifest import load_manifest, write_manifest
 from rain_core.sweep.sequence import folder_checksum, render_sequence
 from rain_core.sweep.spec import SweepSpec
@@ -132,12 +133,15 @@ def run_sweep(spec: SweepSpec, out_dir, workers: int = 1, ray_address: str | Non
     payload = spec.to_dict()
     source = _ray(payload, pending, str(root), ray_address, max(1, int(workers))) if ray_address else \
         _local(payload, pending, str(root), max(1, int(workers)))
+    ctrl_c = CtrlC().__enter__()
     try:
         for line in source:
             lines[line["id"]] = line
             write_manifest(root, [lines[i] for i in order])
             bar.update(line)
+            ctrl_c.check()  # a Ctrl-C a finaliser dropped stops the sweep at the next finished sequence
     finally:
+        ctrl_c.__exit__()
         bar.close()
         if hasattr(source, "close"):
             source.close()
