@@ -241,7 +241,7 @@ def raindrop_bumps(key, count, n, cell_m, water, use_water, cdf, grid, p_d, dp_d
 
 @jit.kernel
 def wake_bumps(wheels, ox, oz, length_m, cell_m, max_radius_m, wake_gain, min_radius_m, wake_ref_m_s):
-    """``RippleField._wakes`` (with ``_clip_segments``) of W wheels, rows (x0, z0, x1, z1 world m, speed m/s, film
+    """Twin: ``wakes.wake_bumps`` (with ``clip_segments``). W wheels, rows (x0, z0, x1, z1 world m, speed m/s, film
     depth mm, tyre width m), for a window whose cell (0, 0) is at world (ox, oz) m: the trough bumps of every
     wheel, then the crests on one side, then the other (the twin's order), as (x m, z m from cell (0, 0),
     radius m, peak m), and the bumps laid per wheel. The twin's operations in its order (np.hypot is libm's)."""

@@ -65,6 +65,7 @@ def _clip_loop(length, ax, az, bx, bz, pad):
 
 def test_segment_clip_equals_the_edge_by_edge_clip():
     from rain_core.effects.ripples.field import RippleField
+    from rain_core.effects.ripples.wakes import clip_segments
 
     field = RippleField(n=64, extent_m=6.3, backend="numpy32")
     rng = np.random.default_rng(5)
@@ -72,7 +73,7 @@ def test_segment_clip_equals_the_edge_by_edge_clip():
     bx[:60] = ax[:60]  # vertical, horizontal and degenerate segments, inside and outside
     bz[40:100] = az[40:100]
     pad = rng.uniform(0.0, 0.5, 500)
-    got = field._clip_segments(ax, az, bx, bz, pad)
+    got = clip_segments(ax, az, bx, bz, pad, field.solver.length_m)
     want = _clip_loop(field.solver.length_m, ax, az, bx, bz, pad)
     assert 50 < want[4].sum() < 450
     for g, w in zip(got, want, strict=True):
@@ -188,12 +189,14 @@ def _wakes_before(field, wheels):
     """The field's wakes as they were laid before the per-wheel values were gathered in one go (each array
     gathered alone, crests picked by a mask even when every wheel rolled): the bumps it would emit."""
     from rain_core.effects.ripples.constants import MIN_FOOTPRINT_CELLS, WAKE_REF_SPEED_M_S
+    from rain_core.effects.ripples.wakes import clip_segments
 
     x0, z0, x1, z1, speed, depth_mm, width = wheels.T
     radius = np.minimum(0.5 * width, field.solver.max_radius_m)
     trough = field.wake_gain * depth_mm * 1e-3 * speed / WAKE_REF_SPEED_M_S
     ox, oz = field.origin_xz
-    ax, az, bx, bz, inside = field._clip_segments(x0 - ox, z0 - oz, x1 - ox, z1 - oz, radius + 2.0 * field.cell_m)
+    ax, az, bx, bz, inside = clip_segments(x0 - ox, z0 - oz, x1 - ox, z1 - oz, radius + 2.0 * field.cell_m,
+                                           field.solver.length_m)
     live = inside & (trough != 0.0)
     ax, az, bx, bz, radius, trough = (v[live] for v in (ax, az, bx, bz, radius, trough))
     length = np.hypot(bx - ax, bz - az)
