@@ -53,6 +53,16 @@ def shed_rows(buf, fresh, n, test_all, gone, flat, w0, dw, height, drop, shed_m)
 
 
 @jit.kernel
+def _counts_to_starts(hist):
+    """A histogram's counts → each bin's first position (exclusive prefix sums, in place)."""
+    at = 0
+    for b in range(hist.shape[0]):
+        c = hist[b]
+        hist[b] = at
+        at += c
+
+
+@jit.kernel
 def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
     """``DropArray._sort_drops`` (after the position columns are written): rows [:n] in stable order of their
     merge-grid KEY (integers below 2^18: two 9-bit passes of a radix sort), only the span of rows that change
@@ -77,11 +87,7 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
     hist[:] = 0
     for i in range(n):
         hist[keys[i] & 511] += 1
-    at = 0
-    for b in range(512):
-        c = hist[b]
-        hist[b] = at
-        at += c
+    _counts_to_starts(hist)
     for i in range(n):
         b = keys[i] & 511
         dst[hist[b]] = i
@@ -91,11 +97,7 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
     hist[:] = 0
     for i in range(n):
         hist[keys2[i] >> 9] += 1
-    at = 0
-    for b in range(512):
-        c = hist[b]
-        hist[b] = at
-        at += c
+    _counts_to_starts(hist)
     for i in range(n):
         b = keys2[i] >> 9
         src[hist[b]] = dst[i]
@@ -107,19 +109,17 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
     while src[hi - 1] == hi - 1:
         hi -= 1
     cols = buf.shape[1]
-    if 2 * (hi - lo) > n:
-        # Most rows move: all of them are written in order into tmp once, and the caller swaps the arrays.
-        for j in range(n):
-            r = src[j]
-            for c in range(cols):
-                tmp[j, c] = buf[r, c]
-            tmp_fresh[j] = fresh[r]
-        return 2
+    # Most rows move: all of them are written in order into tmp once, and the caller swaps the arrays.
+    swap = 2 * (hi - lo) > n
+    if swap:
+        lo, hi = 0, n
     for j in range(lo, hi):
         r = src[j]
         for c in range(cols):
             tmp[j, c] = buf[r, c]
         tmp_fresh[j] = fresh[r]
+    if swap:
+        return 2
     for j in range(lo, hi):
         for c in range(cols):
             buf[j, c] = tmp[j, c]
