@@ -51,3 +51,54 @@ def shift_in_place(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
     elif dx < 0:
         a[:, :-dx] = fill
     return a
+
+
+class RowWindow:
+    """An (n, m) C-contiguous window onto a buffer with ``spare`` extra rows above and below it, for an array that
+    scrolls by whole rows every frame (the ripple window at speed: ~20 rows a frame at 100 km/h). A scroll moves
+    the window's offset and fills only the rows that enter, instead of moving the n − |dz| rows that stay (a 1 MB
+    pass over memory the frame has evicted, per array); the rows are moved back to the middle only when the
+    offset runs out of spare rows (every ~spare/|dz| scrolls). ``view`` is the current window: the same values as
+    ``shift_in_place`` would leave, in another array object after each scroll."""
+
+    def __init__(self, a: np.ndarray, spare: int):
+        n_z, n_x = a.shape
+        self.spare = max(1, int(spare))
+        self._buffer = np.empty((n_z + 2 * self.spare, n_x), a.dtype)
+        self.adopt(a)
+
+    def fits(self, a: np.ndarray) -> bool:
+        """Whether ``a`` can be adopted (same shape and dtype as the window)."""
+        return a.shape == self.view.shape and a.dtype == self.view.dtype
+
+    def adopt(self, a: np.ndarray) -> np.ndarray:
+        """Copy ``a`` into the middle of the buffer and make it the window (returned)."""
+        n_z = a.shape[0]
+        self._offset = self.spare
+        self.view = self._buffer[self.spare:self.spare + n_z]
+        np.copyto(self.view, a)
+        return self.view
+
+    def shift(self, dz: int, fill) -> np.ndarray:
+        """The window scrolled by ``dz`` rows: new[iz] = old[iz + dz] where that exists, else ``fill`` (returned,
+        also as ``view``)."""
+        buffer, n_z, spare = self._buffer, self.view.shape[0], self.spare
+        old = self._offset
+        new = old + dz
+        if not 0 <= new <= 2 * spare:  # out of spare rows: the rows that stay go back to the middle
+            new = spare
+            kept = n_z - abs(dz)
+            if kept > 0:
+                src, dst = old + max(dz, 0), new + max(-dz, 0)
+                if src != dst:
+                    lo = min(src, dst)
+                    shift_in_place(buffer[lo:max(src, dst) + kept], 0, src - dst, fill)
+        self._offset = new
+        self.view = view = buffer[new:new + n_z]
+        if abs(dz) >= n_z:
+            view[...] = fill
+        elif dz > 0:
+            view[n_z - dz:] = fill
+        elif dz < 0:
+            view[:-dz] = fill
+        return view

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rain_core.effects.ripples.scroll import shift_in_place, shifted
+from rain_core.effects.ripples.scroll import RowWindow, shift_in_place, shifted
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32, bool])
@@ -23,6 +23,60 @@ def test_shift_in_place_equals_shifted(dtype, kernel_path):
     flags[3] = True
     shift_in_place(flags[:, None], 0, 2, True)
     np.testing.assert_array_equal(flags, shifted(np.eye(1, 12, 3, dtype=bool).T, 0, 2, True)[:, 0])
+
+
+@pytest.mark.parametrize("dtype", [np.float32, bool])
+def test_row_window_scrolls_equal_shifted(dtype, kernel_path):
+    """Scrolls that run out of spare rows both ways (the rows go back to the middle), jumps past the window and
+    adopting a new array: always ``shifted`` of the previous values, and the rows outside never leak in."""
+    rng = np.random.default_rng(5)
+    a = (rng.random((40, 33)) > 0.5).astype(dtype) if dtype is bool else rng.random((40, 33)).astype(dtype)
+    fill = True if dtype is bool else np.nan
+    window = RowWindow(a, 7)
+    want = a.copy()
+    for dz in [3, 3, 3, 3, 5, -2, -9, -9, -9, 1, 39, 40, -41, 6, 6, 6, -13, 0]:
+        want = shifted(want, 0, dz, fill)
+        got = window.shift(dz, fill)
+        assert got is window.view and got.flags.c_contiguous
+        np.testing.assert_array_equal(got, want)
+        if dz == -13:  # a new array adopted: scrolled from its values on
+            want = (rng.random((40, 33)) > 0.5).astype(dtype) if dtype is bool else rng.random((40, 33)).astype(dtype)
+            window.adopt(want)
+            want = want.copy()
+
+
+def test_f32_solver_row_windows_equal_in_place_scrolls(kernel_path):
+    """The float32 solver's z-only scrolls (row windows) against the same solver scrolling in place, bit for bit,
+    through window recentring, lateral scrolls, a new mask, masks in blocks, bumps and a retime (new levels)."""
+    from rain_core.effects.ripples.solver import WaveSolver
+    from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+
+    class InPlace(WaveSolverF32):
+        shift = WaveSolver.shift
+
+    n, h = 48, 0.05
+    rng = np.random.default_rng(3)
+    fast, ref = WaveSolverF32(n, h, 0.3), InPlace(n, h, 0.3)
+    start, mask = rng.standard_normal((n, n)) * 1e-3, rng.random((n, n)) > 0.2
+    for solver in (fast, ref):
+        solver.reset(start)
+        solver.set_water_mask(mask)
+    scrolls = [(0, 9), (0, 9), (0, 9), (0, 9), (2, 3), (0, -20), (0, -20), (0, 5), (0, 60), (0, 4)]
+    for i, (dx, dz) in enumerate(scrolls):
+        new_mask = rng.random((n, n)) > 0.3
+        for solver in (fast, ref):
+            solver.shift(dx, dz)
+            if i == 4:
+                solver.set_water_mask(new_mask)
+            if i == 6:
+                solver.set_water_mask_blocks([(5, 0, np.arange(3 * n).reshape(3, n) % 4 > 0)])
+            solver.add_impulses([0.4, 1.1, 2.2], [0.7, 0.9, 2.25], 0.12, [1e-3, -2e-3, 1e-3])
+            solver.step(solver.dt_max * (0.7 if i == 3 else 1.0))
+        np.testing.assert_array_equal(fast.height, ref.height)
+        np.testing.assert_array_equal(fast.water_mask, ref.water_mask)
+        assert fast.height.flags.c_contiguous and fast.water_mask.flags.c_contiguous
+        assert len(fast._windows) <= 3
+    assert np.abs(fast.height).max() > 0.0
 
 
 @pytest.mark.parametrize("rate", [0.5, 8.0, 60.0])
