@@ -363,31 +363,57 @@ def _lerp(t0, t1, t2, t3, tx, tz):
     return top * (1.0 - tz) + bot * tz
 
 
+# Points whose two table rows _standing_points copies out before it uses any: the table (17 MB) is cold in a frame,
+# and a loop that loads and then computes point by point waits for each cache miss in turn (~4× the warm time).
+_GATHER_CHUNK = 64
+
+
 @jit.kernel
 def _standing_points(table, fc, fi, x, z, index, m, crack_at, puddle_at, standing, shelter):
     """``_road_depths`` before the kerb streams at on-road points x, z (float64 m): the standing water (mm) and the
     shelter into ``standing`` and ``shelter``, at points ``index[:m]`` (all points when m < 0). Both grids of
     ``_PackedGrids.sample`` (constants ``fc``, ``fi`` by grid) and the formulas, the twin's operations in its
-    order (the helpers take scalars only: one taking arrays costs more per call than a point)."""
+    order (the helpers take scalars only: one taking arrays costs more per call than a point). Chunk by chunk,
+    the texels of every point are gathered first (independent loads, so their misses overlap), then blended."""
     count = x.size if m < 0 else m
-    for j in range(count):
-        k = j if m < 0 else index[j]
-        xk = x[k]
-        zk = z[k]
-        a, tx, tz = _texel_cell(xk, zk, fc[0, 0], fc[0, 1], fc[0, 2], fc[0, 3], fc[0, 4], fc[0, 5], fc[0, 6],
-                                fi[0, 1])
-        h = _lerp(table[a, 0], table[a, 1], table[a, 2], table[a, 3], tx, tz)
-        h_smooth = _lerp(table[a, 4], table[a, 5], table[a, 6], table[a, 7], tx, tz)
-        b, tx, tz = _texel_cell(xk, zk, fc[1, 0], fc[1, 1], fc[1, 2], fc[1, 3], fc[1, 4], fc[1, 5], fc[1, 6],
-                                fi[1, 1])
-        n = _lerp(table[b, 0], table[b, 1], table[b, 2], table[b, 3], tx, tz)
-        sh = _lerp(table[b, 4], table[b, 5], table[b, 6], table[b, 7], tx, tz)
-        crack = CRACK_MAX_MM * _clamp01((crack_at - h) / CRACK_DEPTH_SPAN)
-        ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
-        puddle = PUDDLE_MAX_MM * _clamp01((puddle_at - ground) / PUDDLE_DEPTH_SPAN)
-        wet = crack if (crack >= puddle or crack != crack) else puddle
-        standing[k] = wet * (1.0 - sh)
-        shelter[k] = sh
+    rows = np.empty((_GATHER_CHUNK, 2), np.int64)
+    weights = np.empty((_GATHER_CHUNK, 4))
+    for start in range(0, count, _GATHER_CHUNK):
+        stop = min(start + _GATHER_CHUNK, count)
+        touched = np.float32(0.0)
+        for j in range(start, stop):
+            k = j if m < 0 else index[j]
+            xk = x[k]
+            zk = z[k]
+            q = j - start
+            a, tx, tz = _texel_cell(xk, zk, fc[0, 0], fc[0, 1], fc[0, 2], fc[0, 3], fc[0, 4], fc[0, 5], fc[0, 6],
+                                    fi[0, 1])
+            b, tx_b, tz_b = _texel_cell(xk, zk, fc[1, 0], fc[1, 1], fc[1, 2], fc[1, 3], fc[1, 4], fc[1, 5],
+                                        fc[1, 6], fi[1, 1])
+            touched += table[a, 0] + table[b, 0]
+            rows[q, 0] = a
+            rows[q, 1] = b
+            weights[q, 0] = tx
+            weights[q, 1] = tz
+            weights[q, 2] = tx_b
+            weights[q, 3] = tz_b
+        if touched != touched:  # (keeps the loads: their value is not needed)
+            weights[0, 0] = weights[0, 0]
+        for j in range(start, stop):
+            k = j if m < 0 else index[j]
+            q = j - start
+            a, b = rows[q, 0], rows[q, 1]
+            tx, tz, tx_b, tz_b = weights[q, 0], weights[q, 1], weights[q, 2], weights[q, 3]
+            h = _lerp(table[a, 0], table[a, 1], table[a, 2], table[a, 3], tx, tz)
+            h_smooth = _lerp(table[a, 4], table[a, 5], table[a, 6], table[a, 7], tx, tz)
+            n = _lerp(table[b, 0], table[b, 1], table[b, 2], table[b, 3], tx_b, tz_b)
+            sh = _lerp(table[b, 4], table[b, 5], table[b, 6], table[b, 7], tx_b, tz_b)
+            crack = CRACK_MAX_MM * _clamp01((crack_at - h) / CRACK_DEPTH_SPAN)
+            ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
+            puddle = PUDDLE_MAX_MM * _clamp01((puddle_at - ground) / PUDDLE_DEPTH_SPAN)
+            wet = crack if (crack >= puddle or crack != crack) else puddle
+            standing[k] = wet * (1.0 - sh)
+            shelter[k] = sh
 
 
 @jit.kernel
