@@ -16,6 +16,7 @@ import numpy as np
 
 from rain_core.camera import Camera
 from rain_core.gfx import frame_block
+from rain_core.gfx.linalg import inverse
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import RenderTarget
 from rain_core.gfx.uniforms import mat4_bytes
@@ -200,8 +201,15 @@ class RenderContext:
 
     @property
     def camera_position(self) -> np.ndarray:
-        """Camera position (m) in the wrapped frame."""
-        return np.asarray(self.frame.camera.position, dtype=np.float64) - np.array([0.0, 0.0, self.shift_z])
+        """Camera position (m) in the wrapped frame (read-only; made once per camera and shift: the draw lists,
+        the frame block, the shadow and the mirrors ask for it)."""
+        camera = self.frame.camera
+        cached = self.__dict__.get("_cam_cache")
+        if cached is None or cached[0] is not camera or cached[1] is not camera.position or cached[2] != self.shift_z:
+            position = np.asarray(camera.position, dtype=np.float64) - np.array([0.0, 0.0, self.shift_z])
+            position.flags.writeable = False
+            cached = self.__dict__["_cam_cache"] = (camera, camera.position, self.shift_z, position)
+        return cached[3]
 
     def wrap(self, world_points) -> np.ndarray:
         """World positions (…, 3) m → the wrapped frame the GPU uses."""
@@ -249,7 +257,8 @@ class RenderContext:
                 self.__dict__["_state_cache"] = (*cached[:4], uniforms, uniforms.version)
             return cached[2], cached[3]
         merged = {**base, **uniforms}  # the frame's own uniforms (medium, shadow) take precedence
-        data = frame_block.pack(merged)
+        blocks = self.frame_blocks
+        data = frame_block.pack(merged) if blocks is None else blocks.pack(merged)
         self.__dict__["_state_cache"] = (base, items, merged, data, uniforms, uniforms.version if versioned else None)
         return merged, data
 
@@ -278,5 +287,5 @@ class RenderContext:
         key = (self.view, self.projection)
         cached = self.__dict__.get("_inv_cache")
         if cached is None or cached[0][0] is not key[0] or cached[0][1] is not key[1]:
-            cached = self.__dict__["_inv_cache"] = (key, np.linalg.inv(self.view_proj))
+            cached = self.__dict__["_inv_cache"] = (key, inverse(self.view_proj))
         return cached[1]

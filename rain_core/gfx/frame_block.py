@@ -54,27 +54,48 @@ def pack(values: dict) -> bytes:
     out = bytearray(BLOCK_BYTES)
     for name, value in values.items():
         slot = FRAME_BLOCK_LAYOUT.get(name)
-        if slot is None:
-            continue
-        offset, count, kind = slot
-        at = 4 * offset
-        if kind == "b":
-            data = value if isinstance(value, bytes | bytearray) else np.ascontiguousarray(value, np.float32).tobytes()
-            if len(data) % 4:
-                raise ValueError(f"{name}: {len(data)} bytes is not a whole number of float32 words")
-            n = 4 * min(len(data) // 4, count)
-            out[at:at + n] = data[:n]
-        elif kind == "i":
-            _INT.pack_into(out, at, int(value))
-        else:
-            try:
-                if hasattr(value, "__len__"):
-                    _FLOATS[count].pack_into(out, at, *value)
-                else:  # a number fills every word, as NumPy broadcasts it
-                    _FLOATS[count].pack_into(out, at, *((value,) * count))
-            except (struct.error, OverflowError, TypeError):
-                np.frombuffer(out, np.float32)[offset:offset + count] = value
+        if slot is not None:
+            _pack_slot(out, name, slot, value)
     return bytes(out)
+
+
+def pack_changes(values: dict, previous: dict | None, previous_data: bytes | None) -> bytes:
+    """``pack(values)``, made from ``previous_data`` (= ``pack(previous)``) by packing again only the entries
+    whose value is not the same object as in ``previous``: the road's mirror view differs from the main view in
+    its camera and lights alone. Entries are compared by identity (a value must not be changed in place); with
+    other names than ``previous`` it packs everything."""
+    if previous is None or previous_data is None or values.keys() != previous.keys():
+        return pack(values)
+    out = bytearray(previous_data)
+    for name, value in values.items():
+        if value is not previous[name]:
+            slot = FRAME_BLOCK_LAYOUT.get(name)
+            if slot is not None:
+                if slot[2] == "b":  # shorter bytes leave the rest of the slot 0, as in a fresh block
+                    out[4 * slot[0]:4 * (slot[0] + slot[1])] = bytes(4 * slot[1])
+                _pack_slot(out, name, slot, value)
+    return bytes(out)
+
+
+def _pack_slot(out: bytearray, name: str, slot: tuple[int, int, str], value) -> None:
+    offset, count, kind = slot
+    at = 4 * offset
+    if kind == "b":
+        data = value if isinstance(value, bytes | bytearray) else np.ascontiguousarray(value, np.float32).tobytes()
+        if len(data) % 4:
+            raise ValueError(f"{name}: {len(data)} bytes is not a whole number of float32 words")
+        n = 4 * min(len(data) // 4, count)
+        out[at:at + n] = data[:n]
+    elif kind == "i":
+        _INT.pack_into(out, at, int(value))
+    else:
+        try:
+            if hasattr(value, "__len__"):
+                _FLOATS[count].pack_into(out, at, *value)
+            else:  # a number fills every word, as NumPy broadcasts it
+                _FLOATS[count].pack_into(out, at, *((value,) * count))
+        except (struct.error, OverflowError, TypeError):
+            np.frombuffer(out, np.float32)[offset:offset + count] = value
 
 
 def unpack(data: bytes) -> dict:
@@ -141,6 +162,14 @@ class FrameBlocks:
         self._order = list(range(slots))  # least recently used first
         self._programs: dict[int, _ProgramInfo] = {}
         self._last = 0
+        self._packed: tuple[dict, bytes] | None = None  # (values, bytes) packed last: pack() starts from them
+
+    def pack(self, values: dict) -> bytes:
+        """``frame_block.pack(values)``, made from the values packed last (``pack_changes``)."""
+        previous = self._packed
+        data = pack_changes(values, *(previous or (None, None)))
+        self._packed = (values, data)
+        return data
 
     def program_info(self, program) -> _ProgramInfo:
         info = self._programs.get(program.glo)
@@ -176,3 +205,4 @@ class FrameBlocks:
         self._contents = []
         self._order = []
         self._programs.clear()
+        self._packed = None

@@ -43,10 +43,12 @@ class GpuMesh:
     depth_vao: moderngl.VertexArray
     count: int
     vbo: moderngl.Buffer
+    mirror_vao: moderngl.VertexArray | None = None  # for SceneDrawer's mirror-view program
 
     def release(self) -> None:
-        for obj in (self.vao, self.depth_vao, self.vbo):
-            obj.release()
+        for obj in (self.vao, self.depth_vao, self.vbo, self.mirror_vao):
+            if obj is not None:
+                obj.release()
 
 
 class SceneDrawer:
@@ -55,6 +57,11 @@ class SceneDrawer:
     def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary, world, shadow_program: moderngl.Program):
         self.ctx = ctx
         self.scene_prog = shaders.program("core/scene.vert", "core/scene.frag")
+        # The same shader compiled once more (the define is unused: the same code) for the mirror views (the road's
+        # reflection, the door mirrors): each program then keeps its view's values (clip plane, the road's mirror
+        # flags, no ripples, no cabin) from frame to frame, and OwnedUniforms skips them instead of the main
+        # and the mirror view rewriting them in turn.
+        self.mirror_prog = shaders.program("core/scene.vert", "core/scene.frag", defines={"SCENE_MIRROR_VIEW": 1})
         self.sky_prog = shaders.program("common/fullscreen.vert", "core/sky.frag")
         self._shadow_prog = shadow_program
         self._sky_vao = ctx.vertex_array(self.sky_prog, [])
@@ -72,6 +79,11 @@ class SceneDrawer:
         vao = self.ctx.vertex_array(self.scene_prog, [(vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
         depth_vao = self.ctx.vertex_array(self._shadow_prog, [(vbo, "3f 36x", "in_position")])
         return GpuMesh(vao, depth_vao, len(vertices), vbo)
+
+    def _mirror_vao(self, mesh: GpuMesh) -> moderngl.VertexArray:
+        if mesh.mirror_vao is None:
+            mesh.mirror_vao = self.ctx.vertex_array(self.mirror_prog, [(mesh.vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
+        return mesh.mirror_vao
 
     def _vehicle_mesh(self, vehicle) -> GpuMesh:
         key = id(vehicle)
@@ -197,7 +209,8 @@ class SceneDrawer:
             self.sky_prog["u_inv_view_proj"].write(mat4_bytes(rc.inv_view_proj))
             self._sky_vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable(moderngl.DEPTH_TEST)
-        prog = self.scene_prog
+        mirrored = clip_plane is not None
+        prog = self.mirror_prog if mirrored else self.scene_prog
         rc.set_frame_uniforms(prog)
         # Clip plane (reflection passes): keep dot((x, y, z, 1), plane) >= 0, wrapped-frame world positions.
         # The scene drawer alone writes u_clip_plane and u_direct_scale in this program: owned_uniforms skips
@@ -218,11 +231,17 @@ class SceneDrawer:
             prog["u_mirror_view"].value = units.DOOR_MIRROR
             prog["u_mirror_uv_scale"].value = (1.0 / rc.size[0], 1.0 / rc.size[1])
         model_u, set_owned = prog["u_model"], owned.set
+        last_share = last_live = None  # what the previous item set: OwnedUniforms is asked only on a change
         for mesh, model, share in items:
             model_u.write(model)
-            set_owned("u_direct_scale", share)
-            set_owned("u_mirror_live", mesh is live_glass)
-            mesh.vao.render(moderngl.TRIANGLES, vertices=mesh.count)
+            if share != last_share:
+                set_owned("u_direct_scale", share)
+                last_share = share
+            live = mesh is live_glass
+            if live is not last_live:
+                set_owned("u_mirror_live", live)
+                last_live = live
+            (self._mirror_vao(mesh) if mirrored else mesh.vao).render(moderngl.TRIANGLES, vertices=mesh.count)
         if clip_plane is not None:
             ctx.disable_direct(GL_CLIP_DISTANCE0)
 

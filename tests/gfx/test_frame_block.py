@@ -69,6 +69,29 @@ def test_pack_gives_numpy_float32_bytes(seed):
     assert frame_block.pack(values) == _pack_numpy(values)
 
 
+@pytest.mark.parametrize("seed", range(5))
+def test_pack_changes_equals_a_full_pack(seed):
+    """FrameBlocks.pack repacks only entries that are not the same objects as last time: every sequence of
+    views (a light list shorter than the last, a new name, a name gone, values equal but new objects) gives the
+    bytes of a full pack."""
+    rng = np.random.default_rng(seed)
+    blocks = frame_block.FrameBlocks.__new__(frame_block.FrameBlocks)
+    blocks._packed = None
+    values = _random_values(rng)
+    for step in range(12):
+        values = dict(values)
+        for name in rng.choice(list(FRAME_BLOCK_LAYOUT), size=int(rng.integers(0, 6)), replace=False):
+            values[name] = _random_values(rng)[name]
+        if step % 3 == 1:  # fewer lights: the tail of the slots must be 0 again
+            values["u_light_pos"] = values["u_light_pos"][: 16 * int(rng.integers(0, 8))]
+        if step % 4 == 2:
+            values.pop("u_shadow_matrix", None)
+        if step % 4 == 3:
+            values["u_shadow_matrix"] = rng.normal(size=(4, 4))
+        assert blocks.pack(values) == frame_block.pack(values)
+        assert blocks.pack(values) == frame_block.pack(values)  # the same dict again
+
+
 def _readback_shader() -> str:
     """A fragment shader writing word i of the block (read by member name) into pixel x = i."""
     branches = []

@@ -92,3 +92,43 @@ def test_the_shader_uses_the_mirrors_reflectance():
 
     src = (Path(__file__).resolve().parents[2] / "shaders" / "core" / "scene.frag").read_text()
     assert f"const float MIRROR_REFLECTANCE = {M.REFLECTANCE};" in src
+
+
+def test_the_quick_rejection_only_drops_what_the_exact_test_drops():
+    """views() first asks _clearly_out_of_view (Python floats, with margins); whenever it says "out", the exact
+    NumPy test must drop every glass too, over random car poses, eyes, lenses and aims."""
+    from types import SimpleNamespace
+
+    from rain_core.camera import Camera
+    from rain_core.car_mesh import CAR_SPEC, DRIVER_EYE_LOCAL
+
+    rng = np.random.default_rng(7)
+    mirrors = M.DoorMirrors(ctx=None)
+    mirrors._local_faces(CAR_SPEC)
+    quick = shown = 0
+    for _ in range(400):
+        ego = SimpleNamespace(yaw=float(rng.uniform(-np.pi, np.pi)), spec=CAR_SPEC,
+                              position=np.array([rng.uniform(-5, 5), 0.0, rng.uniform(0, 400)]))
+        c, s = np.cos(ego.yaw), np.sin(ego.yaw)
+        ego.model_matrix = lambda c=c, s=s, p=ego.position: np.array(
+            [[c, 0.0, s, p[0]], [0.0, 1.0, 0.0, p[1]], [-s, 0.0, c, p[2]], [0.0, 0.0, 0.0, 1.0]])
+        rot = ego.model_matrix()[:3, :3]
+        eye = rot @ (np.asarray(DRIVER_EYE_LOCAL) + rng.normal(size=3) * 0.3) + ego.position
+        fwd = rot @ np.array([rng.normal() * 0.8, rng.normal() * 0.2, -1.0])
+        cam = Camera(position=eye, forward=fwd, fov_y_deg=float(rng.uniform(30, 100)), inside_car=True)
+        shift_z = 0.0 if rng.random() < 0.5 else 100.0
+        view = cam.view_matrix(shift=(0.0, 0.0, shift_z))
+        proj = cam.projection_matrix(16 / 9)
+        rc = SimpleNamespace(frame=SimpleNamespace(ego=ego, camera=cam), shift_z=shift_z, view=view,
+                             projection=proj, view_proj=proj @ view, size=(320, 180), camera_position=eye)
+        if M._clearly_out_of_view(mirrors._corners, ego, shift_z, rc.view_proj):
+            quick += 1
+            # the exact test alone (the quick one switched off) drops both glasses as well
+            saved, M._clearly_out_of_view = M._clearly_out_of_view, lambda *a: False
+            try:
+                assert mirrors.views(rc) == []
+            finally:
+                M._clearly_out_of_view = saved
+        else:
+            shown += bool(mirrors.views(rc))
+    assert quick > 50 and shown > 20  # both answers were exercised

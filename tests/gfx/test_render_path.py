@@ -128,3 +128,45 @@ def test_observe_is_timed_with_its_effect_only_while_it_runs(gl_ctx):
         assert "watcher" not in rows
     finally:
         scene.release()
+
+
+def test_mirror_views_keep_their_own_programs_values_across_live_changes(gl_ctx):
+    """The mirror views (the road's reflection, the door mirrors) draw with a scene program of their own that keeps
+    its values between frames: a frame drawn again after the road and the mirrors were switched off and on live
+    is the frame drawn the first time, and the frame a fresh renderer draws."""
+    import dataclasses
+
+    from rain_core.effects.road import RoadEffect
+    from rain_core.gfx.renderer import Renderer
+
+    def settings(**values):
+        s = Settings()
+        for path, value in {"time_of_day.hour": 12.0, "camera.auto_exposure": False, "traffic.count": 2,
+                            "camera.driver_fov_deg": 70.0, "rain.wetness": 1.0, "rain.puddles": 1.0,
+                            **values}.items():
+            set_value(s, path, value)
+        return s
+
+    wet = settings()
+    scene = Scene(gl_ctx, (320, 180), settings=wet, seed=2, gpu_timing=False, effects=[RoadEffect(gl_ctx, wet)])
+    fresh = None
+    try:
+        for _ in range(3):
+            scene.step(1 / 30)
+        frame = scene.frame()
+        renderer = scene.renderer
+        renderer.render(frame)
+        first = renderer.hdr_image()
+        assert {s.name: s.ran for s in renderer.stats}["mirrors"]  # a door mirror drawn, and the reflection
+        for off in ({"road.enabled": False}, {"camera.mirrors": False}, {"road.reflections": False}):
+            renderer.render(dataclasses.replace(frame, settings=settings(**off)))
+            assert np.abs(renderer.hdr_image() - first).max() > 0.0
+            renderer.render(frame)
+            np.testing.assert_array_equal(renderer.hdr_image(), first)
+        fresh = Renderer(gl_ctx, (320, 180), scene.world, effects=[RoadEffect(gl_ctx, wet)], gpu_timing=False)
+        fresh.render(frame)
+        np.testing.assert_array_equal(fresh.hdr_image(), first)
+    finally:
+        if fresh is not None:
+            fresh.release()
+        scene.release()

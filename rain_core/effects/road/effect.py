@@ -12,6 +12,7 @@ from rain_core.effects.road.surface import wave_parameters
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext, WaterNormals
+from rain_core.gfx.linalg import inverse
 from rain_core.gfx.targets import float_target
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform
 from rain_core.gutter import frame_spread_coefficient
@@ -257,7 +258,7 @@ class RoadEffect(Effect):
         if rc.frame.camera.inside_car and ego is not None and not mirror:
             model = ego.model_matrix().copy()
             model[2, 3] -= rc.shift_z
-            out.set("u_road_cabin", mat4_bytes(np.linalg.inv(model)))
+            out.set("u_road_cabin", mat4_bytes(inverse(model)))
             out.set("u_road_cabin_box", self._cabin_box(ego.spec))
         else:
             out.set("u_road_cabin_box", (0.0, 0.0, 0.0, 0.0))
