@@ -85,6 +85,12 @@ class DropArray:
         self._step_air = None  # the air (head, cross) of the last step: the drops' EV columns hold for it
         self._shed_all = False  # test every drop against the glass's edges in the next _shed_outside
         self._ks: KernelScratch | None = None
+        self.version = 0  # counts changes of the drops (``changed``): what is made from them is made again
+
+    def changed(self) -> None:
+        """Note that the drops, beads or wipers changed (a step, drops added or removed, a column assigned): the
+        effect's drop rows made from them (``WindshieldEffect.update``) are no longer theirs."""
+        self.version += 1
 
     def _scratch(self) -> KernelScratch:
         """The compiled kernels' work arrays, for the drop array's capacity."""
@@ -104,6 +110,7 @@ class DropArray:
         d[:, _PLACED] = self._placed(d[:, _S], d[:, _T])
         d[:, _RB] = np.inf
         self._shed_all = True
+        self.version += 1
 
     @property
     def vel(self) -> np.ndarray:
@@ -113,6 +120,7 @@ class DropArray:
     def vel(self, value) -> None:
         self._buf[: self._n, _VS : _VT + 1] = value
         self._buf[: self._n, _RB] = np.inf
+        self.version += 1
 
     @property
     def mass(self) -> np.ndarray:
@@ -123,6 +131,7 @@ class DropArray:
         self._buf[: self._n, _M] = value
         self._buf[: self._n, _A] = drop_radius(self._buf[: self._n, _M])
         self._buf[: self._n, _RB] = np.inf
+        self.version += 1
 
     @property
     def trail(self) -> np.ndarray:
@@ -131,6 +140,7 @@ class DropArray:
     @trail.setter
     def trail(self, value) -> None:
         self._buf[: self._n, _TRAIL] = value
+        self.version += 1
 
     @property
     def fresh(self) -> np.ndarray:
@@ -139,6 +149,7 @@ class DropArray:
     @fresh.setter
     def fresh(self, value) -> None:
         self._fresh_buf[: self._n] = value
+        self.version += 1
 
     @property
     def count(self) -> int:
@@ -189,6 +200,7 @@ class DropArray:
         self._dirty = True
         self._fresh_buf[n : n + k] = True
         self._n = n + k
+        self.version += 1
         return rows
 
     def _bead_drops(self, u: np.ndarray, v: np.ndarray, m: np.ndarray) -> None:
@@ -198,6 +210,7 @@ class DropArray:
 
     def _keep(self, keep: np.ndarray) -> None:
         n = self._n
+        self.version += 1
         if jit.active():
             self._n = kernels.compact_rows(self._buf, self._fresh_buf, n, ~keep)
             return

@@ -136,6 +136,7 @@ class WindshieldEffect(WaterPass, Effect):
         # The drop pass reads the drops' rows where the drop texture's splats left them: nothing more is uploaded.
         self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], _DROP_FORMAT, "in_seg", "in_radius")])
         self._drop_builder = DropRows()
+        self._early = None  # what update made for the water pass: water_pass._make_rows_early
         self._film_builder = FilmRows()
         self._drop_rows = 0  # rows in the drop buffer this frame
         self.upload_bytes = 0  # bytes written to the GPU by the last frame's water pass
@@ -266,7 +267,10 @@ class WindshieldEffect(WaterPass, Effect):
         self._last_time = float(frame.time_s)
         self._inputs = self.inputs_for(frame)
         self._dt = min(dt, MAX_FRAME_DT_S)
-        self.sim.step(self._dt, self._inputs)
+        sim = self.sim
+        sim.step(self._dt, self._inputs)
+        if rc is not None:
+            self._make_rows_early(rc)
 
     def render(self, stage: str, rc) -> None:
         if stage == "prepare":
@@ -395,6 +399,7 @@ class WindshieldEffect(WaterPass, Effect):
     def release(self) -> None:
         """Free the textures, buffers and vertex arrays, and the programs when the shader library is our own."""
         self._release_textures()
+        self._early = None
         gl_objects = [
             *self._coarse,
             self._mesh_vbo,

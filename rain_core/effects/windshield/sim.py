@@ -157,6 +157,7 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         """Take over the whole state of another simulation of the same glass (its drops, film, beads, wipers,
         counters and random generator), e.g. a reference's, to run both on from the same glass."""
         self._n = 0
+        self.changed()
         self._append(other.pos, other.vel, other.mass)
         self.trail[:] = other.trail
         self.fresh[:] = other.fresh
@@ -166,6 +167,15 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         self.wipers = copy.deepcopy(other.wipers)
         for name in ("arrived", "wiped", "shed", "evaporated", "time_s", "arrival_count", "merges", "_budget"):
             setattr(self, name, getattr(other, name))
+
+    def blade_angles(self) -> list[float]:
+        """Each blade's angle now (rad), the reference's: kept while the wipers' phase and the blades are the same
+        (the water pass and the glass pass both ask each frame)."""
+        phase = self.wipers.phase
+        memo = self.__dict__.get("_angles_memo")
+        if memo is None or memo[0] != phase or memo[1] is not self.blades:
+            memo = self._angles_memo = (phase, self.blades, super().blade_angles())
+        return list(memo[2])
 
     @property
     def sensor_kg_m2(self) -> float:
@@ -318,6 +328,7 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         dt_s = checks.time_step(dt_s)
         if type(inputs) is not GlassInputs:
             _check_inputs(inputs)
+        self.version += 1
         self._reset_frame_records()
         if dt_s == 0.0:
             return

@@ -125,10 +125,8 @@ def _blade_frames(sim) -> list[tuple[float, float, float, float]]:
     (towards the stroke's direction), where its bead bins' lines lie: WindshieldSimReference.bead_bin_centres ±
     half a bin along the blade, i.e. pivot + ahead·normal + r·direction for each bin's two ends."""
     ahead = 0.004 if (sim.wipers.phase or 0.0) < 0.5 else -0.004
-    progress = sim.wipers.progress
     frames = []
-    for blade in sim.blades:
-        angle = float(blade.angle(progress))
+    for blade, angle in zip(sim.blades, sim.blade_angles(), strict=True):  # (float(blade.angle(progress)) each)
         c, s = math.cos(angle), math.sin(angle)
         frames.append((c, s, blade.pivot[0] - ahead * s, blade.pivot[1] + ahead * c))
     return frames
