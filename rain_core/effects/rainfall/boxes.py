@@ -66,21 +66,62 @@ def layer_boxes(camera_position, camera_forward, container_m: float) -> Boxes:
     camera along the horizontal view direction (scaled by its horizontal share, so a camera looking straight
     down sits at the centre). Heights are fixed (``box_heights``): a box reaches from just below the ground
     unless the eye is higher than EYE_ALLOWANCE_M, when it slides up and its bottom fades in."""
-    cam = np.asarray(camera_position, dtype=np.float64)
-    f = np.asarray(camera_forward, dtype=np.float64)
-    fh = np.array([f[0], f[2]])
-    n = float(np.hypot(*fh))
-    fh = fh / n if n > 1e-9 else np.zeros(2)
-    h = 0.5 * float(container_m) * np.asarray(LAYER_SCALES)
-    height = box_heights(container_m)
-    centre = cam[[0, 2]][None, :] + fh[None, :] * (FORWARD_OFFSET * h * min(n, 1.0))[:, None]
-    top = np.maximum(BOX_BOTTOM_Y_M + height, max(float(cam[1]), GROUND_Y_M) + TOP_SLOPE * h + TOP_PAD_M)
-    bottom = top - height
-    lo = np.stack([centre[:, 0] - h, bottom, centre[:, 1] - h], axis=1)
-    hi = np.stack([centre[:, 0] + h, top, centre[:, 1] + h], axis=1)
-    fade = np.stack([FADE_FRACTION * h, FADE_FRACTION * height, FADE_FRACTION * h], axis=1)
-    fade_bottom = np.minimum(bottom - BOX_BOTTOM_Y_M, FADE_FRACTION * height)
-    return Boxes(lo, hi, fade, np.asarray(LAYER_PROFILE, dtype=np.float64), fade_bottom)
+    # Every frame, four layers: in Python floats, the same float64 operations in the same order as the array
+    # form (tests/effects/rainfall/test_cpu_paths.py keeps that form as the oracle); fade and ν depend on
+    # container_m alone and are shared, read-only, between frames.
+    cx, cy, cz = (float(v) for v in camera_position)
+    f0, _, f2 = (float(v) for v in camera_forward)
+    n = _horizontal_length(f0, f2)
+    fx, fz = (f0 / n, f2 / n) if n > 1e-9 else (0.0, 0.0)
+    reach = min(n, 1.0)
+    shape = _layer_shape(float(container_m))
+    eye = max(cy, GROUND_Y_M)
+    lo, hi, fade_bottom = [], [], []
+    for h, height, ff_height in shape.rows:
+        s = FORWARD_OFFSET * h * reach
+        x, z = cx + fx * s, cz + fz * s
+        top = max(BOX_BOTTOM_Y_M + height, eye + TOP_SLOPE * h + TOP_PAD_M)
+        bottom = top - height
+        lo.append((x - h, bottom, z - h))
+        hi.append((x + h, top, z + h))
+        fade_bottom.append(min(bottom - BOX_BOTTOM_Y_M, ff_height))
+    return Boxes(np.array(lo), np.array(hi), shape.fade, shape.nu, np.array(fade_bottom))
+
+
+_HYPOT = [None, None, 0.0]  # the last (f0, f2) and np.hypot of it: a camera driving straight keeps its forward
+
+
+def _horizontal_length(f0: float, f2: float) -> float:
+    # np.hypot as before (math.hypot is another algorithm: it may differ in the last bit), once per forward.
+    last = _HYPOT
+    if last[0] != f0 or last[1] != f2:
+        last[:] = [f0, f2, float(np.hypot(f0, f2))]
+    return last[2]
+
+
+class _LayerShape:
+    """What the boxes of one container size share: per layer (half-size, height, top fade) as floats, and the
+    fade (L, 3) and profile ν (L,) arrays (read-only: every frame's Boxes holds them)."""
+
+    __slots__ = ("container_m", "rows", "fade", "nu")
+
+    def __init__(self, container_m: float):
+        h = 0.5 * container_m * np.asarray(LAYER_SCALES)
+        height = box_heights(container_m)
+        self.container_m = container_m
+        self.rows = tuple(zip(h.tolist(), height.tolist(), (FADE_FRACTION * height).tolist(), strict=True))
+        self.fade = np.stack([FADE_FRACTION * h, FADE_FRACTION * height, FADE_FRACTION * h], axis=1)
+        self.nu = np.asarray(LAYER_PROFILE, dtype=np.float64)
+        self.fade.flags.writeable = self.nu.flags.writeable = False
+
+
+_SHAPE: list[_LayerShape] = []  # the last container size's (it changes only in the settings panel)
+
+
+def _layer_shape(container_m: float) -> _LayerShape:
+    if not _SHAPE or _SHAPE[0].container_m != container_m:
+        _SHAPE[:] = [_LayerShape(container_m)]
+    return _SHAPE[0]
 
 
 def wrap_near(z, around_z):

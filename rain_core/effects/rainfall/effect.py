@@ -31,22 +31,23 @@ from rain_core.effects.rainfall.optics import optics_uniforms
 from rain_core.effects.rainfall.shape import SHAPE_DIAMETERS_MM, drop_shape_factors
 from rain_core.effects.rainfall.sim import SPLASH_V_M_S, RainfallSim, RainInput, RainUpdate, box_offsets, splash_clock
 from rain_core.effects.rainfall.streaks import StreakCamera
-from rain_core.effects.rainfall.vehicle_fate import vehicle_uniforms
+from rain_core.effects.rainfall.uniform_cache import box_pairs, program_uniforms, splash_box_pairs
+from rain_core.effects.rainfall.vehicle_fate import vehicle_uniform_pairs, vehicle_uniforms
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import owned_uniforms, set_uniform, set_uniforms
+from rain_core.gfx.uniforms import set_uniforms
 
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
 PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
-# Uniforms only this effect writes: written when their value changed (most are constant, or constant while the
-# rate is). Others (lights, wetness, …) may also be written by rc.set_frame_uniforms, so they are always written.
-_OWN_UNIFORMS = ("u_box_", "u_veh_", "u_occ_", "u_splash_", "u_shape_", "u_thin", "u_layer_", "u_seed_key",
-                 "u_drop_table", "u_road_", "u_time_", "u_epoch", "u_wind", "u_turb_eps", "u_period_world",
-                 "u_ground_y", "u_width_", "u_alpha_max", "u_alpha_spread", "u_stretch_max", "u_crown_per_d",
-                 "u_cam_vel", "u_exposure_s", "u_near", "u_rain_env", "u_brightness", "u_focal_px")
-_IS_OWN: dict[str, bool] = {}  # uniform name → whether it starts with one of _OWN_UNIFORMS
+# The light uniforms: rc.set_frame_uniforms writes the frame's into a program that declares them (drop.glsl does),
+# and render() then writes the lights that reach the boxes over them where those differ.
+_LIGHT_NAMES = ("u_light_pos", "u_light_dir", "u_light_color", "u_light_count")
+
+
+def _f32(values) -> bytes:
+    return np.ascontiguousarray(values, dtype=np.float32).tobytes()
 
 
 class RainfallEffect(Effect):
@@ -94,6 +95,7 @@ class RainfallEffect(Effect):
         self._prev_cam: tuple[np.ndarray, float] | None = None
         self.camera_velocity_m_s = np.zeros(3)
         self.last_update: RainUpdate | None = None
+        self._constants: tuple | None = None  # (its key, the uniforms that rarely change: _constant_pairs)
         area, width = drop_shape_factors(SHAPE_DIAMETERS_MM)
         self._shape_area = area.astype(np.float32)
         self._shape_width = width.astype(np.float32)
@@ -116,6 +118,7 @@ class RainfallEffect(Effect):
         if self._world is not world or not self._static_tex:
             self._world = world
             self._upload_world(world)
+            self._constants = None  # the roof maps' and the road's geometry are among them
 
     def _texture(self, name: str, grid: np.ndarray, linear: bool = False) -> None:
         old = self._static_tex.pop(name, None)
@@ -191,11 +194,9 @@ class RainfallEffect(Effect):
             rel_x = float(cam[0]) - float(car[0])
             rel_z = float(cam[2]) - float(car[2])
             rel_z -= PERIOD_M * round(rel_z / PERIOD_M)
-            v = np.array(ego.velocity(), dtype=np.float64)
+            vx, vy, vz = (float(c) for c in ego.velocity())
             omega = float(getattr(ego, "yaw_rate_rad_s", 0.0))
-            v[0] += omega * rel_z
-            v[2] -= omega * rel_x
-            return v
+            return np.array((vx + omega * rel_z, vy, vz - omega * rel_x))
         pos = np.asarray(frame.camera.position, dtype=np.float64)
         prev = self._prev_cam
         if prev is None or frame.time_s <= prev[1]:
@@ -234,20 +235,26 @@ class RainfallEffect(Effect):
 
     def _lights(self, rc, boxes: Boxes) -> tuple:
         """rc.lights without the lights whose range cannot reach the outer box (wrapped frame); rc.lights itself
-        when every light reaches it (nothing to repack)."""
+        when every light reaches it (nothing to repack). The three buffers have one size (lighting.pack_lights)."""
         pos_b, dir_b, col_b, count = rc.lights
-        size = len(pos_b)
-        if len(dir_b) != size or len(col_b) != size:
-            raise ValueError("rc.lights: the position, direction and colour buffers must have the same size")
         if count == 0:
             return rc.lights
+        size = len(pos_b)
         pos = np.frombuffer(pos_b, np.float32, count=4 * count).reshape(count, 4)
-        lo = boxes.lo[-1] - [0.0, 0.0, rc.shift_z]
-        hi = boxes.hi[-1] - [0.0, 0.0, rc.shift_z]
-        gap = np.maximum(np.maximum(lo - pos[:, :3], pos[:, :3] - hi), 0.0)
-        keep = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) < pos[:, 3] * pos[:, 3])  # w < 0: a low beam
-        if keep.size == count:
+        lx, ly, lz = boxes.lo[-1].tolist()
+        hx, hy, hz = boxes.hi[-1].tolist()
+        shift_z = float(rc.shift_z)
+        p = pos[:, :3]
+        gap = np.maximum(np.array((lx, ly, lz - shift_z)) - p, p - np.array((hx, hy, hz - shift_z)))
+        np.maximum(gap, 0.0, out=gap)
+        r = pos[:, 3]
+        keep = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) < r * r)  # w < 0: a low beam
+        n = keep.size
+        if n == count:
             return rc.lights
+        if n == 0 or keep[-1] == n - 1:  # the nearest n (pack_nearest sorts by distance): a prefix of each buffer
+            pad = bytes(size - 16 * n)
+            return pos_b[:16 * n] + pad, dir_b[:16 * n] + pad, col_b[:16 * n] + pad, n
         # The three arrays packed in one pass (one gather, one tobytes), then cut into their three byte strings.
         arr = np.frombuffer(pos_b + dir_b + col_b, np.float32).reshape(3, -1, 4)
         packed = np.zeros_like(arr)
@@ -312,19 +319,65 @@ class RainfallEffect(Effect):
             "u_crown_per_d": SPLASH_CROWN_HEIGHT_PER_D, "u_splash_alpha_max": ALPHA_MAX,
         }
 
-    def _set(self, prog, values: dict) -> None:
-        """set_uniforms, skipping own uniforms whose value is the one last written to this program (the program's
-        OwnedUniforms: shared by every effect drawing with it); others (lights, wetness, …) may also be written by
-        rc.set_frame_uniforms, so they are always written."""
-        owned = owned_uniforms(prog)
-        for name, value in values.items():
-            own = _IS_OWN.get(name)
-            if own is None:
-                own = _IS_OWN[name] = name.startswith(_OWN_UNIFORMS)
-            if own:
-                owned.set(name, value)
-            else:
-                set_uniform(prog, name, value)
+    def _constant_pairs(self, upd: RainUpdate) -> tuple:
+        """(name, value) of every uniform that changes only with the sim (seed, layout), the world or never, for
+        both programs (a name a program lacks is skipped); rebuilt when the sim's layout, the boxes' fade (the
+        container size) or the world changed."""
+        sim = self.sim
+        key = (sim, sim.table_version, upd.boxes.fade)
+        cached = self._constants
+        if cached is not None and all(a is b for a, b in zip(cached[0], key, strict=True)):
+            return cached[1]
+        road_geom = (layout.ROAD_HALF_WIDTH_M, layout.ROAD_HALF_WIDTH_M + layout.KERB_WIDTH_M
+                     + layout.SIDEWALK_WIDTH_M, layout.KERB_HEIGHT_M)
+        pairs = (
+            ("u_seed_key", int(sim.key)), ("u_layer_start", np.asarray(upd.starts[:-1], np.int32).tobytes()),
+            ("u_drop_table", units.RAINFALL_DROPS), ("u_box_fade", _f32(upd.boxes.fade)),
+            ("u_layer_rho", _f32(upd.density)), ("u_turb_eps", TURB_EPS),
+            ("u_occ_fine", units.RAINFALL_OCCLUDER), ("u_occ_coarse", units.RAINFALL_OCCLUDER_COARSE),
+            ("u_occ_fine_geom", self._occ_geom["fine"]), ("u_occ_coarse_geom", self._occ_geom["coarse"]),
+            ("u_period_world", PERIOD_M), ("u_ground_y", GROUND_Y_M), ("u_rain_env", units.RAINFALL_ENV),
+            ("u_shape_area", _f32(self._shape_area)), ("u_shape_width", _f32(self._shape_width)),
+            ("u_width_floor_px", WIDTH_FLOOR_PX), ("u_width_max_px", WIDTH_MAX_PX), ("u_alpha_max", ALPHA_MAX),
+            ("u_alpha_spread", SPREAD_ALPHA), ("u_stretch_max", STRETCH_MAX),
+            ("u_splash_key", int(sim.splash_key)), ("u_splash_period", SPLASH_PERIOD_S),
+            ("u_splash_v", _f32(SPLASH_V_M_S)), ("u_road_height", units.RAINFALL_ROAD_HEIGHT),
+            ("u_road_extent", self._road_extent), ("u_road_geom", road_geom),
+            ("u_crown_per_d", SPLASH_CROWN_HEIGHT_PER_D), ("u_splash_alpha_max", ALPHA_MAX),
+        )
+        self._constants = (key, pairs)
+        return pairs
+
+    def _frame_pairs(self, upd: RainUpdate, rc, s) -> list:
+        """(name, value) of the uniforms both programs get that may change every frame (drop_uniforms' and the
+        view's), values as float32 bytes, numbers or tuples of floats."""
+        whole, frac, epoch = time_split(upd.time_s)
+        size = rc.size
+        pairs = [
+            ("u_viewport", (float(size[0]), float(size[1]))),
+            ("u_focal_px", float(rc.projection[1, 1]) * size[1] / 2.0),
+            ("u_brightness", float(s.rainfall.streak_brightness)),
+            ("u_time_whole", whole), ("u_time_frac", frac), ("u_epoch", epoch),
+            ("u_wind", tuple(upd.wind_m_s.tolist())), ("u_thin", (upd.thin_a, upd.thin_b, upd.thin_c)),
+        ]
+        pairs += box_pairs(upd.boxes, upd.wind_integral_m, rc.shift_z)
+        pairs += vehicle_uniform_pairs(upd.vehicles, rc.shift_z, float(rc.camera_position[2]))
+        return pairs
+
+    def _streak_pairs(self, rc, s) -> tuple:
+        return (("u_cam_vel", tuple(self.camera_velocity_m_s.tolist())), ("u_exposure_s", float(s.camera.exposure_s)),
+                ("u_near", float(rc.frame.camera.near_m)))
+
+    def _use(self, prog, rc, upd: RainUpdate, frame_pairs, lights, own_pairs) -> None:
+        """Bind the frame's uniforms to prog and write this effect's where they changed (uniform_cache)."""
+        rc.set_frame_uniforms(prog)
+        cache = program_uniforms(prog)
+        for name, value in zip(_LIGHT_NAMES, rc.lights, strict=True):
+            cache.assume(name, value)  # what set_frame_uniforms just wrote
+        cache.put_once(self._constant_pairs(upd))
+        cache.put_pairs(frame_pairs)
+        cache.put_pairs(zip(_LIGHT_NAMES, lights, strict=True))
+        cache.put_pairs(own_pairs)
 
     def render(self, stage: str, rc) -> None:
         upd = self.last_update
@@ -332,17 +385,9 @@ class RainfallEffect(Effect):
             return
         s = self._settings(rc.frame)
         ctx = rc.ctx
-        boxes = upd.boxes
         self._draw_environment(rc)
-        lights = self._lights(rc, boxes)
-        common = {
-            "u_viewport": tuple(float(v) for v in rc.size),
-            "u_focal_px": float(rc.projection[1, 1]) * rc.size[1] / 2.0,
-            "u_brightness": float(s.rainfall.streak_brightness), "u_rain_env": units.RAINFALL_ENV,
-            "u_light_pos": lights[0], "u_light_dir": lights[1], "u_light_color": lights[2],
-            "u_light_count": lights[3],
-        }
-        common.update(self.drop_uniforms(upd, rc.shift_z, float(rc.camera_position[2])))
+        lights = self._lights(rc, upd.boxes)
+        frame_pairs = self._frame_pairs(upd, rc, s)
         self._env_tex.use(units.RAINFALL_ENV)
         self._bind_static()
         ctx.enable(moderngl.BLEND)
@@ -352,22 +397,15 @@ class RainfallEffect(Effect):
         rc.hdr.fbo.depth_mask = False
         try:
             if self.sim.capacity and upd.drawn_expected > 0.0:
-                prog = self.streak_prog
-                rc.set_frame_uniforms(prog)
-                self._set(prog, common)
-                self._set(prog, {
-                    "u_cam_vel": tuple(self.camera_velocity_m_s), "u_exposure_s": float(s.camera.exposure_s),
-                    "u_near": float(rc.frame.camera.near_m),
-                    "u_shape_area": self._shape_area, "u_shape_width": self._shape_width,
-                    "u_width_floor_px": WIDTH_FLOOR_PX, "u_width_max_px": WIDTH_MAX_PX, "u_alpha_max": ALPHA_MAX,
-                    "u_alpha_spread": SPREAD_ALPHA, "u_stretch_max": STRETCH_MAX,
-                })
+                self._use(self.streak_prog, rc, upd, frame_pairs, lights, self._streak_pairs(rc, s))
                 self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
             if s.rainfall.splashes and upd.splashes and upd.splash_accept > 0.0:
-                prog = self.splash_prog
-                rc.set_frame_uniforms(prog)
-                self._set(prog, common)
-                self._set(prog, self.splash_uniforms(upd, rc.shift_z))
+                count, tau = splash_clock(upd.time_s)
+                own = [("u_splash_count", count), ("u_splash_tau", tau), ("u_splash_accept", upd.splash_accept),
+                       ("u_splash_weight", upd.splash_weight), ("u_splash_lam", upd.splash_lam),
+                       ("u_wetness", upd.wetness), ("u_puddles", upd.puddles)]
+                own += splash_box_pairs(upd.boxes, SPLASH_LAYER, rc.shift_z)
+                self._use(self.splash_prog, rc, upd, frame_pairs, lights, own)
                 self._splash_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.splash_capacity)
         finally:
             rc.hdr.fbo.depth_mask = True
@@ -426,18 +464,8 @@ class RainfallEffect(Effect):
         if not self.sim.capacity or upd.drawn_expected <= 0.0:
             return
         s = self._settings(rc.frame)
-        prog = self.streak_prog
-        rc.set_frame_uniforms(prog)
-        self._set(prog, self.drop_uniforms(upd, rc.shift_z, float(rc.camera_position[2])))
-        self._set(prog, {
-            "u_viewport": tuple(float(v) for v in rc.size),
-            "u_focal_px": float(rc.projection[1, 1]) * rc.size[1] / 2.0,
-            "u_brightness": float(s.rainfall.streak_brightness), "u_rain_env": units.RAINFALL_ENV,
-            "u_cam_vel": tuple(self.camera_velocity_m_s), "u_exposure_s": float(s.camera.exposure_s),
-            "u_near": float(rc.frame.camera.near_m), "u_shape_area": self._shape_area,
-            "u_shape_width": self._shape_width, "u_width_floor_px": WIDTH_FLOOR_PX, "u_width_max_px": WIDTH_MAX_PX,
-            "u_alpha_max": ALPHA_MAX, "u_alpha_spread": SPREAD_ALPHA, "u_stretch_max": STRETCH_MAX,
-        })
+        self._use(self.streak_prog, rc, upd, self._frame_pairs(upd, rc, s), self._lights(rc, upd.boxes),
+                  self._streak_pairs(rc, s))
         self._env_tex.use(units.RAINFALL_ENV)  # colour only, but never another pass's texture on that unit
         self._bind_static()
         target.fbo.use()

@@ -5,6 +5,7 @@ is the NumPy twin."""
 from __future__ import annotations
 
 import math
+import struct
 
 import numpy as np
 
@@ -98,8 +99,11 @@ def cull_vehicles(vehicles, centre, reach_m: float) -> list:
         x, z = float(veh.position[0]), float(veh.position[2])
         dz = z - cz
         dz = dz - PERIOD_M * round(dz / PERIOD_M)
-        dist = float(np.hypot(x - cx, dz))
-        if dist <= reach_m + 0.5 * veh.spec.length_m:
+        dx, limit = x - cx, reach_m + 0.5 * veh.spec.length_m
+        if abs(dx) > limit or abs(dz) > limit:
+            continue  # hypot ≥ either leg (rounded too: each leg is a float below the exact length), so far off
+        dist = float(np.hypot(dx, dz))
+        if dist <= limit:
             out.append((dist, veh))
     out.sort(key=lambda item: item[0])
     return [veh for _, veh in out[:MAX_VEHICLES]]
@@ -113,17 +117,34 @@ def vehicle_uniforms(vehicles, shift_z: float, around_z: float) -> dict[str, np.
     for i, veh in enumerate(vehicles):
         x, y, z = (float(v) for v in veh.position)
         pose[i] = (x, y, float(wrap_near(z - float(shift_z), float(around_z))), veh.yaw)
-    lo, hi, planes = _piece_arrays(tuple(veh.spec for veh in vehicles))
+    lo, hi, planes = _pieces(tuple(veh.spec for veh in vehicles))[0]
     return {"u_veh_pose": pose, "u_veh_lo": lo, "u_veh_hi": hi, "u_veh_plane": planes,
             "u_veh_count": len(vehicles)}
+
+
+_POSE = struct.Struct(f"={4 * MAX_VEHICLES}f")
+
+
+def vehicle_uniform_pairs(vehicles, shift_z: float, around_z: float) -> tuple:
+    """``vehicle_uniforms`` as (name, value) pairs with the arrays as their float32 bytes, built from floats (the
+    renderer's per-frame form: the pieces' bytes are kept per spec sequence, the poses packed directly)."""
+    vehicles = vehicles[:MAX_VEHICLES]
+    pose = [0.0] * (4 * MAX_VEHICLES)
+    shift_z, around_z = float(shift_z), float(around_z)
+    for i, veh in enumerate(vehicles):
+        x, y, z = (float(v) for v in veh.position)
+        pose[4 * i: 4 * i + 4] = (x, y, float(wrap_near(z - shift_z, around_z)), float(veh.yaw))
+    lo, hi, planes = _pieces(tuple(veh.spec for veh in vehicles))[1]
+    return (("u_veh_pose", _POSE.pack(*pose)), ("u_veh_lo", lo), ("u_veh_hi", hi), ("u_veh_plane", planes),
+            ("u_veh_count", len(vehicles)))
 
 
 _PIECE_ARRAYS: dict[tuple, tuple[tuple, tuple]] = {}
 
 
-def _piece_arrays(specs: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """u_veh_lo, u_veh_hi, u_veh_plane for vehicles of ``specs`` in this order: they change only when the
-    vehicles near the camera do, so they are kept per spec sequence (shared read-only arrays)."""
+def _pieces(specs: tuple) -> tuple[tuple, tuple]:
+    """((u_veh_lo, u_veh_hi, u_veh_plane), their float32 bytes) for vehicles of ``specs`` in this order: they
+    change only when the vehicles near the camera do, so they are kept per spec sequence."""
     key = tuple(id(sp) for sp in specs)
     hit = _PIECE_ARRAYS.get(key)
     if hit is not None and all(a is b for a, b in zip(hit[0], specs, strict=True)):
@@ -141,8 +162,10 @@ def _piece_arrays(specs: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         a.flags.writeable = False
     if len(_PIECE_ARRAYS) > 256:
         _PIECE_ARRAYS.clear()  # forgetting only costs a rebuild
-    _PIECE_ARRAYS[key] = (specs, (lo, hi, planes))
-    return lo, hi, planes
+    arrays = (lo, hi, planes)
+    entry = (arrays, tuple(a.astype(np.float32).tobytes() for a in arrays))
+    _PIECE_ARRAYS[key] = (specs, entry)
+    return entry
 
 
 def inside_vehicles(p: np.ndarray, vehicles) -> np.ndarray:

@@ -2,19 +2,34 @@
 
 from __future__ import annotations
 
+import struct
 from types import SimpleNamespace
 
 import numpy as np
 
 from rain_core import layout
-from rain_core.effects.rainfall.boxes import layer_boxes, wrap_near
-from rain_core.effects.rainfall.constants import MAX_VEHICLES
+from rain_core.effects.rainfall.boxes import box_heights, layer_boxes, wrap_near
+from rain_core.effects.rainfall.constants import (
+    BOX_BOTTOM_Y_M,
+    FADE_FRACTION,
+    FORWARD_OFFSET,
+    GROUND_Y_M,
+    LAYER_PROFILE,
+    LAYER_SCALES,
+    MAX_VEHICLES,
+    SPLASH_LAYER,
+    TOP_PAD_M,
+    TOP_SLOPE,
+)
 from rain_core.effects.rainfall.effect import RainfallEffect
+from rain_core.effects.rainfall.sim import RainfallSim
+from rain_core.effects.rainfall.uniform_cache import box_pairs, program_uniforms, splash_box_pairs
 from rain_core.effects.rainfall.vehicle_fate import (
     PIECES_PER_VEHICLE,
     PLANES_PER_PIECE,
     cull_vehicles,
     piece_volumes,
+    vehicle_uniform_pairs,
     vehicle_uniforms,
 )
 from rain_core.vehicles import CAR_SPEC, TRUCK_SPEC, VAN_SPEC, Vehicle
@@ -86,6 +101,17 @@ def test_lights_are_packed_as_each_buffer_alone():
         packed[:keep.size] = arr[keep]
         assert data == packed.tobytes()
     assert got[3] == keep.size
+    # The renderer's lights come nearest first, so those that reach are usually the first ones: cut, not gathered.
+    order = np.concatenate([keep, np.setdiff1d(np.arange(count), keep)])
+    for arr in (pos, dirs, cols):
+        arr[:count] = arr[order]
+    rc.lights = (pos.tobytes(), dirs.tobytes(), cols.tobytes(), count)
+    got = RainfallEffect._lights(None, rc, boxes)
+    assert got[3] == keep.size
+    for arr, data in zip((pos, dirs, cols), got[:3], strict=True):
+        packed = np.zeros_like(arr)
+        packed[:keep.size] = arr[:keep.size]
+        assert data == packed.tobytes()
 
 
 class _Uniform:
@@ -105,7 +131,7 @@ class _Uniform:
 
 
 class _Program(dict):
-    __hash__ = object.__hash__  # a program is its own key in owned_uniforms' weak table
+    __hash__ = object.__hash__  # a program is its own key in program_uniforms' weak table
     __eq__ = object.__eq__
 
     def __init__(self, names):
@@ -113,28 +139,165 @@ class _Program(dict):
         super().__init__({n: _Uniform(self.log, n) for n in names})
 
 
-def test_set_skips_only_values_equal_to_the_last_written():
-    """The effect's uniform cache: an unchanged value (or the same read-only array) is not written again; a
-    changed value, a writeable array edited in place, or another value in between is."""
+def test_program_uniforms_skip_only_values_equal_to_the_last_written():
+    """The programs' uniform cache: an unchanged value is not written again; a changed one, a value of another
+    type, or one after another writer (told through assume) is; every effect shares one cache per program."""
+    prog = _Program(["u_box_lo", "u_light_count", "u_time_frac"])
+    cache = program_uniforms(prog)
+    assert program_uniforms(prog) is cache
+    cache.put_pairs([("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5), ("u_missing", 1.0)])
+    cache.put_pairs([("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5), ("u_missing", 1.0)])
+    assert prog.log == [("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5)]
+    cache.put("u_time_frac", 0.25)
+    cache.put("u_light_count", 3)
+    cache.put("u_light_count", 3.0)  # another type: written (an int uniform and a float compare equal)
+    assert [n for n, _ in prog.log[2:]] == ["u_time_frac", "u_light_count", "u_light_count"]
+    cache.assume("u_light_count", 9)  # the frame wrote its own count
+    cache.put("u_light_count", 3.0)
+    assert prog.log[-1] == ("u_light_count", 3.0)
+    constants = tuple([("u_time_frac", 0.75)])
+    cache.put_once(constants)
+    cache.put("u_time_frac", 0.1)
+    cache.put_once(constants)  # the same tuple again: not even compared
+    assert prog.log[-2:] == [("u_time_frac", 0.75), ("u_time_frac", 0.1)]
+    cache.put_once(tuple([("u_time_frac", 0.75)]))  # another tuple: put, compared, written where it differs
+    assert prog.log[-1] == ("u_time_frac", 0.75)
+
+
+def _layer_boxes_arrays(camera_position, camera_forward, container_m):
+    """layer_boxes as it was written with arrays (the oracle of the float form)."""
+    cam = np.asarray(camera_position, dtype=np.float64)
+    f = np.asarray(camera_forward, dtype=np.float64)
+    fh = np.array([f[0], f[2]])
+    n = float(np.hypot(*fh))
+    fh = fh / n if n > 1e-9 else np.zeros(2)
+    h = 0.5 * float(container_m) * np.asarray(LAYER_SCALES)
+    height = box_heights(container_m)
+    centre = cam[[0, 2]][None, :] + fh[None, :] * (FORWARD_OFFSET * h * min(n, 1.0))[:, None]
+    top = np.maximum(BOX_BOTTOM_Y_M + height, max(float(cam[1]), GROUND_Y_M) + TOP_SLOPE * h + TOP_PAD_M)
+    bottom = top - height
+    lo = np.stack([centre[:, 0] - h, bottom, centre[:, 1] - h], axis=1)
+    hi = np.stack([centre[:, 0] + h, top, centre[:, 1] + h], axis=1)
+    fade = np.stack([FADE_FRACTION * h, FADE_FRACTION * height, FADE_FRACTION * h], axis=1)
+    fade_bottom = np.minimum(bottom - BOX_BOTTOM_Y_M, FADE_FRACTION * height)
+    return lo, hi, fade, np.asarray(LAYER_PROFILE, dtype=np.float64), fade_bottom
+
+
+def test_layer_boxes_in_floats_equal_the_array_form_bit_for_bit():
+    rng = np.random.default_rng(11)
+    for trial in range(3000):
+        cam = rng.uniform(-3000.0, 3000.0, 3)
+        cam[1] = (rng.uniform(-1.0, 12.0), 1.2, 0.0)[trial % 3]
+        fwd = rng.standard_normal(3) * (1e-3 if trial % 7 == 0 else 1.0)
+        if trial % 50 == 0:
+            fwd[0] = fwd[2] = 0.0  # straight down
+        container = (40.0, float(rng.uniform(10.0, 120.0)))[trial % 2]
+        got = layer_boxes(cam, fwd, container)
+        want = _layer_boxes_arrays(cam, fwd, container)
+        for name, w in zip(("lo", "hi", "fade", "nu", "fade_bottom"), want, strict=True):
+            g = getattr(got, name)
+            assert g.dtype == w.dtype and g.shape == w.shape and g.tobytes() == w.tobytes(), (name, trial)
+    # the arrays every frame shares are read-only: no caller can corrupt the next frame's boxes
+    assert not got.fade.flags.writeable and not got.nu.flags.writeable
+
+
+def _as_bytes(value) -> bytes:
+    if isinstance(value, bytes):
+        return value
+    if isinstance(value, np.ndarray):
+        return np.ascontiguousarray(value, np.float32).tobytes()
+    if isinstance(value, int):
+        return struct.pack("=i", value)
+    return np.asarray(value, np.float32).tobytes()
+
+
+def test_packed_pairs_equal_the_uniform_dicts(rain):
+    """box_pairs, splash_box_pairs and vehicle_uniform_pairs give the bytes drop_uniforms, splash_uniforms and
+    vehicle_uniforms give (as the GPU receives them), the wind's integral and the shift included."""
+    rng = np.random.default_rng(5)
     effect = RainfallEffect.__new__(RainfallEffect)
-    prog = _Program(["u_box_lo", "u_veh_lo", "u_light_count"])
-    frozen = np.arange(8.0)
-    frozen.flags.writeable = False
-    live = np.arange(3.0)
-    effect._set(prog, {"u_veh_lo": frozen, "u_box_lo": live})
-    effect._set(prog, {"u_veh_lo": frozen, "u_box_lo": live})
-    assert [n for n, _ in prog.log] == ["u_veh_lo", "u_box_lo"]
-    live[1] = 7.0  # edited in place: written again
-    effect._set(prog, {"u_box_lo": live})
-    assert prog.log[-1] == ("u_box_lo", live.astype(np.float32).tobytes())
-    other = np.zeros(8)
-    effect._set(prog, {"u_veh_lo": other})
-    effect._set(prog, {"u_veh_lo": frozen})  # back to the frozen array after another value: written
-    assert [n for n, _ in prog.log] == ["u_veh_lo", "u_box_lo", "u_box_lo", "u_veh_lo", "u_veh_lo"]
-    assert prog.log[-1][1] == frozen.astype(np.float32).tobytes()
-    # Another effect drawing with the same program shares its cache; a name others may also write (the frame's
-    # light count) is written every time.
-    second = RainfallEffect.__new__(RainfallEffect)
-    second._set(prog, {"u_veh_lo": frozen, "u_light_count": 3})
-    effect._set(prog, {"u_light_count": 3})
-    assert [n for n, _ in prog.log[5:]] == ["u_light_count", "u_light_count"]
+    effect.sim = RainfallSim(5000, seed=3)
+    effect._occ_geom = {"fine": (0.0, 1.0, 0.0, 1.0), "coarse": (0.0, 1.0, 0.0, 1.0)}
+    effect._road_extent = (1.0, 1.0)
+    for trial in range(40):
+        pos = (rng.uniform(-6, 6), rng.uniform(0.5, 9.0), rng.uniform(-3000, 3000))
+        upd = effect.sim.advance(rain.input(0.1 + trial / 7.0, pos=pos, wind=tuple(rng.uniform(-20, 20, 3)),
+                                            forward=rng.standard_normal(3), container_m=rng.uniform(10, 120)))
+        effect.sim.wind_integral = rng.uniform(-5000, 5000, 3)
+        upd.wind_integral_m = effect.sim.wind_integral.copy()
+        shift = float(rng.choice([0.0, 1200.0, -2400.0]))
+        want = effect.drop_uniforms(upd, shift, 30.0)
+        for name, value in box_pairs(upd.boxes, upd.wind_integral_m, shift):
+            assert value == _as_bytes(want[name]), (name, trial)
+        splash = effect.splash_uniforms(upd, shift)
+        for name, value in splash_box_pairs(upd.boxes, SPLASH_LAYER, shift):
+            assert _as_bytes(value) == _as_bytes(splash[name]), (name, trial)
+    vehicles = _fleet(rng, n=11)
+    got = dict(vehicle_uniform_pairs(vehicles, 1200.0, 40.0))
+    for name, value in vehicle_uniforms(vehicles, 1200.0, 40.0).items():
+        assert _as_bytes(got[name]) == _as_bytes(value), name
+
+
+def _uniform_bytes(prog, name):
+    uniform = prog.get(name, None)
+    return None if uniform is None else uniform.read()
+
+
+def _check_programs(effect, rc):
+    """Every uniform the effect owns holds, in both programs, what the dict forms say for this frame."""
+    upd = effect.last_update
+    s = effect._settings(rc.frame)
+    lights = effect._lights(rc, upd.boxes)
+    common = effect.drop_uniforms(upd, rc.shift_z, float(rc.camera_position[2]))
+    common.update({"u_viewport": tuple(float(v) for v in rc.size),
+                   "u_focal_px": float(rc.projection[1, 1]) * rc.size[1] / 2.0,
+                   "u_brightness": float(s.rainfall.streak_brightness),
+                   "u_light_pos": lights[0], "u_light_dir": lights[1], "u_light_color": lights[2],
+                   "u_light_count": lights[3]})
+    streak = dict(common, u_cam_vel=tuple(effect.camera_velocity_m_s), u_exposure_s=float(s.camera.exposure_s),
+                  u_near=float(rc.frame.camera.near_m), u_shape_area=effect._shape_area,
+                  u_shape_width=effect._shape_width)
+    splash = dict(common, **effect.splash_uniforms(upd, rc.shift_z))
+    checked = 0
+    for prog, values in ((effect.streak_prog, streak), (effect.splash_prog, splash)):
+        for name, value in values.items():
+            if name == "u_seed_key" or name == "u_splash_key" or name == "u_splash_count" or name == "u_epoch":
+                want = struct.pack("=I", value)
+            else:
+                want = _as_bytes(value)
+            got = _uniform_bytes(prog, name)
+            if got is not None:
+                assert got[:len(want)] == want, name
+                checked += 1
+    assert checked > 60
+    return lights[3] < rc.lights[3]
+
+
+def test_programs_hold_this_frames_uniforms_through_live_changes(gl_ctx, shaders, rain):
+    """The uniform cache never leaves a stale value: after every frame both programs hold what the dict forms
+    give, through a container resize, a camera switch, the rain off and on, and a second effect drawing with
+    the same programs (another seed)."""
+    s = rain.settings(rate=12.0, mode="driver", budget=3000, hour=22.0, container_m=20.0)
+    scene, effect = rain.scene(gl_ctx, shaders, s, seed=4)
+    culled = []  # frames where some lights did not reach the boxes: their filtered list differs from the frame's
+    other_settings = rain.settings(rate=3.0, mode="chase", budget=2000, container_m=25.0)
+    other, other_effect = rain.scene(gl_ctx, shaders, other_settings, seed=9)
+    assert other_effect.streak_prog is effect.streak_prog  # one shader library: shared programs
+    try:
+        changes = [lambda: None, lambda: setattr(s.rainfall, "container_m", 70.0),
+                   lambda: setattr(s.camera, "mode", "chase"), lambda: setattr(s.rainfall, "enabled", False),
+                   lambda: setattr(s.rainfall, "enabled", True), lambda: setattr(s.rainfall, "density_scale", 2.0)]
+        for change in changes:
+            change()
+            for _ in range(2):
+                scene.step(1.0 / 30.0)
+                frame = scene.render()
+            if s.rainfall.enabled:
+                culled.append(_check_programs(effect, scene.renderer.render_context(frame)))
+            other.step(1.0 / 30.0)
+            other_frame = other.render()
+            _check_programs(other_effect, other.renderer.render_context(other_frame))
+        assert any(culled)
+    finally:
+        other.release()
+        scene.release()
