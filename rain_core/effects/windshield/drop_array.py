@@ -75,6 +75,8 @@ class KernelScratch:
 class DropArray:
     """The drops of ``WindshieldSim`` as rows of one array (see the module docstring)."""
 
+    version = 0  # (the class's: a simulation pickled before it counted starts from 0)
+
     def _init_drops(self) -> None:
         self._n = 0
         self._buf = np.zeros((512, _COLS))
