@@ -79,7 +79,8 @@ class StreetCollider:
         order = np.argsort(solids.circles[:, 1])
         self._circles = solids.circles[order]
         self._z = self._circles[:, 1]
-        self._window: tuple[float, np.ndarray] | None = None  # (z m it was made at, circles) of _nearby_circles
+        # (z m it was made at, circles, their least |x| − radius m) of _nearby
+        self._window: tuple[float, np.ndarray, float] | None = None
 
     def wall_x(self, x: float, z: float) -> float:
         """|x| (m) of the wall on the side of x at z (m, any world z)."""
@@ -97,9 +98,14 @@ class StreetCollider:
         """The circles within REACH_M + CACHE_SLACK_M along z of ``z`` (m), in its period. A car's sub-steps ask
         about nearly the same z: the last window is kept while z stays within CACHE_SLACK_M of where it was
         made (a circle further than REACH_M cannot touch a car, so the wider set gives the same contacts)."""
+        return self._nearby(z)[0]
+
+    def _nearby(self, z: float) -> tuple[np.ndarray, float]:
+        """(``_nearby_circles(z)``, the least |x| − radius (m) among them: how far across x the nearest one's edge
+        lies from the street's centre line; inf without circles)."""
         cached = self._window
         if cached is not None and abs(z - cached[0]) <= CACHE_SLACK_M:
-            return cached[1]
+            return cached[1], cached[2]
         zz = z % layout.PERIOD_M
         reach = REACH_M + CACHE_SLACK_M
         out = []
@@ -110,8 +116,9 @@ class StreetCollider:
                 c[:, 1] += shift + (z - zz)
                 out.append(c)
         circles = np.concatenate(out) if out else np.zeros((0, 3))
-        self._window = (z, circles)
-        return circles
+        inner = float((np.abs(circles[:, 0]) - circles[:, 2]).min()) if len(circles) else math.inf
+        self._window = (z, circles, inner)
+        return circles, inner
 
     def resolve(self, car) -> bool:
         """Push ``car`` (rain_core.vehicles.Vehicle) out of whatever it overlaps and take the speed the contact
@@ -122,7 +129,8 @@ class StreetCollider:
         for _ in range(3):  # a corner can touch a wall and a post at once: a few passes settle it
             contact = self._deepest(car, half_l, half_w)
             if contact is None:
-                break
+                # Nothing touches at this pose, the walls included (_deepest starts from them): nothing to add.
+                return touched
             depth, normal = contact
             car.position[0] += normal[0] * depth
             car.position[2] += normal[1] * depth
@@ -161,12 +169,18 @@ class StreetCollider:
         # Walls: the footprint's corners beyond |x| = wall.
         best = self._wall_contact(car, half_l, half_w)
         # Circles: the nearest point of the footprint (in the car's frame) to each centre.
-        circles = self._nearby_circles(pz)
+        circles, inner = self._nearby(pz)
         if len(circles):
+            bound = math.hypot(half_l, half_w) + 1e-6
+            # Every circle's edge lies further across x than the footprint's bounding circle reaches (by a mm, far
+            # beyond rounding): the test below would find none, without its arrays (a car in its lane, posts on
+            # the sidewalks: nearly every sub-step).
+            if inner - abs(px) > bound + 1e-3:
+                return best
             dx, dz = circles[:, 0] - px, circles[:, 1] - pz
             # No circle reaches the footprint's bounding circle (radius hypot(half_l, half_w), with a margin for
             # rounding): no contact, without the footprint's nearest points (most sub-steps, far from posts).
-            reach = circles[:, 2] + (math.hypot(half_l, half_w) + 1e-6)
+            reach = circles[:, 2] + bound
             if not (dx * dx + dz * dz < reach * reach).any():
                 return best
             lf = np.minimum(np.maximum(dx * fx + dz * fz, -half_l), half_l)  # np.clip, without its wrapper

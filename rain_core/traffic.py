@@ -119,13 +119,20 @@ class Autopilot:
         v = car.speed_m_s
         lane = self.lane_index
         d = _lane_direction(lane)
-        lane_right = np.array([-d[2], 0.0, d[0]])  # right of the lane direction (d rotated clockwise)
-        rear = car.rear_axle()
         # Pure pursuit (Coulter 1992): aim the rear axle at a point on the (wandering) lane line ahead.
         lookahead = max(self.min_lookahead_m, self.lookahead_s * abs(v))
-        lane_point = np.array([layout.LANE_CENTRES_X[lane], 0.0, rear[2]])
-        target = lane_point + d * lookahead + lane_right * self.lateral_target_m()
-        w = target - rear
+        # w = lane point (lane x, 0, rear z) + d·lookahead + (right of d)·lateral − rear axle, with right of d =
+        # (−d_z, 0, d_x) and rear axle = position − forward·wheelbase/2: the arrays' operations on scalars, in
+        # their order (the same bits); the dot products and the norm stay NumPy's.
+        d0, d1, d2 = d.tolist()
+        lateral = self.lateral_target_m()
+        half = spec.wheelbase_m / 2.0
+        yaw = car.yaw
+        p0, p1, p2 = car.position.tolist()
+        rear0, rear1, rear2 = p0 - -math.sin(yaw) * half, p1 - 0.0 * half, p2 - -math.cos(yaw) * half
+        w = np.array([(layout.LANE_CENTRES_X[lane] + d0 * lookahead) + -d2 * lateral - rear0,
+                      (0.0 + d1 * lookahead) + 0.0 * lateral - rear1,
+                      (rear2 + d2 * lookahead) + d0 * lateral - rear2])
         fwd = car.forward()
         left = -car.right()
         alpha = math.atan2(float(w @ left), float(w @ fwd))
@@ -283,8 +290,13 @@ class Traffic:
         members = [self._lane_members(lane, _lane_direction(lane)) for lane in range(len(layout.LANE_CENTRES_X))]
         accels = []
         for v, lane, desired in zip(self.vehicles, self.lanes, self.desired_speeds_m_s, strict=True):
-            s = float(v.position @ _lane_direction(lane))
-            gap, lead_speed = _leader(s, v.spec.length_m / 2.0, [m[1:] for m in members[lane] if m[0] is not v])
+            others = []
+            for m in members[lane]:  # v is among its lane's members, with its s = position · lane direction
+                if m[0] is v:
+                    s = m[1]
+                else:
+                    others.append(m[1:])
+            gap, lead_speed = _leader(s, v.spec.length_m / 2.0, others)
             accels.append(idm_accel(v.speed_m_s, desired, gap, v.speed_m_s - lead_speed, v.spec.max_accel_m_s2,
                                     v.spec.max_brake_m_s2))
         for v, a in zip(self.vehicles, accels, strict=True):

@@ -16,6 +16,7 @@ ring of that length when it looks for the vehicle ahead.
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 
 import numpy as np
@@ -164,6 +165,9 @@ def _forward(yaw: float) -> np.ndarray:
     return np.array([-math.sin(yaw), 0.0, -math.cos(yaw)])
 
 
+_PACK_YAW = struct.Struct("d").pack
+
+
 class Vehicle:
     """A vehicle on the road: spec, pose and motion. See the module docstring for frames and signs.
 
@@ -173,6 +177,12 @@ class Vehicle:
     color: linear RGB body colour. odometer_m: distance rolled (m, signed), e.g. to spin the wheels.
     previous_wheel_contacts: (4, 3) world contacts at the start of the last step (for sweeping wheel paths).
     """
+
+    # (pose key, spec, value) of what is derived from the pose alone and asked many times a frame (the step, the
+    # ripples, the spray, the renderer's passes): kept, read-only, until the pose's bits or the spec change.
+    _contacts_cache: tuple | None = None
+    _model_cache: tuple | None = None
+    _rotation_cache: tuple | None = None  # (yaw bits, to_world's transposed rotation)
 
     def __init__(self, spec: VehicleSpec = CAR_SPEC, position=None, yaw: float = 0.0, speed_m_s: float = 0.0,
                  color=(0.35, 0.02, 0.02)):
@@ -198,16 +208,35 @@ class Vehicle:
         """(3,) unit vector to the vehicle's right (world)."""
         return np.array([math.cos(self.yaw), 0.0, -math.sin(self.yaw)])
 
+    def _pose_key(self) -> bytes:
+        """The pose's exact bits (position, yaw; a −0.0 differs from a 0.0 here): the position is mutated in place
+        (collisions, the period shift), so a cache compares values, not the array."""
+        return self.position.tobytes() + _PACK_YAW(self.yaw)
+
     def model_matrix(self) -> np.ndarray:
-        """(4, 4) float64 local→world transform (rotation about +Y by yaw, then translation to position)."""
+        """(4, 4) float64 local→world transform (rotation about +Y by yaw, then translation to position);
+        read-only (kept while the pose stays: copy it to change it)."""
+        key = self._pose_key()
+        cached = self._model_cache
+        if cached is not None and cached[0] == key:
+            return cached[1]
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         x, y, z = (float(v) for v in self.position)
-        return np.array([[c, 0.0, s, x], [0.0, 1.0, 0.0, y], [-s, 0.0, c, z], [0.0, 0.0, 0.0, 1.0]])
+        model = np.array([[c, 0.0, s, x], [0.0, 1.0, 0.0, y], [-s, 0.0, c, z], [0.0, 0.0, 0.0, 1.0]])
+        model.flags.writeable = False
+        self._model_cache = (key, model)
+        return model
 
     def to_world(self, points_local) -> np.ndarray:
         """Local-frame points (n, 3) m → world (n, 3) m."""
-        c, s = math.cos(self.yaw), math.sin(self.yaw)  # model_matrix's rotation, without the 4×4 per call
-        rotation_t = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+        yaw = _PACK_YAW(self.yaw)
+        cached = self._rotation_cache
+        if cached is not None and cached[0] == yaw:  # the traffic's yaw stays: its rotation is made once
+            rotation_t = cached[1]
+        else:
+            c, s = math.cos(self.yaw), math.sin(self.yaw)  # model_matrix's rotation, without the 4×4 per call
+            rotation_t = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+            self._rotation_cache = (yaw, rotation_t)
         return np.asarray(points_local, dtype=np.float64) @ rotation_t + self.position
 
     def rear_axle(self) -> np.ndarray:
@@ -236,8 +265,16 @@ class Vehicle:
         return np.array([fx * self.speed_m_s + w * rel_z, 0.0 * self.speed_m_s, fz * self.speed_m_s - w * rel_x])
 
     def wheel_contacts(self) -> np.ndarray:
-        """(4, 3) world contact points (m), order FL, FR, RL, RR, on the road plane y = 0."""
-        return self.to_world(_contacts_local(self.spec))
+        """(4, 3) world contact points (m), order FL, FR, RL, RR, on the road plane y = 0; read-only (kept while
+        the pose and the spec stay)."""
+        key = self._pose_key()
+        cached = self._contacts_cache
+        if cached is not None and cached[0] == key and cached[1] is self.spec:
+            return cached[2]
+        contacts = self.to_world(_contacts_local(self.spec))
+        contacts.flags.writeable = False
+        self._contacts_cache = (key, self.spec, contacts)
+        return contacts
 
     def wheel_speeds(self) -> np.ndarray:
         """(4,) ground speed of each contact point (m/s), order FL, FR, RL, RR; negative while reversing.

@@ -224,6 +224,31 @@ def test_contacts_with_the_bounding_circle_early_out_are_the_full_tests(collider
     assert 300 < touching < 2900  # both outcomes are exercised
 
 
+def test_contacts_with_the_across_x_early_out_are_the_full_tests(collider):
+    """_deepest also skips the circles when every nearby one lies further across x than the footprint reaches
+    (a car in its lane): over poses across the whole street (lanes, kerbs, sidewalks; along the posts and past the
+    window's slack), the same contacts as the full test, with the early-out taken and not taken."""
+    rng = np.random.default_rng(4)
+    car = EgoCar()
+    half_l, half_w = car.spec.length_m / 2.0, car.spec.width_m / 2.0
+    bound = math.hypot(half_l, half_w) + 1e-6
+    taken = not_taken = 0
+    z = float(collider._circles[rng.integers(len(collider._circles))][1])
+    for _ in range(3000):
+        z += rng.uniform(-0.5, 1.5)  # mostly onwards, so the window of nearby circles is kept and made again
+        car.position = np.array([rng.uniform(-11.0, 11.0), 0.0, z])
+        car.yaw, car.speed_m_s = rng.uniform(-math.pi, math.pi), rng.uniform(-5.0, 30.0)
+        want = _deepest_by_nearest_points(collider, car, half_l, half_w)
+        assert collider._deepest(car, half_l, half_w) == want
+        circles, inner = collider._nearby(z)
+        assert inner == (float((np.abs(circles[:, 0]) - circles[:, 2]).min()) if len(circles) else math.inf)
+        if inner - abs(car.position[0]) > bound + 1e-3:
+            taken += 1
+        else:
+            not_taken += 1
+    assert taken > 300 and not_taken > 300
+
+
 def test_kerb_crossings_count_wheels_that_changed_side():
     from rain_core.collision import kerb_crossings
 

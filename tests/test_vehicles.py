@@ -385,3 +385,71 @@ def test_spec_validation():
         VehicleSpec("bus", 10, 2.5, 3, 6, 2, 0.5, 0.3, 0.5, 25, 1, 5)
     with pytest.raises(ValueError):
         VehicleSpec("car", 4, 1.8, 1.4, 5.0, 1.5, 0.3, 0.2, 0.5, 50, 3, 9)  # wheelbase longer than the car
+
+
+def test_pose_caches_follow_every_change_of_the_pose():
+    """wheel_contacts and model_matrix are kept while the pose's bits stay: after a step, an in-place move of the
+    position (a collision push, the period shift), a new yaw (−0.0 after 0.0 included) or a new spec, each equals
+    a fresh computation, bit for bit, and is read-only."""
+    from rain_core.vehicles import _contacts_local
+
+    def fresh(car):
+        c, s = math.cos(car.yaw), math.sin(car.yaw)
+        x, y, z = (float(v) for v in car.position)
+        model = np.array([[c, 0.0, s, x], [0.0, 1.0, 0.0, y], [-s, 0.0, c, z], [0.0, 0.0, 0.0, 1.0]])
+        return car.to_world(_contacts_local(car.spec)), model
+
+    def check(car):
+        contacts, model = fresh(car)
+        for _ in range(2):  # made, then kept
+            got_c, got_m = car.wheel_contacts(), car.model_matrix()
+            assert got_c.tobytes() == contacts.tobytes() and got_m.tobytes() == model.tobytes()
+            assert not got_c.flags.writeable and not got_m.flags.writeable
+
+    car = EgoCar(position=(1.75, 0.0, 10.0), speed_m_s=20.0)
+    check(car)
+    car.step(1 / 30, 0.5, 0.0, 0.3)
+    check(car)
+    car.position[0] += 0.25  # in place, as a collision pushes
+    check(car)
+    car._shift_z(-400.0)
+    check(car)
+    car.yaw = 0.0
+    check(car)
+    car.yaw = -0.0
+    assert car.model_matrix()[0, 2] == 0.0 and math.copysign(1.0, car.model_matrix()[0, 2]) == -1.0
+    check(car)
+    car.spec = TRUCK_SPEC
+    check(car)
+    other = Vehicle(position=(5.25, 0.0, 3.0), yaw=math.pi)
+    check(other)
+
+
+def test_autopilot_steering_in_scalars_is_the_array_formula():
+    """Autopilot.controls builds the pursuit vector in scalars: over random poses, lanes and times the steering
+    equals the array formula's (lane point + d·lookahead + right·lateral − rear axle), bit for bit."""
+    from rain_core.traffic import _lane_direction
+
+    rng = np.random.default_rng(9)
+    compared = 0
+    for _ in range(400):
+        lane = int(rng.integers(4))
+        pilot = Autopilot(lane_index=lane, target_speed_m_s=20.0, seed=int(rng.integers(100)))
+        car = EgoCar(position=(rng.uniform(-9.0, 9.0), 0.0, rng.uniform(-500.0, 500.0)),
+                     yaw=rng.uniform(-math.pi, math.pi), speed_m_s=rng.uniform(0.0, 40.0))
+        dt = rng.uniform(0.0, 0.1)
+        _, _, steer = pilot.controls(car, dt)
+        d = _lane_direction(lane)
+        lane_right = np.array([-d[2], 0.0, d[0]])
+        rear = car.rear_axle()
+        lookahead = max(pilot.min_lookahead_m, pilot.lookahead_s * abs(car.speed_m_s))
+        target = np.array([layout.LANE_CENTRES_X[lane], 0.0, rear[2]]) + d * lookahead \
+            + lane_right * pilot.lateral_target_m()
+        w = target - rear
+        alpha = math.atan2(float(w @ -car.right()), float(w @ car.forward()))
+        delta = math.atan(2.0 * car.spec.wheelbase_m * math.sin(alpha) / max(float(np.linalg.norm(w)), 1e-6))
+        want = min(max(delta / car.spec.max_steer_at(car.speed_m_s), -1.0), 1.0)
+        if Autopilot(lane_index=lane)._recover(car, car.forward(), alpha) is None:  # not backing off a wall
+            assert steer == want
+            compared += 1
+    assert compared > 100
