@@ -9,6 +9,7 @@ nothing at all happens, and the effect is idle (no draw) once every roof has dra
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import moderngl
@@ -28,7 +29,7 @@ from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import owned_uniforms, set_uniform
+from rain_core.gfx.uniforms import owned_uniforms
 from rain_core.settings import DripsSection
 
 SLOTS = 12  # drops drawn per site: the hanging one and the last 11 released
@@ -71,6 +72,7 @@ class DripsEffect(Effect):
         self._prog: moderngl.Program | None = None
         self._vao: moderngl.VertexArray | None = None
         self._ranges: list[tuple[int, int, float]] = []
+        self._sites_z: tuple | None = None  # (sites, their z as a list) for _visible_ranges
         self.landed = 0  # drops that reached standing-water-capable ground in the last update
         self._seen_s = 0.0  # time of the last frame observed (s)
 
@@ -112,14 +114,17 @@ class DripsEffect(Effect):
 
     def _visible_ranges(self, camera_z: float, reach_m: float) -> list[tuple[int, int, float]]:
         """(first, count, world z offset of the tile) of the sites within reach_m (m) of camera_z along z."""
-        z = self.sites.z
+        sites_z = self._sites_z
+        if sites_z is None or sites_z[0] is not self.sites:
+            sites_z = self._sites_z = (self.sites, self.sites.z.tolist())
+        z = sites_z[1]  # sorted: bisect gives np.searchsorted's indices without its array conversions
         period = layout.PERIOD_M
         base = math.floor(camera_z / period) * period
         offsets = (-period, 0.0, period)
         bounds = []
         for offset in offsets:
             bounds += (camera_z - reach_m - base - offset, camera_z + reach_m - base - offset)
-        ends = np.searchsorted(z, bounds).tolist()  # one call for the three tiles
+        ends = [bisect.bisect_left(z, b) for b in bounds]
         out = []
         for k, offset in enumerate(offsets):
             a, b = ends[2 * k], ends[2 * k + 1]
@@ -222,9 +227,10 @@ class DripsEffect(Effect):
         rc.hdr.fbo.depth_mask = False  # test against the scene's depth, never write it
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
-        for first, count, z_base in self._ranges:  # changes between draws: always written
-            set_uniform(prog, "u_first", first)
-            set_uniform(prog, "u_z_offset", float(z_base - rc.shift_z))
+        owned = owned_uniforms(prog)
+        for first, count, z_base in self._ranges:  # written where they differ from the last draw's (one range: rarely)
+            owned.set("u_first", first)
+            owned.set("u_z_offset", float(z_base - rc.shift_z))
             self._vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=count * SLOTS)
         ctx.blend_func = moderngl.DEFAULT_BLENDING
         ctx.disable(moderngl.BLEND)

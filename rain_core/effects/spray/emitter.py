@@ -231,7 +231,8 @@ class SprayEmitter:
 
     def alive_until(self) -> float:
         """Effect-clock time (s since epoch) when the last parcel in flight dies."""
-        return max((r.last_death() for r in self.rings), default=-math.inf)
+        drops, mist = self.rings  # (always two; no generator for the per-frame asks)
+        return max(drops.last_death(), mist.last_death())
 
     def clock(self, time_s: float) -> float:
         """Frame time (s) → the effect clock (s since the first frame), what the shader's u_clock holds."""

@@ -64,3 +64,49 @@ def test_dry_day_costs_nothing(gl_ctx):
     finally:
         scene.release()
         gl_ctx.detect_framebuffer(0).use()
+
+
+def test_visible_ranges_follow_the_sites():
+    """The sites' z list (for bisect) is made again when the sites change: the ranges are np.searchsorted's."""
+    from types import SimpleNamespace
+
+    from rain_core import layout
+    from rain_core.effects.drips import DripsEffect
+
+    effect = DripsEffect(None, seed=1)
+
+    def expected(z, camera_z, reach):
+        base = np.floor(camera_z / layout.PERIOD_M) * layout.PERIOD_M
+        out = []
+        for offset in (-layout.PERIOD_M, 0.0, layout.PERIOD_M):
+            a, b = np.searchsorted(z, [camera_z - reach - base - offset, camera_z + reach - base - offset])
+            if b > a:
+                out.append((int(a), int(b - a), base + offset))
+        return out
+
+    for z in (np.array([1.0, 5.0, 300.0, 1195.0]), np.array([2.0, 250.0, 310.0, 320.0, 900.0])):
+        effect.sites = SimpleNamespace(z=z)
+        for camera_z in (0.0, 305.0, 1199.0, -400.0):
+            assert effect._visible_ranges(camera_z, 60.0) == expected(z, camera_z, 60.0)
+
+
+def test_range_uniforms_are_the_last_draws(gl_ctx):
+    """u_first and u_z_offset are written only where they differ from the last draw's: after two ranges, one
+    range with the first's values must still be written."""
+    from rain_core import layout
+
+    scene, effect = _scene(gl_ctx)
+    cam = look_at(EYE, TARGET, fov_y_deg=60.0)
+    plans = [[(0, 4, 0.0), (8, 4, 1200.0)], [(0, 4, 0.0)], [(8, 4, 1200.0)], [(8, 4, 1200.0)], [(3, 2, -1200.0)]]
+    try:
+        for plan in plans:
+            effect._visible_ranges = lambda camera_z, reach_m, plan=plan: list(plan)
+            scene.step(1 / 30)
+            scene.render(cam)
+            first, _, z_base = plan[-1]
+            assert effect._prog["u_first"].value == first
+            shift_z = np.floor(EYE[2] / layout.PERIOD_M) * layout.PERIOD_M  # the renderer's
+            assert effect._prog["u_z_offset"].value == np.float32(z_base - shift_z)
+    finally:
+        scene.release()
+        gl_ctx.detect_framebuffer(0).use()
