@@ -158,7 +158,7 @@ class WindshieldEffect(WaterPass, Effect):
         self._dt = 0.0
         self._token = object()  # names this instance in the static uniform keys (update_for)
         self._blades_memo = None  # (sim.blades, their u_blade bytes)
-        self._inputs_memo = None  # (what the last GlassInputs was made of, it): inputs_for
+        self._inputs_memo = None  # (what the last GlassInputs was made of, it, its settings' types): inputs_for
         self._head_memo = (None, 0.0)  # (inputs, the head wind over the glass that dries the film, m/s)
 
     # --- resources ------------------------------------------------------------------------------------------
@@ -240,15 +240,19 @@ class WindshieldEffect(WaterPass, Effect):
         memo = self._inputs_memo
         if memo is not None and memo[0] == key:
             return memo[1]
-        inputs = GlassInputs(
-            rate_mm_h=frame.rain_rate_mm_h,
-            car_velocity_m_s=velocity,
-            wind_m_s=wind,
-            car_rotation=rotation,
-            sheltered=sheltered,
-            **kw,
-        )
-        self._inputs_memo = (key, inputs)
+        types = tuple(map(type, kw.values()))  # (1 and True are equal, not checked alike)
+        if memo is not None and memo[0][5:] == key[5:] and memo[2] == types:  # the same settings: only the motion
+            inputs = memo[1].moved(frame.rain_rate_mm_h, velocity, wind, rotation, sheltered)
+        else:
+            inputs = GlassInputs(
+                rate_mm_h=frame.rain_rate_mm_h,
+                car_velocity_m_s=velocity,
+                wind_m_s=wind,
+                car_rotation=rotation,
+                sheltered=sheltered,
+                **kw,
+            )
+        self._inputs_memo = (key, inputs, types)
         return inputs
 
     def catch_up(self, frame, dt_s: float) -> None:

@@ -96,3 +96,58 @@ def test_the_blade_angles_kept_follow_the_wipers():
         assert sim.blade_angles() == want  # (asked twice a frame: the kept ones)
         seen.add(tuple(want))
     assert len(seen) > 20  # the blades moved
+
+
+def test_moved_inputs_are_the_constructors_and_are_checked():
+    import math
+
+    import pytest
+
+    from rain_core.effects.windshield import GlassInputs
+
+    base = GlassInputs.for_speed(50.0, 4.0, wiper_mode="low", drop_budget=3000, blade_wear=0.5)
+    yaw = 0.3
+    rot = np.array([[math.cos(yaw), 0.0, math.sin(yaw)], [0.0, 1.0, 0.0], [-math.sin(yaw), 0.0, math.cos(yaw)]])
+    vel, wind = np.array([-3.0, 0.0, -20.0]), [1.5, 0.0, -0.5]
+    moved = base.moved(6.0, vel, wind, rot, True)
+    made = GlassInputs(rate_mm_h=6.0, car_velocity_m_s=vel, wind_m_s=wind, car_rotation=rot, sheltered=True,
+                       **{k: getattr(base, k) for k in ("drop_scale", "drop_budget", "wiper_mode", "wiper_interval_s",
+                                                        "wiper_low_cpm", "wiper_high_cpm", "wiper_sensitivity",
+                                                        "blade_wear")})
+    for name in GlassInputs.__dataclass_fields__:
+        a, b = getattr(moved, name), getattr(made, name)
+        assert type(a) is type(b) and np.array_equal(a, b), name
+    assert not moved.car_velocity_m_s.flags.writeable and moved.car_velocity_m_s is not vel
+    assert base.car_velocity_m_s[2] < -13.0  # (the one it was made from is as it was)
+    for bad in [dict(rate_mm_h=-1.0), dict(car_velocity_m_s=[0.0, 0.0, 1e4]), dict(wind_m_s=[math.nan, 0.0, 0.0]),
+                dict(car_rotation=2.0 * rot), dict(sheltered="yes")]:
+        args = dict(rate_mm_h=6.0, car_velocity_m_s=vel, wind_m_s=wind, car_rotation=rot, sheltered=False) | bad
+        with pytest.raises(ValueError):
+            base.moved(**args)
+
+
+def test_the_inputs_of_a_moving_car_follow_the_settings_changed_live(gl_ctx, shaders):
+    from rain_core.scene import Scene
+
+    s = Settings()
+    s.rain.rate_mm_h = 8.0
+    s.wipers.mode = "low"
+    effect = WindshieldEffect(gl_ctx, s, seed=4, shaders=shaders)
+    scene = Scene(gl_ctx, (64, 36), s, seed=1, effects=[effect], gpu_timing=False)
+    scene.ego.speed_m_s = 20.0
+    scene.autopilot.target_speed_m_s = 20.0
+
+    def inputs():
+        scene.step(1 / 30)
+        return effect.inputs_for(scene.frame())
+
+    first, second = inputs(), inputs()
+    assert second is not first and second.wiper_mode == "low"  # made from the first (the car moved)
+    assert not np.array_equal(first.car_velocity_m_s, second.car_velocity_m_s) or first.rate_mm_h != 0
+    s.wipers.mode = "high"
+    s.windshield.drop_budget = 1234
+    third = inputs()
+    assert third.wiper_mode == "high" and third.drop_budget == 1234
+    s.wipers.blade_wear = 0.7
+    assert inputs().blade_wear == 0.7 and inputs().wiper_mode == "high"
+    scene.release()
