@@ -249,16 +249,25 @@ def light_candidates(lamps, vehicles, camera_z_m: float, lighting: Lighting, shi
         local, is_head, cd, color, cos_outer, cos_inner, range_m = _vehicle_table(vehicles)
         yaw = np.fromiter((v.yaw for v in vehicles), dtype=np.float64, count=n)
         centre = np.array([v.position for v in vehicles], dtype=np.float64).reshape(n, 3)
-        c, s_ = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+        cos, sin = np.cos(yaw), np.sin(yaw)
+        c, s_ = cos[:, None], sin[:, None]
         # Vehicle.model_matrix: rotation about +Y by yaw, [[c, 0, s], [0, 1, 0], [−s, 0, c]], then the position.
+        # Written into one array, not np.stack'ed (its Python-level wrapper cost a third of this function).
         lx, ly, lz = local[..., 0], local[..., 1], local[..., 2]
-        pos = np.stack([c * lx + s_ * lz + centre[:, None, 0], ly + centre[:, None, 1],
-                        -s_ * lx + c * lz + centre[:, None, 2]], axis=-1).reshape(4 * n, 3)
+        pos = np.empty((n, 4, 3))
+        pos[..., 0] = c * lx + s_ * lz + centre[:, None, 0]
+        pos[..., 1] = ly + centre[:, None, 1]
+        pos[..., 2] = -s_ * lx + c * lz + centre[:, None, 2]
+        pos = pos.reshape(4 * n, 3)
         pos[:, 2] -= shift_z
-        fwd = np.stack([-np.sin(yaw), np.zeros(n), -np.cos(yaw)], axis=1)  # Vehicle.forward()
+        fwd = np.empty((n, 3))  # Vehicle.forward(): (−sin, 0, −cos)
+        fwd[:, 0], fwd[:, 1], fwd[:, 2] = -sin, 0.0, -cos
         pitch_c, pitch_s = math.cos(HEADLIGHT_PITCH_RAD), math.sin(HEADLIGHT_PITCH_RAD)
         head_dir = fwd * pitch_c + np.array([0.0, pitch_s, 0.0])
-        dirs = np.stack([head_dir, head_dir, -fwd, -fwd], axis=1).reshape(4 * n, 3)
+        dirs = np.empty((n, 4, 3))
+        dirs[:, 0] = dirs[:, 1] = head_dir
+        dirs[:, 2] = dirs[:, 3] = -fwd
+        dirs = dirs.reshape(4 * n, 3)
         parts.append(LightSet(pos, dirs, cd, color, cos_outer, cos_inner, range_m, is_head))
     if not parts:
         return _kind(np.zeros((0, 3)), np.zeros((0, 3)), 0.0, (0.0, 0.0, 0.0), (-1.0, -1.0, 0.0), False)

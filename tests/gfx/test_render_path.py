@@ -88,6 +88,44 @@ def test_nearest_of_the_candidates_are_the_lights_of_the_frame(gl_ctx):
         scene.release()
 
 
+def _vehicle_lights_stacked(vehicles, shift_z):
+    """The vehicles' head and tail lights as light_candidates built them with np.stack (the twin)."""
+    import math
+
+    from rain_core.lighting import _vehicle_table
+    from rain_core.vehicles import HEADLIGHT_PITCH_RAD
+
+    n = len(vehicles)
+    local = _vehicle_table(vehicles)[0]
+    yaw = np.fromiter((v.yaw for v in vehicles), dtype=np.float64, count=n)
+    centre = np.array([v.position for v in vehicles], dtype=np.float64).reshape(n, 3)
+    c, s_ = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    lx, ly, lz = local[..., 0], local[..., 1], local[..., 2]
+    pos = np.stack([c * lx + s_ * lz + centre[:, None, 0], ly + centre[:, None, 1],
+                    -s_ * lx + c * lz + centre[:, None, 2]], axis=-1).reshape(4 * n, 3)
+    pos[:, 2] -= shift_z
+    fwd = np.stack([-np.sin(yaw), np.zeros(n), -np.cos(yaw)], axis=1)
+    head_dir = fwd * math.cos(HEADLIGHT_PITCH_RAD) + np.array([0.0, math.sin(HEADLIGHT_PITCH_RAD), 0.0])
+    return pos, np.stack([head_dir, head_dir, -fwd, -fwd], axis=1).reshape(4 * n, 3)
+
+
+def test_vehicle_lights_are_the_stacked_formulas_bit_for_bit(gl_ctx):
+    scene = _scene(gl_ctx, hour=12.0, traffic=9)
+    try:
+        rng = np.random.default_rng(11)
+        for _ in range(4):
+            scene.step(0.3)
+            frame = scene.frame()
+            for vehicle in frame.vehicles[1:]:
+                vehicle.yaw = float(rng.uniform(-np.pi, np.pi))  # every heading, not just along the street
+            shift = float(rng.choice([0.0, layout.PERIOD_M, -2.0 * layout.PERIOD_M]))
+            cand = light_candidates([], frame.vehicles, 0.0, frame.lighting, shift, layout.PERIOD_M, True)
+            pos, dirs = _vehicle_lights_stacked(frame.vehicles, shift)
+            assert cand.position.tobytes() == pos.tobytes() and cand.direction.tobytes() == dirs.tobytes()
+    finally:
+        scene.release()
+
+
 def test_lighting_of_an_hour_is_one_read_only_object():
     a, b = lighting_for_hour(12.0, 0.25), lighting_for_hour(12.0, 0.25)
     assert a is b and lighting_for_hour(12.0, 0.5) is not a
