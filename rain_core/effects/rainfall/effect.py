@@ -6,7 +6,10 @@ and the road's height map for the splash kinds (``units.RAINFALL_ROAD_HEIGHT``).
 
 from __future__ import annotations
 
+import functools
 import math
+import struct
+from array import array
 
 import moderngl
 import numpy as np
@@ -46,6 +49,18 @@ PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
 _LIGHT_NAMES = ("u_light_pos", "u_light_dir", "u_light_color", "u_light_count")
 
 
+@functools.cache
+def _light_struct(count: int) -> struct.Struct:
+    return struct.Struct(f"={4 * count}f")
+
+
+# The frame values rainfall/env.frag reads (common/sky.glsl, common/atmosphere.glsl) that rc.uniforms may hold; the
+# rest of what it reads comes from the frame's Lighting.
+_ENV_INPUTS = ("u_sun_dir", "u_sun_illum", "u_sky_zenith", "u_sky_horizon", "u_ground_albedo", "u_extinction_per_m",
+               "u_airlight", "u_medium_extinction_per_m", "u_airlight_sun", "u_airlight_sun_dir", "u_phase_g",
+               "u_phase_back_g", "u_phase_back_weight")
+
+
 def _f32(values) -> bytes:
     return np.ascontiguousarray(values, dtype=np.float32).tobytes()
 
@@ -83,6 +98,7 @@ class RainfallEffect(Effect):
         self._env_tex.repeat_x, self._env_tex.repeat_y = True, False
         self._env_fbo = ctx.framebuffer(color_attachments=[self._env_tex])
         self._optics_set = False  # the drop optics' quadrature (optics.py): constant, written once
+        self._env_key: tuple | None = None  # what the environment map was last drawn for (_draw_environment)
         self._splash_vao = ctx.vertex_array(self.splash_prog, [])
         self.sim: RainfallSim | None = None
         self._world = None
@@ -95,6 +111,7 @@ class RainfallEffect(Effect):
         self._prev_cam: tuple[np.ndarray, float] | None = None
         self.camera_velocity_m_s = np.zeros(3)
         self.last_update: RainUpdate | None = None
+        self._prepared: tuple | None = None  # (rc, its lights, the update, _lights, _frame_pairs) made in update
         self._constants: tuple | None = None  # (its key, the uniforms that rarely change: _constant_pairs)
         area, width = drop_shape_factors(SHAPE_DIAMETERS_MM)
         self._shape_area = area.astype(np.float32)
@@ -226,6 +243,11 @@ class RainfallEffect(Effect):
         if frame.time_s > (self._prev_cam[1] if self._prev_cam is not None else -math.inf):
             self._prev_cam = (np.asarray(frame.camera.position, dtype=np.float64).copy(), frame.time_s)
         self.last_update = upd
+        self._prepared = None
+        if upd.rate_mm_h > 0.0 and getattr(rc, "lights", None) is not None:
+            # The transparent pass's lights and uniforms, made now: this context draws it, and here the CPU is
+            # not shared with the rasteriser still drawing the passes before (llvmpipe: ~3x the time there).
+            self._prepared = (rc, rc.lights, upd, self._lights(rc, upd.boxes), self._frame_pairs(upd, rc, s))
 
     def streak_camera(self, rc) -> StreakCamera:
         """The camera as the streak shader sees it this frame (for the NumPy twin)."""
@@ -240,16 +262,24 @@ class RainfallEffect(Effect):
         if count == 0:
             return rc.lights
         size = len(pos_b)
-        pos = np.frombuffer(pos_b, np.float32, count=4 * count).reshape(count, 4)
         lx, ly, lz = boxes.lo[-1].tolist()
         hx, hy, hz = boxes.hi[-1].tolist()
         shift_z = float(rc.shift_z)
-        p = pos[:, :3]
-        gap = np.maximum(np.array((lx, ly, lz - shift_z)) - p, p - np.array((hx, hy, hz - shift_z)))
-        np.maximum(gap, 0.0, out=gap)
-        r = pos[:, 3]
-        keep = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) < r * r)  # w < 0: a low beam
-        n = keep.size
+        lz, hz = lz - shift_z, hz - shift_z
+        # In floats (a few dozen lights; NumPy's many small calls cost more, cold, after the other passes): the
+        # gap from the box in float64, its squared length summed as NumPy's einsum sums three terms ((x, z) then
+        # y), against w² rounded to float32 as NumPy's float32 product (w < 0: a low beam).
+        vals = _light_struct(count).unpack_from(pos_b)
+        ranges = array("f", [w * w for w in vals[3::4]])
+        keep = []
+        for i, r2 in enumerate(ranges):
+            x, y, z = vals[4 * i: 4 * i + 3]
+            gx = max(lx - x, x - hx, 0.0)
+            gy = max(ly - y, y - hy, 0.0)
+            gz = max(lz - z, z - hz, 0.0)
+            if gx * gx + gz * gz + gy * gy < r2:
+                keep.append(i)
+        n = len(keep)
         if n == count:
             return rc.lights
         if n == 0 or keep[-1] == n - 1:  # the nearest n (pack_nearest sorts by distance): a prefix of each buffer
@@ -258,11 +288,19 @@ class RainfallEffect(Effect):
         # The three arrays packed in one pass (one gather, one tobytes), then cut into their three byte strings.
         arr = np.frombuffer(pos_b + dir_b + col_b, np.float32).reshape(3, -1, 4)
         packed = np.zeros_like(arr)
-        packed[:, : keep.size] = arr[:, keep]
+        packed[:, :n] = arr[:, keep]
         data = packed.tobytes()
-        return data[:size], data[size:2 * size], data[2 * size:], int(keep.size)
+        return data[:size], data[size:2 * size], data[2 * size:], n
 
     def _draw_environment(self, rc) -> None:
+        """Draw what a drop shows into the environment map, unless nothing it reads changed since it was drawn:
+        the lighting (one immutable object while the hour and the overcast stay) and the medium's uniforms."""
+        inputs = rc.uniforms
+        key = (rc.frame.lighting, tuple(inputs.get(name) for name in _ENV_INPUTS))
+        last = self._env_key
+        if last is not None and last[0] is key[0] and last[1] == key[1]:
+            return
+        self._env_key = key
         rc.set_frame_uniforms(self.env_prog)
         if not self._optics_set:
             set_uniforms(self.env_prog, optics_uniforms())
@@ -385,9 +423,12 @@ class RainfallEffect(Effect):
             return
         s = self._settings(rc.frame)
         ctx = rc.ctx
+        ready = self._prepared
+        if ready is not None and ready[0] is rc and ready[1] is rc.lights and ready[2] is upd:
+            lights, frame_pairs = ready[3], ready[4]
+        else:  # another context than update's (a test, a probe)
+            lights, frame_pairs = self._lights(rc, upd.boxes), self._frame_pairs(upd, rc, s)
         self._draw_environment(rc)
-        lights = self._lights(rc, upd.boxes)
-        frame_pairs = self._frame_pairs(upd, rc, s)
         self._env_tex.use(units.RAINFALL_ENV)
         self._bind_static()
         ctx.enable(moderngl.BLEND)

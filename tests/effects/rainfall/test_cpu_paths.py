@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import struct
 from types import SimpleNamespace
 
@@ -112,6 +113,33 @@ def test_lights_are_packed_as_each_buffer_alone():
         packed = np.zeros_like(arr)
         packed[:keep.size] = arr[:keep.size]
         assert data == packed.tobytes()
+
+
+def test_lights_that_reach_are_those_of_the_array_formula():
+    """_lights decides in floats, per light, what the array form decided (float64 gap, einsum, float32 w²),
+    lights near the box's faces and corners included; none, some or all reach."""
+    rng = np.random.default_rng(8)
+    boxes = layer_boxes(np.array([1.5, 1.2, 300.0]), np.array([0.1, -0.05, -1.0]), 40.0)
+    shift = 240.0
+    lo = boxes.lo[-1] - [0.0, 0.0, shift]
+    hi = boxes.hi[-1] - [0.0, 0.0, shift]
+    seen = set()
+    for trial in range(300):
+        count = int(rng.integers(1, 33))
+        pos = np.zeros((32, 4), np.float32)
+        pos[:count, :3] = rng.uniform(lo - 30.0, hi + 30.0, (count, 3))
+        pos[:count, 3] = rng.uniform(-30.0, 30.0, count) * (trial % 3)  # trial % 3 == 0: zero ranges, none reach
+        gap = np.maximum(np.maximum(lo - pos[:count, :3], pos[:count, :3] - hi), 0.0)
+        want = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) < pos[:count, 3] * pos[:count, 3])
+        cols = rng.uniform(0, 5, (32, 4)).astype(np.float32)
+        rc = SimpleNamespace(lights=(pos.tobytes(), cols.tobytes(), cols.tobytes(), count), shift_z=shift)
+        got = RainfallEffect._lights(None, rc, boxes)
+        assert got[3] == want.size
+        packed = np.zeros_like(pos)
+        packed[:want.size] = pos[want]
+        assert got[0] == (pos.tobytes() if want.size == count else packed.tobytes())
+        seen.add("none" if want.size == 0 else "all" if want.size == count else "some")
+    assert seen == {"none", "some", "all"}
 
 
 class _Uniform:
@@ -298,6 +326,75 @@ def test_programs_hold_this_frames_uniforms_through_live_changes(gl_ctx, shaders
             other_frame = other.render()
             _check_programs(other_effect, other.renderer.render_context(other_frame))
         assert any(culled)
+        # A pass drawn with another context than the update's (its own shift): made for it, not the update's.
+        rc = dataclasses.replace(scene.renderer.render_context(frame), shift_z=scene.renderer.render_context(
+            frame).shift_z + layout.PERIOD_M)
+        effect.render("transparent", rc)
+        _check_programs(effect, rc)
     finally:
         other.release()
         scene.release()
+
+
+def test_environment_map_is_redrawn_when_the_lighting_or_the_medium_changes(gl_ctx, shaders, rain):
+    """The drop's environment map is drawn only when what it reads changed; after an hour change (a new
+    lighting) and a rain rate change (another medium) it equals a map drawn afresh."""
+    from rain_core.scene import Scene
+
+    s = rain.settings(rate=8.0, mode="driver", budget=2000)
+    scene = Scene(gl_ctx, (64, 36), s, seed=1, gpu_timing=False)
+    effect = next(e for e in scene.effects if e.name == "rainfall")
+    try:
+        def fresh():
+            effect._env_key = None
+            scene.render()
+            return effect._env_tex.read()
+
+        scene.step(1.0 / 30.0)
+        scene.render()
+        before = effect._env_tex.read()
+        key = effect._env_key
+        scene.step(1.0 / 30.0)
+        scene.render()
+        assert effect._env_key is key  # nothing it reads changed: not drawn again
+        for change in (lambda: setattr(s.time_of_day, "hour", 17.5), lambda: setattr(s.rain, "rate_mm_h", 40.0)):
+            change()
+            for _ in range(3):
+                scene.step(1.0 / 30.0)
+                scene.render()
+            kept = effect._env_tex.read()
+            assert kept != before
+            assert kept == fresh()
+            before = kept
+    finally:
+        scene.release()
+
+
+def test_environment_key_holds_the_lighting_and_each_medium_uniform():
+    """_draw_environment draws again for a new lighting object or any medium value it reads; not for the
+    frame's other uniforms (the shadow's, which move every frame)."""
+    draws = []
+    effect = RainfallEffect.__new__(RainfallEffect)
+    effect._env_key, effect._optics_set, effect.env_prog = None, True, object()
+    effect.ctx = SimpleNamespace(disable=lambda flag: None)
+    effect._env_fbo = SimpleNamespace(use=lambda: None)
+    effect._env_vao = SimpleNamespace(render=lambda *a, **k: draws.append(1))
+    fbo = SimpleNamespace(use=lambda: None)
+    lighting = object()
+    uniforms = {"u_extinction_per_m": 1e-3, "u_airlight": (1.0, 1.0, 1.0), "u_shadow_matrix": b"0"}
+
+    def draw():
+        rc = SimpleNamespace(uniforms=dict(uniforms), frame=SimpleNamespace(lighting=lighting),
+                             set_frame_uniforms=lambda prog: None, hdr=SimpleNamespace(fbo=fbo))
+        effect._draw_environment(rc)
+        return len(draws)
+
+    assert draw() == 1 and draw() == 1
+    uniforms["u_shadow_matrix"] = b"1"
+    assert draw() == 1
+    uniforms["u_airlight"] = (1.0, 2.0, 1.0)
+    assert draw() == 2
+    uniforms["u_phase_g"] = 0.7  # a medium uniform appearing (the atmosphere switched on)
+    assert draw() == 3
+    lighting = object()  # another hour or overcast
+    assert draw() == 4 and draw() == 4
