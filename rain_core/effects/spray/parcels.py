@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rain_core import layout
+from rain_core import jit, layout
+from rain_core.effects.spray import kernels
 from rain_core.effects.spray.flight import flight_position, relax
 
 # Kinds of parcel (the shader's in_misc.x; +2 = fades out at the end of its life instead of hitting something).
@@ -62,6 +63,7 @@ class ParcelRing:
         self.birth = np.full(self.capacity, np.inf)
         self._scratch = np.zeros(0, PARTICLE_DTYPE)
         self._last_death = -math.inf
+        self._ranges = np.zeros((2, 2), dtype=np.int64)  # push_rows' slot ranges
 
     def scratch(self, n: int) -> np.ndarray:
         """A reusable record array of length n (grown when needed, never shrunk): where a frame's new records
@@ -79,10 +81,16 @@ class ParcelRing:
         if n > self.capacity:
             records, birth, death = records[-self.capacity:], birth[-self.capacity:], death[-self.capacity:]
             n = self.capacity
+        plain = records.dtype == PARTICLE_DTYPE and records.flags.c_contiguous
+        if plain and jit.active():  # the copies and the max in one call (kernels.push_rows), the same values
+            out = self._ranges
+            self.head, used, top = kernels.push_rows(as_floats(records), birth, death, self._floats, self.birth,
+                                                     self.death, self.head, out)
+            self._last_death = max(self._last_death, top)
+            return [(start, count) for start, count in out[:used].tolist()]
         self._last_death = max(self._last_death, float(death.max()))
         ranges = []
         start, done = self.head, 0
-        plain = records.dtype == PARTICLE_DTYPE and records.flags.c_contiguous
         src, dst = (as_floats(records), self._floats) if plain else (records, self.data)
         while done < n:
             count = min(n - done, self.capacity - start)

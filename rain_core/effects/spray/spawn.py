@@ -87,6 +87,7 @@ class SpawnBuffers:
         self.flight = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
         self.draws = np.empty(draws_needed(n))  # the compiled launches' random draws, and their offsets
         self.offs = np.zeros(7, dtype=np.int64)
+        self.q90 = np.zeros(2)  # the compiled settle's running percentiles (SprayEmitter._life_q90), in and out
         # The compiled filing's outputs: road landings, the kept records (as floats) and their birth and death.
         self.landings = np.empty((n, 4))
         self.record_floats = as_floats(self.records)
@@ -121,7 +122,7 @@ def _horizons(q90: list, life: np.ndarray, nd: int) -> tuple[float, float]:
     """Each ring's horizon (s): the running 90th percentile of its parcels' lives (``q90``, updated in place with
     this frame's droplets [:nd] and mist [nd:]), at least 50 ms."""
     out = [0.0, 0.0]
-    quantile = kernels.quantile_90 if jit.active() else quantile_90
+    quantile = quantile_90  # (the compiled path's horizons: kernels.settle_horizons)
     for ring, sl in ((0, slice(0, nd)), (1, slice(nd, len(life)))):
         if sl.stop > sl.start:
             q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile(life[sl]), 0.05)
@@ -210,9 +211,11 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
                               rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
     if compiled:
         cap = rng.uniform(*MIST_LIFE_S, nm) if nm else _NO_CAPS
-        kernels.settle(t_body if nd else _NO_CAPS, t_ground, cap, speed, nd, life, fate, growth, FATE_ROAD,
-                       FATE_BODY, FATE_AIR)
-        horizons = _horizons(em._life_q90, life, nd)
+        q90 = buf.q90
+        q90[0], q90[1] = em._life_q90
+        horizons = kernels.settle_horizons(t_body if nd else _NO_CAPS, t_ground, cap, speed, nd, life, fate, growth,
+                                           FATE_ROAD, FATE_BODY, FATE_AIR, q90)
+        em._life_q90[0], em._life_q90[1] = q90.tolist()
         _file_compiled(em, frame, geo, buf, nd, now, horizons, fate, life, mass, p0, v0, u, tau, birth, sigma0, growth,
                        d_mm, vi)
         return

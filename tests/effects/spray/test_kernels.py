@@ -200,3 +200,57 @@ def test_quantile_equals_the_twins():
         if n > 3:
             x[: n // 3] = x[0]  # ties
         assert kernels.quantile_90(x) == spawn.quantile_90(x) == pytest.approx(np.quantile(x, 0.9), rel=1e-15)
+
+
+@pytest.mark.parametrize("nd, nm", [(300, 40), (300, 0), (0, 25), (1, 1)])
+def test_settle_and_horizons_in_one_call_equal_the_three_calls(nd, nm):
+    """kernels.settle_horizons: kernels.settle, then spawn._horizons by kernels.quantile_90 (the path it replaces),
+    bit for bit — fates, lives, spread rates, the running percentiles and the horizons (a ring without parcels
+    keeps its percentile and gets 0)."""
+    from rain_core.effects.spray import parcels
+
+    rng = np.random.default_rng(9)
+    n = nd + nm
+    t_body, t_ground = rng.uniform(0.0, 2.0, nd), rng.uniform(0.0, 1.5, n)
+    cap, speed, growth = rng.uniform(0.5, 3.0, nm), rng.uniform(1.0, 30.0, n), rng.random(n)
+    fates = (parcels.FATE_ROAD, parcels.FATE_BODY, parcels.FATE_AIR)
+    out = []
+    for merged in (False, True):
+        life, fate, g = np.empty(n), np.empty(n, np.int64), growth.copy()
+        q90 = [0.7, 2.5]
+        if merged:
+            q = np.array(q90)
+            horizons = kernels.settle_horizons(t_body, t_ground, cap, speed, nd, life, fate, g, *fates, q)
+            q90 = q.tolist()
+        else:
+            kernels.settle(t_body, t_ground, cap, speed, nd, life, fate, g, *fates)
+            horizons = [0.0, 0.0]
+            for ring, sl in ((0, slice(0, nd)), (1, slice(nd, n))):
+                if sl.stop > sl.start:
+                    q90[ring] = 0.9 * q90[ring] + 0.1 * max(kernels.quantile_90(life[sl]), 0.05)
+                    horizons[ring] = max(q90[ring], 0.05)
+        out.append((life, fate, g, q90, tuple(horizons)))
+    for a, b in zip(*out, strict=True):
+        assert np.array_equal(a, b)
+    assert (out[1][4][0] > 0.0) == (nd > 0) and (out[1][4][1] > 0.0) == (nm > 0)
+
+
+def test_ring_push_by_the_kernel_equals_the_twins():
+    """ParcelRing.push with the kernels (kernels.push_rows) and without: the same slots, times, head, slot ranges
+    and last death, through pushes that fit, wrap, fill the ring exactly and overflow it."""
+    rng = np.random.default_rng(11)
+    rings = []
+    for compiled in (False, True):
+        with jit.forced(compiled):
+            ring, log = parcels.ParcelRing(50), []
+            for n in (20, 25, 30, 50, 7, 80, 1):
+                rec = np.zeros(n, parcels.PARTICLE_DTYPE)
+                parcels.as_floats(rec)[:] = rng.random((n, parcels.PARTICLE_FLOATS))
+                birth, death = rng.random(n), rng.uniform(1.0, 9.0, n)
+                log.append((ring.push(rec, birth, death), ring.head, ring.last_death()))
+            rings.append((ring, log))
+        rng = np.random.default_rng(11)
+    (twin, twin_log), (comp, comp_log) = rings
+    assert comp_log == twin_log and any(len(r) == 2 for r, _, _ in twin_log)
+    assert np.array_equal(comp.data, twin.data) and np.array_equal(comp.birth, twin.birth)
+    assert np.array_equal(comp.death, twin.death)

@@ -18,8 +18,10 @@ from rain_core.effects.spray.kernels.records import (  # noqa: F401
     add_wet_landings,
     due_landings,
     file_records,
+    push_rows,
     quantile_90,
     settle,
+    settle_horizons,
     tally,
 )
 from rain_core.effects.spray.kernels.wheel_state import wheel_kinematics, wheel_water  # noqa: F401

@@ -32,6 +32,31 @@ def settle(t_body, t_ground, cap, speed, nd, life, fate, growth, fate_road, fate
 
 
 @jit.kernel
+def _floor_005(v):
+    """Python's max(v, 0.05) (v kept unless 0.05 > v: NaN stays NaN)."""
+    return 0.05 if 0.05 > v else v
+
+
+@jit.kernel
+def settle_horizons(t_body, t_ground, cap, speed, nd, life, fate, growth, fate_road, fate_body, fate_air, q90):
+    """:func:`settle`, then each ring's horizon (s) as ``spawn._horizons`` makes it: the running 90th percentile
+    of its parcels' lives ``q90`` (2,) s (droplets [:nd], mist [nd:]), updated in place for a ring with parcels
+    this frame, at least 50 ms. One call instead of three. Returns (droplets' horizon, mist's); 0 for a ring
+    without parcels."""
+    settle(t_body, t_ground, cap, speed, nd, life, fate, growth, fate_road, fate_body, fate_air)
+    n = life.shape[0]
+    h_drop = 0.0
+    h_mist = 0.0
+    if nd > 0:
+        q90[0] = 0.9 * q90[0] + 0.1 * _floor_005(quantile_90(life[:nd]))
+        h_drop = _floor_005(q90[0])
+    if n > nd:
+        q90[1] = 0.9 * q90[1] + 0.1 * _floor_005(quantile_90(life[nd:]))
+        h_mist = _floor_005(q90[1])
+    return h_drop, h_mist
+
+
+@jit.kernel
 def file_records(fate, life, horizon_drop, horizon_mist, nd, now, landings_on, mass, p0, v0, u, tau, birth, sigma0,
                  growth, d_mm, vi, vehicle_consts, consts, fates, landings, records, birth_out, death_out):
     """The end of ``spawn.spawn_parcels_fast`` for a frame's parcels (droplets [:nd], then mist): lives past their
@@ -217,3 +242,37 @@ def quantile_90(x):
             if part[j] < upper:
                 upper = part[j]
     return part[lo] + (pos - lo) * (upper - part[lo])
+
+
+@jit.kernel
+def push_rows(src, birth, death, dst, dst_birth, dst_death, head, ranges):
+    """``parcels.ParcelRing.push`` of n ≤ capacity plain records: rows ``src`` (n, F) float32 with their ``birth``
+    and ``death`` (s) written over the oldest slots of the ring ``dst`` (capacity, F), ``dst_birth``,
+    ``dst_death`` from slot ``head`` on, wrapping once at most. The (start, count) slot ranges written into
+    ``ranges`` (2, 2) int64. Returns (the new head, how many ranges, the largest death: NumPy's max, NaN if any)."""
+    n = src.shape[0]
+    cap = dst.shape[0]
+    width = src.shape[1]
+    start = head
+    done = 0
+    count_ranges = 0
+    while done < n:
+        count = min(n - done, cap - start)
+        for r in range(count):
+            for c in range(width):
+                dst[start + r, c] = src[done + r, c]
+            dst_birth[start + r] = birth[done + r]
+            dst_death[start + r] = death[done + r]
+        ranges[count_ranges, 0] = start
+        ranges[count_ranges, 1] = count
+        count_ranges += 1
+        done += count
+        start = (start + count) % cap
+    top = death[0]
+    for i in range(1, n):  # np.max: the first NaN wins
+        if top != top:
+            break
+        d = death[i]
+        if d > top or d != d:
+            top = d
+    return start, count_ranges, top
