@@ -102,3 +102,26 @@ class RowWindow:
         elif dz < 0:
             view[:-dz] = fill
         return view
+
+
+class RowWindows:
+    """The row windows of a solver's arrays that scroll along z together (its levels, its mask): each array is
+    the view of one window, and an array replaced since (new levels, a new mask) is copied into a window that
+    no array in use holds, or a new one."""
+
+    def __init__(self, spare: int):
+        self.spare = spare
+        self.windows: list[RowWindow] = []
+
+    def scrolled(self, a: np.ndarray, dz: int, fill, in_use: tuple) -> np.ndarray:
+        """``a`` scrolled by dz rows (``RowWindow.shift``); ``in_use``: the arrays whose windows must be kept."""
+        for window in self.windows:
+            if window.view is a:
+                return window.shift(dz, fill)
+        for window in self.windows:
+            if window.fits(a) and not any(window.view is b for b in in_use):
+                window.adopt(a)
+                return window.shift(dz, fill)
+        window = RowWindow(a, self.spare)
+        self.windows.append(window)
+        return window.shift(dz, fill)

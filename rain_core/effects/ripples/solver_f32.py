@@ -7,7 +7,7 @@ import numpy as np
 from rain_core import jit
 from rain_core.effects.ripples import kernels
 from rain_core.effects.ripples.constants import FOOTPRINT_BATCH_CELLS, MIN_FOOTPRINT_CELLS
-from rain_core.effects.ripples.scroll import RowWindow
+from rain_core.effects.ripples.scroll import RowWindows
 from rain_core.effects.ripples.solver import WaveSolver
 
 # The kernels' stand-in for "no mask" (a fixed (1, 1) float32 array: one compiled signature).
@@ -32,7 +32,7 @@ class WaveSolverF32(WaveSolver):
         self._bump_scratch = np.empty((2, 1024))
         self._bump_order = np.empty((2, 1024), np.int64)
         self._reach_starts = np.empty(self.n + 3, np.int64)
-        self._windows: list[RowWindow] = []  # the row windows the levels and the mask scroll in (see shift)
+        self._row_windows = RowWindows(self.n // 2)  # where the levels and the mask scroll (see shift)
 
     def shift(self, dx_cells: int, dz_cells: int):
         """``WaveSolver.shift``; a scroll along z only (the car drives along z) moves the levels' and the mask's
@@ -51,19 +51,8 @@ class WaveSolverF32(WaveSolver):
             a[0, :] = a[-1, :] = a[:, 0] = a[:, -1] = 0.0
 
     def _scrolled(self, a: np.ndarray, dz: int, fill) -> np.ndarray:
-        """``a`` scrolled by dz rows in its row window; an array that is in none (new levels or a new mask) is
-        copied into a window first: one not in use, else a new one (three at most in use: z, z⁻ and the mask)."""
-        for window in self._windows:
-            if window.view is a:
-                return window.shift(dz, fill)
-        in_use = (self._z, self._zp, self._mask)
-        for window in self._windows:
-            if window.fits(a) and not any(window.view is b for b in in_use):
-                window.adopt(a)
-                return window.shift(dz, fill)
-        window = RowWindow(a, self.n // 2)
-        self._windows.append(window)
-        return window.shift(dz, fill)
+        # Three windows at most in use: z, z⁻ and the mask.
+        return self._row_windows.scrolled(a, dz, fill, (self._z, self._zp, self._mask))
 
     def _kernel_mask(self) -> tuple[np.ndarray, bool]:
         return (_NO_MASK, False) if self._mask is None else (self._mask, True)

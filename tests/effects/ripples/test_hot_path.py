@@ -75,7 +75,7 @@ def test_f32_solver_row_windows_equal_in_place_scrolls(kernel_path):
         np.testing.assert_array_equal(fast.height, ref.height)
         np.testing.assert_array_equal(fast.water_mask, ref.water_mask)
         assert fast.height.flags.c_contiguous and fast.water_mask.flags.c_contiguous
-        assert len(fast._windows) <= 3
+        assert len(fast._row_windows.windows) <= 3
     assert np.abs(fast.height).max() > 0.0
 
 
@@ -294,3 +294,24 @@ def test_wakes_gathered_at_once_equal_the_wheel_by_wheel_gathers(parked):
     assert len(emitted) == 1 and counts.sum() == len(want[0]) > 0 and (counts == 0).sum() >= 1
     for got, expected in zip(emitted[0], want, strict=True):
         np.testing.assert_array_equal(got, expected)
+
+
+def test_gpu_solver_mask_row_window_equals_shifted(gl_ctx, shaders):
+    """The GPU solver's CPU copy of the mask scrolls along z in a row window: through recentring both ways and a
+    lateral scroll, it stays ``shifted`` of the mask (entering cells water) and equals the mask texture."""
+    from rain_core.effects.ripples.gpu import WaveSolverGPU
+
+    n = 40
+    solver = WaveSolverGPU(gl_ctx, n, 0.05, 0.3, shaders=shaders)
+    try:
+        want = np.random.default_rng(6).random((n, n)) > 0.4
+        solver.set_water_mask(want)
+        for dx, dz in [(0, 9), (0, 9), (0, 9), (0, 9), (3, 2), (0, -25), (0, -25), (0, 7), (0, 45), (0, 6)]:
+            solver.shift(dx, dz)
+            want = shifted(want, dx, dz, True)
+            np.testing.assert_array_equal(solver.water_mask, want)
+            texels = np.frombuffer(solver.mask_texture.read(), np.uint8).reshape(n, n)
+            np.testing.assert_array_equal(texels > 127, want)
+        assert len(solver._row_windows.windows) == 1
+    finally:
+        solver.release()
