@@ -17,6 +17,7 @@ import numpy as np
 
 from rain_core.exposure import METER_SIZE
 from rain_core.gfx import units
+from rain_core.gfx.uniforms import owned_uniforms
 
 
 class AutoExposure:
@@ -58,7 +59,9 @@ class AutoExposure:
         ctx.disable(moderngl.BLEND)
         self.meter_fbo.use()
         hdr.use(units.SCRATCH[0])
-        self.meter_prog["u_hdr"].value = units.SCRATCH[0]
+        # These programs' uniforms are written by this class alone, through OwnedUniforms: the units never
+        # change and the adaptation's inputs rarely do, so most frames write none of them.
+        owned_uniforms(self.meter_prog).set("u_hdr", units.SCRATCH[0])
         self._meter_vao.render(moderngl.TRIANGLES, vertices=3)
         self.meter_tex.build_mipmaps(0, self.top_level)
 
@@ -66,14 +69,10 @@ class AutoExposure:
         self.state_fbo[nxt].use()
         self.meter_tex.use(units.SCRATCH[0])
         self.state[self.current].use(units.SCRATCH[1])
-        prog = self.adapt_prog
-        prog["u_meter"].value = units.SCRATCH[0]
-        prog["u_previous"].value = units.SCRATCH[1]
-        prog["u_top"].value = self.top_level
-        prog["u_dt_s"].value = float(dt_s)
-        prog["u_tau_s"].value = float(tau_s)
-        prog["u_compensation_ev"].value = float(compensation_ev)
-        prog["u_reset"].value = self._reset
+        key = (self.top_level, float(dt_s), float(tau_s), float(compensation_ev), self._reset)
+        owned_uniforms(self.adapt_prog).update_for("adapt", key, lambda: {
+            "u_meter": units.SCRATCH[0], "u_previous": units.SCRATCH[1], "u_top": key[0], "u_dt_s": key[1],
+            "u_tau_s": key[2], "u_compensation_ev": key[3], "u_reset": key[4]})
         self._adapt_vao.render(moderngl.TRIANGLES, vertices=3)
         self.current = nxt
         self._reset = False

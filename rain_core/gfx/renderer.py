@@ -30,6 +30,7 @@ from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
 from rain_core.gfx.targets import RenderTarget, float_target
 from rain_core.gfx.timing import PassTimer
+from rain_core.gfx.uniforms import owned_uniforms
 from rain_core.lighting import (
     concat_lights,
     light_candidates,
@@ -304,11 +305,10 @@ class Renderer:
             self.ldr.use()
             self.hdr.color.use(units.IMAGE)
             self.exposure.texture.use(units.SCRATCH[1])
-            prog = self.tonemap_prog
-            prog["u_hdr"].value = units.IMAGE
-            prog["u_exposure_ev"].value = units.SCRATCH[1]
-            prog["u_auto_exposure"].value = auto
-            prog["u_compensation_ev"].value = compensation
+            # Written by renderers alone, through OwnedUniforms: unchanged from frame to frame, skipped.
+            owned_uniforms(self.tonemap_prog).update_for("tonemap", (auto, compensation), lambda: {
+                "u_hdr": units.IMAGE, "u_exposure_ev": units.SCRATCH[1], "u_auto_exposure": auto,
+                "u_compensation_ev": compensation})
             self._tonemap_vao.render(moderngl.TRIANGLES, vertices=3)
 
         self._timed("tonemap", tonemap)

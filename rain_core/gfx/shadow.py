@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import moderngl
 import numpy as np
 
@@ -64,10 +66,11 @@ class ShadowMap:
         ctx = self.ctx
         sun = np.asarray(rc.frame.lighting.sun_direction, dtype=np.float64)
         forward = np.asarray(rc.frame.camera.forward, dtype=np.float64)  # as Camera.basis normalises it
-        norm = np.linalg.norm(forward)
+        # math.sqrt of the dot product: np.linalg.norm's own formula for a vector, without its wrapper
+        norm = math.sqrt(forward.dot(forward))
         f = forward / norm if norm > 0 else forward
         ahead = np.array([f[0], 0.0, f[2]])
-        ahead /= max(np.linalg.norm(ahead), 1e-9)
+        ahead /= max(math.sqrt(ahead.dot(ahead)), 1e-9)
         center = rc.camera_position + ahead * SHADOW_HALF_M * 0.6
         lx, ly = self._axes(sun)
         texel = 2.0 * SHADOW_HALF_M / SHADOW_SIZE

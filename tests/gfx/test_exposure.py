@@ -151,3 +151,70 @@ def test_the_eye_adapts_over_seconds_when_the_light_changes(gl_ctx):
         assert all(math.isfinite(e) for e in evs)
     finally:
         scene.release()
+
+
+def test_exposures_sharing_programs_keep_their_own_inputs(gl_ctx):
+    """The adaptation's uniforms are skipped while unchanged (per program, shared by every AutoExposure of a
+    shader library): two eyes adapting in turn with other steps, time constants, compensations and resets each
+    follow the reference as if alone."""
+    from rain_core.gfx.exposure import AutoExposure
+    from rain_core.gfx.shaders import ShaderLibrary
+
+    image = np.full((36, 64, 3), 0.02)
+    shaders = ShaderLibrary(gl_ctx)
+    eyes = [AutoExposure(gl_ctx, shaders), AutoExposure(gl_ctx, shaders)]
+    tex = _texture(gl_ctx, image)
+    try:
+        target = {0: X.target_correction_ev(X.metered_log2_luminance(image), 0.0),
+                  1: X.target_correction_ev(X.metered_log2_luminance(image), 1.0)}
+        expected = {0: None, 1: None}
+        steps = [(0, 1 / 30, 1.5), (1, 0.25, 0.5), (0, 1 / 30, 1.5), (1, 0.25, 0.5), (1, 0.25, 0.5), (0, 0.5, 3.0)]
+        for i, (eye, dt, tau) in enumerate(steps):
+            if i == 4:
+                eyes[1].reset()  # takes the target at once, then adapts again
+                expected[1] = None
+            eyes[eye].update(tex, dt, tau, float(eye))
+            previous = expected[eye]
+            expected[eye] = target[eye] if previous is None else X.adapt(previous, target[eye], dt, tau)
+            assert eyes[eye].read_ev() == pytest.approx(expected[eye], abs=2e-3)
+    finally:
+        tex.release()
+        for eye in eyes:
+            eye.release()
+        shaders.release()
+
+
+def test_tone_map_follows_live_exposure_changes(gl_ctx):
+    """The tone map's uniforms are skipped while unchanged: a frame shown with auto exposure off at +1 EV after
+    a frame with it on is the frame a fresh renderer shows with those settings (no effects: no state besides)."""
+    import dataclasses
+
+    from rain_core.gfx.renderer import Renderer
+    from rain_core.settings import set_value
+
+    scene = _scene(gl_ctx, 12.0)
+    fresh = None
+    try:
+        scene.step(1 / 30)
+        frame = scene.frame()
+        off = dataclasses.replace(frame, settings=dataclasses.replace(frame.settings))
+        off.settings.camera = dataclasses.replace(frame.settings.camera)
+        set_value(off.settings, "camera.auto_exposure", False)
+        set_value(off.settings, "camera.exposure_compensation_ev", 1.0)
+        renderer = Renderer(gl_ctx, (192, 108), scene.world, gpu_timing=False, shaders=scene.renderer.shaders)
+        fresh = Renderer(gl_ctx, (192, 108), scene.world, gpu_timing=False)
+        renderer.render(frame)
+        on_image = renderer.image()
+        renderer.render(off)
+        fresh.render(off)
+        np.testing.assert_array_equal(renderer.image(), fresh.image())
+        assert np.abs(renderer.image().astype(int) - on_image.astype(int)).max() > 0
+        fresh.render(frame)  # and back: auto exposure from a reset, as the first frame
+        renderer.exposure.reset()
+        renderer.render(frame)
+        np.testing.assert_array_equal(renderer.image(), fresh.image())
+        renderer.release()
+    finally:
+        if fresh is not None:
+            fresh.release()
+        scene.release()
