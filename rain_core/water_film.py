@@ -251,7 +251,8 @@ DRY_FLOOR_MARGIN = 1e-9
 # The dry-cell test trusts its cell only within this many cells of z = 0, where the samplers' row arithmetic is
 # exact to far below a texel (here 2.5e8 m: their coordinates' rounding stays below 1e-5 texel).
 DRY_TEST_MAX_ROWS = 1e9
-# Queries smaller than this skip the dry-cell test (its dozen NumPy calls cost more than they save).
+# Queries smaller than this skip the dry-cell test (its dozen NumPy calls cost more than they save); the compiled
+# test (one loop) is worth it at any size, so with the kernels on every query takes it.
 DRY_TEST_MIN_POINTS = 512
 # Queries smaller than this compute the kerb streams everywhere rather than in their band alone.
 KERB_BAND_MIN_POINTS = 256
@@ -536,7 +537,7 @@ def film_depth_sampler(cracks, puddles, puddle_amount=0.5, seed=0, world=None, w
     scale = (nz / layout.PERIOD_M, nx / (2 * ROAD_HALF_WIDTH_M), float(nx), nz * nx)
 
     def standing_depth(x, z):
-        if x.size < DRY_TEST_MIN_POINTS:
+        if x.size < DRY_TEST_MIN_POINTS and not jit.active():
             return depth(x, z)
         return _standing_where_wet(grids, floors, levels, kerb, scale, x, z, crack_at, puddle_at, gutter_k, depth)
 

@@ -92,3 +92,16 @@ def test_kernels_give_the_twins_bits_at_far_and_non_finite_z():
             out.append(water_film.film_depth_sampler(1.0, 1.0, world=world, gutter_k=0.1)(x, z))
     for g, w in zip(got, want, strict=True):
         assert g.tobytes() == w.tobytes()
+
+
+def test_small_queries_take_the_dry_test_and_give_the_references_bits(kernel_path):
+    """With the kernels on, queries of any size take the dry-cell test (below DRY_TEST_MIN_POINTS too): a few
+    wheels or a frame's landings on standing water and kerb streams give the reference's depths."""
+    world = water_film.default_world()
+    x, z = _points(np.random.default_rng(21), 2000)
+    for n in (1, 5, 64, 65, 300, water_film.DRY_TEST_MIN_POINTS - 1):
+        xs, zs = x[-n:], z[-n:]
+        for levels in ((1.0, 1.0, 0.5, 0, 0.0, 0.1), (0.6, 0.3, 1.0, 2, 0.0, 0.0)):
+            standing, film = _reference(xs, zs, *levels[:3], levels[3], world, levels[4], levels[5])
+            sampler = water_film.film_depth_sampler(*levels[:4], world, levels[4], levels[5])
+            assert np.array_equal(sampler(xs, zs), np.maximum(standing, film))
