@@ -423,7 +423,7 @@ class RainfallEffect(Effect):
             return
         s = self._settings(rc.frame)
         ctx = rc.ctx
-        ready = self._prepared
+        ready, self._prepared = self._prepared, None  # used once: no context kept alive past its frame
         if ready is not None and ready[0] is rc and ready[1] is rc.lights and ready[2] is upd:
             lights, frame_pairs = ready[3], ready[4]
         else:  # another context than update's (a test, a probe)
