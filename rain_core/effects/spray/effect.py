@@ -44,8 +44,6 @@ class SprayEffect(Effect):
         self._vaos: list[moderngl.VertexArray | None] = [None, None]
         self._capacity = [-1, -1]
         self._program = None
-        self._forward_key = None  # see _unit_forward
-        self._forward = (0.0, 0.0, -1.0)
         self._color_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
                                           repeat_x=False, repeat_y=False)
@@ -141,20 +139,6 @@ class SprayEffect(Effect):
         # The pass reads the scene's depth, so it writes through a framebuffer without that depth attached.
         return self._color_fbo.fbo(rc.hdr.color)
 
-    def _unit_forward(self, forward) -> tuple[float, float, float]:
-        """camera.basis()[2] (the normalised forward) as Python floats, kept while the forward's bytes stay the same
-        (a new camera each frame, but on a straight road the same direction): NumPy's own normalisation, so the
-        same bits, without its half-dozen small-array calls most frames."""
-        key = forward.tobytes() if isinstance(forward, np.ndarray) else tuple(forward)
-        if key != self._forward_key:
-            fwd = np.asarray(forward, dtype=np.float64)
-            norm = np.sqrt(fwd.dot(fwd))
-            if norm > 0:
-                fwd = fwd / norm
-            self._forward = (float(fwd[0]), float(fwd[1]), float(fwd[2]))
-            self._forward_key = key
-        return self._forward
-
     def _set_uniforms(self, prog, rc, now: float) -> None:
         """The pass's own uniforms, through the program's OwnedUniforms: only those that changed since the last
         write are written (the clock, camera velocity and forward change every frame; the rest rarely, so they
@@ -162,9 +146,15 @@ class SprayEffect(Effect):
         frame = rc.frame
         camera = frame.camera
         vel = tuple(frame.ego.velocity().tolist()) if frame.ego is not None else (0.0, 0.0, 0.0)
+        # camera.basis()[2] (the normalised forward) without the right and up vectors it also makes. (Not cached:
+        # the driver's camera turns a little every frame.)
+        fwd = np.asarray(camera.forward, dtype=np.float64)
+        norm = np.sqrt(fwd.dot(fwd))
+        if norm > 0:
+            fwd = fwd / norm
         owned = owned_uniforms(prog)
         owned.update({"u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
-                      "u_camera_vel": vel, "u_cam_forward": self._unit_forward(camera.forward)})
+                      "u_camera_vel": vel, "u_cam_forward": tuple(fwd.tolist())})
         exposure_s = getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)
         key = (exposure_s, rc.size[0], rc.size[1], camera.near_m, camera.far_m, camera.fov_y_deg)
         owned.update_for("static", key, lambda: {
