@@ -56,7 +56,7 @@ def shift_in_place(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
 class RowWindow:
     """An (n, m) C-contiguous window onto a buffer with ``spare`` extra rows above and below it, for an array that
     scrolls by whole rows every frame (the ripple window at speed: ~20 rows a frame at 100 km/h). A scroll moves
-    the window's offset and fills only the rows that enter, instead of moving the n − |dz| rows that stay (a 1 MB
+    the window's offset and fills only the rows that enter, instead of moving the n − |dz| rows that stay (an n²
     pass over memory the frame has evicted, per array); the rows are moved back to the middle only when the
     offset runs out of spare rows (every ~spare/|dz| scrolls). ``view`` is the current window: the same values as
     ``shift_in_place`` would leave, in another array object after each scroll."""
@@ -105,9 +105,10 @@ class RowWindow:
 
 
 class RowWindows:
-    """The row windows of a solver's arrays that scroll along z together (its levels, its mask): each array is
-    the view of one window, and an array replaced since (new levels, a new mask) is copied into a window that
-    no array in use holds, or a new one."""
+    """The row windows of a solver's arrays that scroll along z (the GPU solver's CPU copy of its mask): each
+    array is the view of one window, and an array replaced since (a new mask) is copied into a window that no
+    array in use holds, or a new one. (The float32 solver's levels and mask scroll in place: their scroll pass
+    also brings them into cache for the bumps' scattered adds, and without it those adds cost what it saved.)"""
 
     def __init__(self, spare: int):
         self.spare = spare

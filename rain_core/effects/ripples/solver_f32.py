@@ -7,7 +7,6 @@ import numpy as np
 from rain_core import jit
 from rain_core.effects.ripples import kernels
 from rain_core.effects.ripples.constants import FOOTPRINT_BATCH_CELLS, MIN_FOOTPRINT_CELLS
-from rain_core.effects.ripples.scroll import RowWindows
 from rain_core.effects.ripples.solver import WaveSolver
 
 # The kernels' stand-in for "no mask" (a fixed (1, 1) float32 array: one compiled signature).
@@ -32,27 +31,6 @@ class WaveSolverF32(WaveSolver):
         self._bump_scratch = np.empty((2, 1024))
         self._bump_order = np.empty((2, 1024), np.int64)
         self._reach_starts = np.empty(self.n + 3, np.int64)
-        self._row_windows = RowWindows(self.n // 2)  # where the levels and the mask scroll (see shift)
-
-    def shift(self, dx_cells: int, dz_cells: int):
-        """``WaveSolver.shift``; a scroll along z only (the car drives along z) moves the levels' and the mask's
-        row windows (``scroll.RowWindow``) instead of their rows: the same values, without three 1 MB moves."""
-        dx, dz = int(dx_cells), int(dz_cells)
-        if dx != 0 or dz == 0:
-            super().shift(dx, dz)
-            return
-        if self._mask is not None:
-            self._mask = self._scrolled(self._mask, dz, 1.0)
-        if self._asleep:
-            return
-        self._z = self._scrolled(self._z, dz, 0.0)
-        self._zp = self._scrolled(self._zp, dz, 0.0)
-        for a in (self._z, self._zp):
-            a[0, :] = a[-1, :] = a[:, 0] = a[:, -1] = 0.0
-
-    def _scrolled(self, a: np.ndarray, dz: int, fill) -> np.ndarray:
-        # Three windows at most in use: z, z⁻ and the mask.
-        return self._row_windows.scrolled(a, dz, fill, (self._z, self._zp, self._mask))
 
     def _kernel_mask(self) -> tuple[np.ndarray, bool]:
         return (_NO_MASK, False) if self._mask is None else (self._mask, True)

@@ -45,40 +45,6 @@ def test_row_window_scrolls_equal_shifted(dtype, kernel_path):
             want = want.copy()
 
 
-def test_f32_solver_row_windows_equal_in_place_scrolls(kernel_path):
-    """The float32 solver's z-only scrolls (row windows) against the same solver scrolling in place, bit for bit,
-    through window recentring, lateral scrolls, a new mask, masks in blocks, bumps and a retime (new levels)."""
-    from rain_core.effects.ripples.solver import WaveSolver
-    from rain_core.effects.ripples.solver_f32 import WaveSolverF32
-
-    class InPlace(WaveSolverF32):
-        shift = WaveSolver.shift
-
-    n, h = 48, 0.05
-    rng = np.random.default_rng(3)
-    fast, ref = WaveSolverF32(n, h, 0.3), InPlace(n, h, 0.3)
-    start, mask = rng.standard_normal((n, n)) * 1e-3, rng.random((n, n)) > 0.2
-    for solver in (fast, ref):
-        solver.reset(start)
-        solver.set_water_mask(mask)
-    scrolls = [(0, 9), (0, 9), (0, 9), (0, 9), (2, 3), (0, -20), (0, -20), (0, 5), (0, 60), (0, 4)]
-    for i, (dx, dz) in enumerate(scrolls):
-        new_mask = rng.random((n, n)) > 0.3
-        for solver in (fast, ref):
-            solver.shift(dx, dz)
-            if i == 4:
-                solver.set_water_mask(new_mask)
-            if i == 6:
-                solver.set_water_mask_blocks([(5, 0, np.arange(3 * n).reshape(3, n) % 4 > 0)])
-            solver.add_impulses([0.4, 1.1, 2.2], [0.7, 0.9, 2.25], 0.12, [1e-3, -2e-3, 1e-3])
-            solver.step(solver.dt_max * (0.7 if i == 3 else 1.0))
-        np.testing.assert_array_equal(fast.height, ref.height)
-        np.testing.assert_array_equal(fast.water_mask, ref.water_mask)
-        assert fast.height.flags.c_contiguous and fast.water_mask.flags.c_contiguous
-        assert len(fast._row_windows.windows) <= 3
-    assert np.abs(fast.height).max() > 0.0
-
-
 @pytest.mark.parametrize("rate", [0.5, 8.0, 60.0])
 def test_drop_table_matches_the_exact_law(rate):
     """The momentum table (an index and a gather per drop) against the fall-speed law on the same quantiles:
