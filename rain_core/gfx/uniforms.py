@@ -47,11 +47,13 @@ class OwnedUniforms:
     program), skipping a write whose value equals the one this object wrote last: most of them do not change
     from frame to frame. Anything else writing the same names in the same program would make it skip wrongly."""
 
-    __slots__ = ("_program", "_last", "_keys", "_frozen")
+    __slots__ = ("_program", "_uniforms", "_last", "_keys", "_frozen", "_once")
 
     def __init__(self, program):
         self._program = weakref.ref(program)  # the cache below must not keep a program alive
+        self._uniforms: dict[str, object] = {}  # name → moderngl Uniform, None where the compiler dropped it
         self._last: dict[str, object] = {}
+        self._once = None  # the pairs last written in full by update_once
         self._keys: dict[str, object] = {}  # group → the key its values were last written for (update_for)
         self._frozen: dict[str, np.ndarray | None] = {}  # name → the read-only array its last value came from
 
@@ -73,12 +75,38 @@ class OwnedUniforms:
         last = self._last.get(name, _MISSING)
         if type(last) is type(value) and last == value:
             return
-        set_uniform(self.program, name, value)
         self._last[name] = value
+        uniform = self._uniforms.get(name, _MISSING)
+        if uniform is _MISSING:  # a program's uniforms never change: look each name up once
+            uniform = self._uniforms[name] = self._program().get(name, None)
+        if uniform is None:
+            return
+        if type(value) is bytes:
+            uniform.write(value)
+        else:
+            uniform.value = value
 
     def update(self, values: dict) -> None:
         for name, value in values.items():
             self.set(name, value)
+
+    def update_pairs(self, pairs) -> None:
+        """``set`` each (name, value) of an iterable of pairs."""
+        set_ = self.set
+        for name, value in pairs:
+            set_(name, value)
+
+    def update_once(self, pairs: tuple) -> None:
+        """``update_pairs`` unless this very tuple was the last given here: constants cost one identity test a
+        frame. Nothing else may write those names in between."""
+        if self._once is not pairs:
+            self.update_pairs(pairs)
+            self._once = pairs
+
+    def assume(self, name: str, value) -> None:
+        """Someone else wrote ``value`` to ``name`` (e.g. ``set_frame_uniforms``' lights): compare with it next."""
+        self._last[name] = value
+        self._frozen[name] = None
 
     def update_for(self, group: str, key, make_values) -> None:
         """``update(make_values())`` unless this program last got ``group``'s values for an equal ``key``: uniforms

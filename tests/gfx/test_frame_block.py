@@ -282,6 +282,40 @@ def test_owned_uniforms_skip_only_equal_values():
 
 
 
+class _Program(dict):
+    """A program declaring ``names`` (moderngl's Program.get), logging every write."""
+
+    __hash__ = object.__hash__  # a program is its own key in owned_uniforms' weak table
+    __eq__ = object.__eq__
+
+    def __init__(self, names):
+        self.writes = []
+        super().__init__({n: _Uniform(self.writes, n) for n in names})
+
+
+def test_owned_uniforms_pairs_once_and_assume():
+    """update_pairs skips equal values and names the program lacks; assume records another writer's value (the
+    next differing value is written); update_once skips the very tuple it last wrote in full."""
+    prog = _Program(["u_box_lo", "u_light_count", "u_time_frac"])
+    owned = owned_uniforms(prog)
+    owned.update_pairs([("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5), ("u_missing", 1.0)])
+    owned.update_pairs([("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5), ("u_missing", 1.0)])
+    assert prog.writes == [("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5)]
+    owned.set("u_light_count", 3.0)
+    owned.assume("u_light_count", 9)  # the frame wrote its own count
+    owned.set("u_light_count", 3.0)
+    assert prog.writes[-2:] == [("u_light_count", 3.0), ("u_light_count", 3.0)]
+    owned.set("u_light_count", 3.0)
+    assert len(prog.writes) == 4
+    constants = (("u_time_frac", 0.75),)
+    owned.update_once(constants)
+    owned.set("u_time_frac", 0.1)
+    owned.update_once(constants)  # the same tuple again: not even compared
+    assert prog.writes[-2:] == [("u_time_frac", 0.75), ("u_time_frac", 0.1)]
+    owned.update_once(tuple([("u_time_frac", 0.75)]))  # another tuple: compared, written where it differs
+    assert prog.writes[-1] == ("u_time_frac", 0.75)
+
+
 def test_owned_uniforms_update_for_makes_values_only_when_the_key_changes():
     prog = _Counting()
     owned = OwnedUniforms(prog)

@@ -15,6 +15,7 @@ import moderngl
 import numpy as np
 
 from rain_core import layout
+from rain_core.effects.rainfall.box_uniforms import box_pairs, splash_box_pairs
 from rain_core.effects.rainfall.boxes import Boxes, wrap_near
 from rain_core.effects.rainfall.constants import (
     ALPHA_MAX,
@@ -34,12 +35,11 @@ from rain_core.effects.rainfall.optics import optics_uniforms
 from rain_core.effects.rainfall.shape import SHAPE_DIAMETERS_MM, drop_shape_factors
 from rain_core.effects.rainfall.sim import SPLASH_V_M_S, RainfallSim, RainInput, RainUpdate, box_offsets, splash_clock
 from rain_core.effects.rainfall.streaks import StreakCamera
-from rain_core.effects.rainfall.uniform_cache import box_pairs, program_uniforms, splash_box_pairs
 from rain_core.effects.rainfall.vehicle_fate import vehicle_uniform_pairs, vehicle_uniforms
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import set_uniforms
+from rain_core.gfx.uniforms import owned_uniforms, set_uniforms
 
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
@@ -407,15 +407,15 @@ class RainfallEffect(Effect):
                 ("u_near", float(rc.frame.camera.near_m)))
 
     def _use(self, prog, rc, upd: RainUpdate, frame_pairs, lights, own_pairs) -> None:
-        """Bind the frame's uniforms to prog and write this effect's where they changed (uniform_cache)."""
+        """Bind the frame's uniforms to prog and write this effect's where they changed (OwnedUniforms)."""
         rc.set_frame_uniforms(prog)
-        cache = program_uniforms(prog)
+        cache = owned_uniforms(prog)
         for name, value in zip(_LIGHT_NAMES, rc.lights, strict=True):
             cache.assume(name, value)  # what set_frame_uniforms just wrote
-        cache.put_once(self._constant_pairs(upd))
-        cache.put_pairs(frame_pairs)
-        cache.put_pairs(zip(_LIGHT_NAMES, lights, strict=True))
-        cache.put_pairs(own_pairs)
+        cache.update_once(self._constant_pairs(upd))
+        cache.update_pairs(frame_pairs)
+        cache.update_pairs(zip(_LIGHT_NAMES, lights, strict=True))
+        cache.update_pairs(own_pairs)
 
     def render(self, stage: str, rc) -> None:
         upd = self.last_update

@@ -9,6 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from rain_core import layout
+from rain_core.effects.rainfall.box_uniforms import box_pairs, splash_box_pairs
 from rain_core.effects.rainfall.boxes import box_heights, layer_boxes, wrap_near
 from rain_core.effects.rainfall.constants import (
     BOX_BOTTOM_Y_M,
@@ -24,7 +25,6 @@ from rain_core.effects.rainfall.constants import (
 )
 from rain_core.effects.rainfall.effect import RainfallEffect
 from rain_core.effects.rainfall.sim import RainfallSim
-from rain_core.effects.rainfall.uniform_cache import box_pairs, program_uniforms, splash_box_pairs
 from rain_core.effects.rainfall.vehicle_fate import (
     PIECES_PER_VEHICLE,
     PLANES_PER_PIECE,
@@ -140,56 +140,6 @@ def test_lights_that_reach_are_those_of_the_array_formula():
         assert got[0] == (pos.tobytes() if want.size == count else packed.tobytes())
         seen.add("none" if want.size == 0 else "all" if want.size == count else "some")
     assert seen == {"none", "some", "all"}
-
-
-class _Uniform:
-    def __init__(self, log, name):
-        self.log, self.name = log, name
-
-    def write(self, data):
-        self.log.append((self.name, data))
-
-    @property
-    def value(self):
-        raise AttributeError
-
-    @value.setter
-    def value(self, v):
-        self.log.append((self.name, v))
-
-
-class _Program(dict):
-    __hash__ = object.__hash__  # a program is its own key in program_uniforms' weak table
-    __eq__ = object.__eq__
-
-    def __init__(self, names):
-        self.log = []
-        super().__init__({n: _Uniform(self.log, n) for n in names})
-
-
-def test_program_uniforms_skip_only_values_equal_to_the_last_written():
-    """The programs' uniform cache: an unchanged value is not written again; a changed one, a value of another
-    type, or one after another writer (told through assume) is; every effect shares one cache per program."""
-    prog = _Program(["u_box_lo", "u_light_count", "u_time_frac"])
-    cache = program_uniforms(prog)
-    assert program_uniforms(prog) is cache
-    cache.put_pairs([("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5), ("u_missing", 1.0)])
-    cache.put_pairs([("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5), ("u_missing", 1.0)])
-    assert prog.log == [("u_box_lo", b"\0" * 12), ("u_time_frac", 0.5)]
-    cache.put("u_time_frac", 0.25)
-    cache.put("u_light_count", 3)
-    cache.put("u_light_count", 3.0)  # another type: written (an int uniform and a float compare equal)
-    assert [n for n, _ in prog.log[2:]] == ["u_time_frac", "u_light_count", "u_light_count"]
-    cache.assume("u_light_count", 9)  # the frame wrote its own count
-    cache.put("u_light_count", 3.0)
-    assert prog.log[-1] == ("u_light_count", 3.0)
-    constants = tuple([("u_time_frac", 0.75)])
-    cache.put_once(constants)
-    cache.put("u_time_frac", 0.1)
-    cache.put_once(constants)  # the same tuple again: not even compared
-    assert prog.log[-2:] == [("u_time_frac", 0.75), ("u_time_frac", 0.1)]
-    cache.put_once(tuple([("u_time_frac", 0.75)]))  # another tuple: put, compared, written where it differs
-    assert prog.log[-1] == ("u_time_frac", 0.75)
 
 
 def _layer_boxes_arrays(camera_position, camera_forward, container_m):
