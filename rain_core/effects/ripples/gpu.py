@@ -8,7 +8,7 @@ import numpy as np
 from rain_core import physics
 from rain_core.effects.ripples.constants import MIN_FOOTPRINT_CELLS
 from rain_core.effects.ripples.raindrops import DROP_CDF_NODES, DROP_MOMENTUM_NODES, RainBatch, momentum_table
-from rain_core.effects.ripples.scroll import RowWindows, shift_in_place
+from rain_core.effects.ripples.scroll import RowWindow, shift_in_place
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.gfx import units
 from rain_core.gfx.shaders import ShaderLibrary
@@ -57,7 +57,7 @@ class WaveSolverGPU(WaveSolver):
         # and the field then writes only the strips that entered.
         self.mask = PingPong(ctx, (n, n), components=1, dtype="f1", filter_linear=False)
         self.mask.src.color.write(np.full(n * n, 255, np.uint8))
-        self._row_windows = RowWindows(n // 2)  # where the CPU copy of the mask scrolls along z (see shift)
+        self._mask_window: RowWindow | None = None  # where the CPU copy of the mask scrolls along z (shift)
         nb = -(-n // REDUCE_BLOCK)
         self.reduce_target = float_target(ctx, (nb, nb), 4, "f4", filter_linear=False)
         prog = self.shaders.program
@@ -338,7 +338,10 @@ class WaveSolverGPU(WaveSolver):
         self._flush()
         if self._mask is not None:
             if dx == 0:  # along z: the row window moves, not the rows (scroll.RowWindow: the same values)
-                self._mask = self._row_windows.scrolled(self._mask, dz, True, (self._mask,))
+                window = self._mask_window
+                if window is None or not window.fits(self._mask):
+                    window = self._mask_window = RowWindow(self._mask, self.n // 2)
+                self._mask = window.scrolled(self._mask, dz, True)
             else:
                 shift_in_place(self._mask, dx, dz, 1.0)
             self._draw("mask_shift", self.mask.dst, {"u_shift": (dx, dz)}, bind_state=False)

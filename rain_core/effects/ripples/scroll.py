@@ -79,6 +79,13 @@ class RowWindow:
         np.copyto(self.view, a)
         return self.view
 
+    def scrolled(self, a: np.ndarray, dz: int, fill) -> np.ndarray:
+        """``a`` scrolled by ``dz`` rows (``shift``): ``a`` is adopted first unless it is the window itself (an
+        array replaced since, e.g. a new mask, is copied in; the previous view is then no longer valid)."""
+        if a is not self.view:
+            self.adopt(a)
+        return self.shift(dz, fill)
+
     def shift(self, dz: int, fill) -> np.ndarray:
         """The window scrolled by ``dz`` rows: new[iz] = old[iz + dz] where that exists, else ``fill`` (returned,
         also as ``view``)."""
@@ -103,26 +110,3 @@ class RowWindow:
             view[:-dz] = fill
         return view
 
-
-class RowWindows:
-    """The row windows of a solver's arrays that scroll along z (the GPU solver's CPU copy of its mask): each
-    array is the view of one window, and an array replaced since (a new mask) is copied into a window that no
-    array in use holds, or a new one. (The float32 solver's levels and mask scroll in place: their scroll pass
-    also brings them into cache for the bumps' scattered adds, and without it those adds cost what it saved.)"""
-
-    def __init__(self, spare: int):
-        self.spare = spare
-        self.windows: list[RowWindow] = []
-
-    def scrolled(self, a: np.ndarray, dz: int, fill, in_use: tuple) -> np.ndarray:
-        """``a`` scrolled by dz rows (``RowWindow.shift``); ``in_use``: the arrays whose windows must be kept."""
-        for window in self.windows:
-            if window.view is a:
-                return window.shift(dz, fill)
-        for window in self.windows:
-            if window.fits(a) and not any(window.view is b for b in in_use):
-                window.adopt(a)
-                return window.shift(dz, fill)
-        window = RowWindow(a, self.spare)
-        self.windows.append(window)
-        return window.shift(dz, fill)
