@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
 
 import moderngl
 import numpy as np
@@ -29,7 +28,7 @@ from rain_core.gfx.scene_draw import SceneDrawer
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.shadow import NO_SHADOW, ShadowMap, sun_is_up
 from rain_core.gfx.targets import RenderTarget, float_target
-from rain_core.gfx.timing import PassTimer
+from rain_core.gfx.timing import PassTimer, cpu_ms
 from rain_core.gfx.uniforms import owned_uniforms
 from rain_core.lighting import (
     concat_lights,
@@ -210,17 +209,15 @@ class Renderer:
     def _timed(self, name: str, fn) -> None:
         # Every pass goes through here: rain_core.bench.frame wraps this method (keep its signature) to sort the
         # GL calls it counts by pass, also when it measures older trees.
-        if not self._gpu_timing:  # PassTimer.measure's CPU-only branch, inline: ~24 passes a frame
-            t0 = time.perf_counter()
-            fn()
-            self.stats.append(PassStat(name, True, (time.perf_counter() - t0) * 1e3, None))
+        if not self._gpu_timing:  # no timer object to look up: ~24 passes a frame
+            self.stats.append(PassStat(name, True, cpu_ms(fn), None))
             return
         timer = self._timers.get(name)
         if timer is None:
             timer = self._timers[name] = PassTimer(self.ctx, gpu=False, lagged=True)
-        cpu_ms, gpu_ms = timer.measure(fn, True)
+        cpu, gpu = timer.measure(fn, True)
         self._gpu_source = timer.gpu_source
-        self.stats.append(PassStat(name, True, cpu_ms, gpu_ms))
+        self.stats.append(PassStat(name, True, cpu, gpu))
 
     def render(self, frame: Frame) -> None:
         """Run every pass of one frame into the HDR target and tone-map it."""

@@ -11,6 +11,13 @@ import time
 import moderngl
 
 
+def cpu_ms(fn) -> float:
+    """Run fn(); return its CPU side's wall time in ms (a pass without GPU timing: two clock reads)."""
+    t0 = time.perf_counter()
+    fn()
+    return (time.perf_counter() - t0) * 1e3
+
+
 class PassTimer:
     """Measures one pass. ``measure(fn, gpu=None)`` runs fn() and returns (cpu_ms, gpu_ms or None).
 
@@ -45,9 +52,7 @@ class PassTimer:
     def measure(self, fn, gpu: bool | None = None) -> tuple[float, float | None]:
         """Run fn(); return (cpu_ms, gpu_ms or None). ``gpu``: time the GPU too (default: ``self.gpu``)."""
         if not (self.gpu if gpu is None else gpu):
-            t0 = time.perf_counter()
-            fn()
-            return (time.perf_counter() - t0) * 1e3, None
+            return cpu_ms(fn), None
         if self._queries is None:
             self._make_queries()
         if not self._queries:
