@@ -112,7 +112,7 @@ class DropArray:
         d[:, _PLACED] = self._placed(d[:, _S], d[:, _T])
         d[:, _RB] = np.inf
         self._shed_all = True
-        self.version += 1
+        self.changed()
 
     @property
     def vel(self) -> np.ndarray:
@@ -122,7 +122,7 @@ class DropArray:
     def vel(self, value) -> None:
         self._buf[: self._n, _VS : _VT + 1] = value
         self._buf[: self._n, _RB] = np.inf
-        self.version += 1
+        self.changed()
 
     @property
     def mass(self) -> np.ndarray:
@@ -133,7 +133,7 @@ class DropArray:
         self._buf[: self._n, _M] = value
         self._buf[: self._n, _A] = drop_radius(self._buf[: self._n, _M])
         self._buf[: self._n, _RB] = np.inf
-        self.version += 1
+        self.changed()
 
     @property
     def trail(self) -> np.ndarray:
@@ -142,7 +142,7 @@ class DropArray:
     @trail.setter
     def trail(self, value) -> None:
         self._buf[: self._n, _TRAIL] = value
-        self.version += 1
+        self.changed()
 
     @property
     def fresh(self) -> np.ndarray:
@@ -151,7 +151,7 @@ class DropArray:
     @fresh.setter
     def fresh(self, value) -> None:
         self._fresh_buf[: self._n] = value
-        self.version += 1
+        self.changed()
 
     @property
     def count(self) -> int:
@@ -202,7 +202,7 @@ class DropArray:
         self._dirty = True
         self._fresh_buf[n : n + k] = True
         self._n = n + k
-        self.version += 1
+        self.changed()
         return rows
 
     def _bead_drops(self, u: np.ndarray, v: np.ndarray, m: np.ndarray) -> None:
@@ -212,7 +212,7 @@ class DropArray:
 
     def _keep(self, keep: np.ndarray) -> None:
         n = self._n
-        self.version += 1
+        self.changed()
         if jit.active():
             self._n = kernels.compact_rows(self._buf, self._fresh_buf, n, ~keep)
             return

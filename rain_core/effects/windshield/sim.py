@@ -328,7 +328,7 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         dt_s = checks.time_step(dt_s)
         if type(inputs) is not GlassInputs:
             _check_inputs(inputs)
-        self.version += 1
+        self.changed()
         self._reset_frame_records()
         if dt_s == 0.0:
             return
