@@ -88,14 +88,16 @@ def layer_boxes(camera_position, camera_forward, container_m: float) -> Boxes:
     return Boxes(np.array(lo), np.array(hi), shape.fade, shape.nu, np.array(fade_bottom))
 
 
-_HYPOT = [None, None, 0.0]  # the last (f0, f2) and np.hypot of it: a camera driving straight keeps its forward
+_HYPOT = (None, None, 0.0)  # the last (f0, f2) and np.hypot of it: a camera driving straight keeps its forward
 
 
 def _horizontal_length(f0: float, f2: float) -> float:
-    # np.hypot as before (math.hypot is another algorithm: it may differ in the last bit), once per forward.
+    # np.hypot as before (math.hypot is another algorithm: it may differ in the last bit), once per forward. The
+    # entry is one tuple, read once and replaced whole, so scenes stepping in two threads never mix two entries.
+    global _HYPOT
     last = _HYPOT
     if last[0] != f0 or last[1] != f2:
-        last[:] = [f0, f2, float(np.hypot(f0, f2))]
+        last = _HYPOT = (f0, f2, float(np.hypot(f0, f2)))
     return last[2]
 
 
@@ -115,13 +117,15 @@ class _LayerShape:
         self.fade.flags.writeable = self.nu.flags.writeable = False
 
 
-_SHAPE: list[_LayerShape] = []  # the last container size's (it changes only in the settings panel)
+_SHAPE: _LayerShape | None = None  # the last container size's (it changes only in the settings panel)
 
 
 def _layer_shape(container_m: float) -> _LayerShape:
-    if not _SHAPE or _SHAPE[0].container_m != container_m:
-        _SHAPE[:] = [_LayerShape(container_m)]
-    return _SHAPE[0]
+    global _SHAPE
+    shape = _SHAPE  # read once (see _horizontal_length)
+    if shape is None or shape.container_m != container_m:
+        shape = _SHAPE = _LayerShape(container_m)
+    return shape
 
 
 def wrap_near(z, around_z):
