@@ -144,7 +144,6 @@ class FrameUniforms(dict):
         super().clear()
 
 
-
 _LIGHTING_VALUES: list = [None, None]  # [the last Lighting asked about, its uniforms]
 
 

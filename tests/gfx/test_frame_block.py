@@ -281,7 +281,6 @@ def test_owned_uniforms_skip_only_equal_values():
     assert [w[0] for w in prog.writes] == ["u_a", "u_a", "u_b", "u_c", "u_c", "u_d", "u_d"]
 
 
-
 class _Program(dict):
     """A program declaring ``names`` (moderngl's Program.get), logging every write."""
 

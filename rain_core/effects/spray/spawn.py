@@ -121,11 +121,10 @@ _FILE_CONSTS = np.array([layout.PERIOD_M, EXTINCTION_EFFICIENCY * 1.5, physics.R
 def _horizons(q90: list, life: np.ndarray, nd: int) -> tuple[float, float]:
     """Each ring's horizon (s): the running 90th percentile of its parcels' lives (``q90``, updated in place with
     this frame's droplets [:nd] and mist [nd:]), at least 50 ms."""
-    out = [0.0, 0.0]
-    quantile = quantile_90  # (the compiled path's horizons: kernels.settle_horizons)
+    out = [0.0, 0.0]  # (the compiled path's twin: kernels.settle_horizons)
     for ring, sl in ((0, slice(0, nd)), (1, slice(nd, len(life)))):
         if sl.stop > sl.start:
-            q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile(life[sl]), 0.05)
+            q90[ring] = 0.9 * q90[ring] + 0.1 * max(quantile_90(life[sl]), 0.05)
             out[ring] = max(q90[ring], 0.05)
     return out[0], out[1]
 

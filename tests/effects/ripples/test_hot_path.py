@@ -129,7 +129,6 @@ def test_float32_footprint_equals_the_reference(masked, choices):
     np.testing.assert_array_equal(vals_f, vals_r)
 
 
-
 def _advance_2d(solver, k: int, alpha: float, kc2: float):
     """The float32 step on the 2-D interior views (the form the fast path had before it went flat)."""
     z, zp = solver._z, solver._zp
