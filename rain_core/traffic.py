@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from rain_core import layout
+from rain_core.collision import WALL_X_M
 from rain_core.vehicles import (
     PERIOD_M,
     SPECS,
@@ -88,6 +89,8 @@ class Autopilot:
     whatever is ahead in its lane.
     """
 
+    _phase_floats: tuple | None = None  # (the phases array, its two values as floats): see lateral_target_m
+
     def __init__(self, lane_index: int = 0, target_speed_m_s: float = 100.0 / 3.6, seed: int = 0,
                  wander_m: float = 0.08, lookahead_s: float = 0.9, min_lookahead_m: float = 6.0):
         if lane_index not in range(len(layout.LANE_CENTRES_X)):
@@ -109,8 +112,13 @@ class Autopilot:
     def lateral_target_m(self) -> float:
         """Where the autopilot aims now, m to the right of the lane centre (seeded slow wander)."""
         t = self.time_s
-        return self.wander_m * (0.6 * math.sin(math.tau * t / 17.0 + self._phases[0])
-                                + 0.4 * math.sin(math.tau * t / 7.3 + self._phases[1]))
+        # The phases as Python floats, made on first use (an autopilot pickled before them has none): the float64
+        # scalars' arithmetic is the floats' (the same bits) at several times the cost, every frame.
+        phases = self._phase_floats
+        if phases is None or phases[0] is not self._phases:
+            phases = self._phase_floats = (self._phases, *self._phases.tolist())
+        _, p0, p1 = phases
+        return self.wander_m * (0.6 * math.sin(math.tau * t / 17.0 + p0) + 0.4 * math.sin(math.tau * t / 7.3 + p1))
 
     def controls(self, car: Vehicle, dt_s: float, others=None) -> tuple[float, float, float]:
         """(throttle [0,1], brake [0,1], steer [−1,1]) for ``car`` this frame; dt_s (s) advances the wander clock."""
@@ -136,7 +144,8 @@ class Autopilot:
         fwd = car.forward()
         left = -car.right()
         alpha = math.atan2(float(w @ left), float(w @ fwd))
-        delta = math.atan(2.0 * spec.wheelbase_m * math.sin(alpha) / max(float(np.linalg.norm(w)), 1e-6))
+        # np.linalg.norm(w) is sqrt(w.dot(w)) (its own formula for a float vector), without its Python-level checks.
+        delta = math.atan(2.0 * spec.wheelbase_m * math.sin(alpha) / max(math.sqrt(w.dot(w)), 1e-6))
         steer = min(max(delta / spec.max_steer_at(v), -1.0), 1.0)
         recovery = self._recover(car, fwd, alpha)
         if recovery is not None:
@@ -153,8 +162,6 @@ class Autopilot:
     def _recover(self, car: Vehicle, fwd: np.ndarray, alpha: float) -> tuple[float, float, float] | None:
         """From a pose off its lane (across the kerb, facing a façade): brake before the wall, back away with the
         wheels turned so the nose swings towards the lane, then drive on. None: drive normally."""
-        from rain_core.collision import WALL_X_M
-
         v = car.speed_m_s
         heading_x = float(fwd[0])
         ahead = math.inf  # m along the heading to the wall it points at
@@ -286,8 +293,23 @@ class Traffic:
                             float(self.ego.velocity() @ d)))
         return members
 
+    def _all_lane_members(self) -> list[list[tuple[Vehicle, float, float, float]]]:
+        """``_lane_members`` of every lane, in one pass over the vehicles (the same tuples in the same order)."""
+        members: list[list] = [[] for _ in _LANE_DIRECTIONS]
+        for v, lane in zip(self.vehicles, self.lanes, strict=True):
+            members[lane].append((v, float(v.position @ _LANE_DIRECTIONS[lane]), v.spec.length_m / 2.0, v.speed_m_s))
+        ego = self.ego
+        if ego is not None:
+            velocity = None
+            for lane, d in enumerate(_LANE_DIRECTIONS):
+                if _in_lane(ego, lane):
+                    velocity = ego.velocity() if velocity is None else velocity
+                    members[lane].append((ego, float(ego.position @ d), ego.spec.length_m / 2.0,
+                                          float(velocity @ d)))
+        return members
+
     def _substep(self, h: float) -> None:
-        members = [self._lane_members(lane, _lane_direction(lane)) for lane in range(len(layout.LANE_CENTRES_X))]
+        members = self._all_lane_members()
         accels = []
         for v, lane, desired in zip(self.vehicles, self.lanes, self.desired_speeds_m_s, strict=True):
             others = []
@@ -302,8 +324,8 @@ class Traffic:
         for v, a in zip(self.vehicles, accels, strict=True):
             v1 = max(0.0, v.speed_m_s + a * h)
             ds = 0.5 * (v.speed_m_s + v1) * h
-            p = v.position  # position + forward()·ds, in scalars (the same bits, no temporaries)
-            v.position = np.array([p[0] + -math.sin(v.yaw) * ds, p[1] + 0.0 * ds, p[2] + -math.cos(v.yaw) * ds])
+            p0, p1, p2 = v.position.tolist()  # position + forward()·ds, in scalars (the same bits, no temporaries)
+            v.position = np.array([p0 + -math.sin(v.yaw) * ds, p1 + 0.0 * ds, p2 + -math.cos(v.yaw) * ds])
             v.speed_m_s = v1
             v.odometer_m += ds
         self._enforce_gaps()
@@ -313,9 +335,10 @@ class Traffic:
         stopped dead in front), hold it HARD_MIN_GAP_M behind at the leader's speed. A few passes settle chains."""
         for _ in range(4):
             moved = False
-            for lane in range(len(layout.LANE_CENTRES_X)):
+            # All lanes' members at once: a vehicle moved here is a member of its own lane alone (the ego, which
+            # may be in two, is never moved), so the later lanes' lists are what they would be made after it.
+            for lane, members in enumerate(self._all_lane_members()):
                 d = _lane_direction(lane)
-                members = self._lane_members(lane, d)
                 for v, s, half, _ in members:
                     if v is self.ego:
                         continue

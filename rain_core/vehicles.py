@@ -183,6 +183,7 @@ class Vehicle:
     _contacts_cache: tuple | None = None
     _model_cache: tuple | None = None
     _rotation_cache: tuple | None = None  # (yaw bits, to_world's transposed rotation)
+    _turned_cache: tuple | None = None  # (yaw bits, spec, the local wheel contacts rotated by the yaw)
 
     def __init__(self, spec: VehicleSpec = CAR_SPEC, position=None, yaw: float = 0.0, speed_m_s: float = 0.0,
                  color=(0.35, 0.02, 0.02)):
@@ -227,17 +228,19 @@ class Vehicle:
         self._model_cache = (key, model)
         return model
 
+    def _rotation_t(self, yaw: bytes) -> np.ndarray:
+        """to_world's transposed rotation for the yaw whose bits are ``yaw`` (the traffic's yaw stays: made once)."""
+        cached = self._rotation_cache
+        if cached is not None and cached[0] == yaw:
+            return cached[1]
+        c, s = math.cos(self.yaw), math.sin(self.yaw)  # model_matrix's rotation, without the 4×4 per call
+        rotation_t = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+        self._rotation_cache = (yaw, rotation_t)
+        return rotation_t
+
     def to_world(self, points_local) -> np.ndarray:
         """Local-frame points (n, 3) m → world (n, 3) m."""
-        yaw = _PACK_YAW(self.yaw)
-        cached = self._rotation_cache
-        if cached is not None and cached[0] == yaw:  # the traffic's yaw stays: its rotation is made once
-            rotation_t = cached[1]
-        else:
-            c, s = math.cos(self.yaw), math.sin(self.yaw)  # model_matrix's rotation, without the 4×4 per call
-            rotation_t = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
-            self._rotation_cache = (yaw, rotation_t)
-        return np.asarray(points_local, dtype=np.float64) @ rotation_t + self.position
+        return np.asarray(points_local, dtype=np.float64) @ self._rotation_t(_PACK_YAW(self.yaw)) + self.position
 
     def rear_axle(self) -> np.ndarray:
         """(3,) world ground point under the rear-axle centre (the bicycle model's reference point), m."""
@@ -269,9 +272,16 @@ class Vehicle:
         the pose and the spec stay)."""
         key = self._pose_key()
         cached = self._contacts_cache
-        if cached is not None and cached[0] == key and cached[1] is self.spec:
+        spec = self.spec
+        if cached is not None and cached[0] == key and cached[1] is spec:
             return cached[2]
-        contacts = self.to_world(_contacts_local(self.spec))
+        # to_world(local contacts) = (local @ rotation) + position: the product is kept while the yaw and the spec
+        # stay (the traffic moves along its lane without turning), and adding the position is to_world's last step.
+        yaw = key[-8:]  # (the pose key ends with the yaw's bits)
+        turned = self._turned_cache
+        if turned is None or turned[0] != yaw or turned[1] is not spec:
+            turned = self._turned_cache = (yaw, spec, _contacts_local(spec) @ self._rotation_t(yaw))
+        contacts = turned[2] + self.position
         contacts.flags.writeable = False
         self._contacts_cache = (key, self.spec, contacts)
         return contacts

@@ -453,3 +453,58 @@ def test_autopilot_steering_in_scalars_is_the_array_formula():
             assert steer == want
             compared += 1
     assert compared > 100
+
+
+def test_wheel_contacts_of_a_vehicle_that_keeps_its_yaw_follow_its_moves():
+    """The rotated local contacts are kept while the yaw and the spec stay (the traffic's): after moves along the
+    lane, in-place pushes, a new yaw and a new spec the contacts equal to_world's, bit for bit."""
+    from rain_core.vehicles import _contacts_local
+
+    traffic = Traffic(count=6, seed=4)
+    for _ in range(40):
+        traffic.step(1 / 30)
+        for v in traffic.vehicles:
+            assert v.wheel_contacts().tobytes() == v.to_world(_contacts_local(v.spec)).tobytes()
+    v = traffic.vehicles[0]
+    v.position[0] += 0.125
+    v.spec = VAN_SPEC if v.spec is not VAN_SPEC else CAR_SPEC
+    assert v.wheel_contacts().tobytes() == v.to_world(_contacts_local(v.spec)).tobytes()
+    v.yaw = v.yaw + 0.25
+    assert v.wheel_contacts().tobytes() == v.to_world(_contacts_local(v.spec)).tobytes()
+
+
+def test_all_lane_members_are_each_lanes_members():
+    """Traffic._all_lane_members (one pass) gives what _lane_members gives lane by lane, the ego between two lanes
+    included (it is then a member of both)."""
+    from rain_core.traffic import _lane_direction
+
+    ego = EgoCar(position=(layout.LANE_CENTRES_X[1], 0.0, 30.0), speed_m_s=15.0)
+    traffic = Traffic(count=9, seed=2, ego=ego)
+    middle = 0.5 * (layout.LANE_CENTRES_X[0] + layout.LANE_CENTRES_X[1])
+    for x, lanes_with_ego in ((layout.LANE_CENTRES_X[1], 1), (middle, 2), (20.0, 0)):
+        ego.position[0] = x
+        ego.yaw_rate_rad_s = 0.1
+        traffic.step(1 / 30)
+        want = [traffic._lane_members(lane, _lane_direction(lane)) for lane in range(len(layout.LANE_CENTRES_X))]
+        assert traffic._all_lane_members() == want
+        assert sum(any(m[0] is ego for m in lane) for lane in want) == lanes_with_ego
+
+
+def test_autopilot_wander_in_floats_is_the_arrays():
+    """lateral_target_m adds its phases as floats: the array phases' values at any time, also after the phases
+    are replaced and for an autopilot made before the floats existed (unpickled: no such attribute)."""
+    pilot = Autopilot(seed=5, wander_m=0.3)
+
+    def want(p):
+        t = p.time_s
+        return p.wander_m * (0.6 * math.sin(math.tau * t / 17.0 + p._phases[0])
+                             + 0.4 * math.sin(math.tau * t / 7.3 + p._phases[1]))
+
+    for t in (0.0, 1.0 / 3.0, 17.25, 1234.5):
+        pilot.time_s = t
+        assert pilot.lateral_target_m() == want(pilot)
+    pilot._phases = np.array([0.5, 2.5])
+    assert pilot.lateral_target_m() == want(pilot)
+    old = Autopilot.__new__(Autopilot)
+    old.__dict__.update({k: v for k, v in pilot.__dict__.items() if k != "_phase_floats"})
+    assert old.lateral_target_m() == want(pilot)
