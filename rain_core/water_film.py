@@ -314,141 +314,6 @@ def _packed_grids(seed: int, world) -> _PackedGrids:
 _NO_INDEX = np.zeros(0, np.int64)  # _standing_points' index when it samples every point
 
 
-# --- compiled twins (rain_core.jit) of the sampling below: the same IEEE operations point by point, so the
-# same bits (no transcendentals); the NumPy code stays the fallback and the oracle.
-
-@jit.kernel
-def _clamp01(v):
-    """np.minimum(np.maximum(v, 0.0), 1.0) of one float64 (NaN kept, as NumPy's)."""
-    v = v if (v >= 0.0 or v != v) else 0.0
-    return v if (v <= 1.0 or v != v) else 1.0
-
-
-@jit.kernel
-def _wrap(i, size):
-    """i mod size (the floor modulo of NumPy's int64 %) of an integer-valued float64, as a float: one float
-    division instead of an integer one (several times slower), exact below 2^52; beyond, int64's own %, and for
-    NaN and ±inf that of the int64 NumPy casts them to, so a row index is always inside the table."""
-    if abs(i) < 4503599627370496.0:
-        r = i - math.floor(i / size) * size
-        if r < 0.0:
-            r += size
-        elif r >= size:
-            r -= size
-        return r
-    if abs(i) < 9223372036854775808.0:
-        return float(np.int64(i) % np.int64(size))
-    # What NumPy's astype(int64) gives beyond int64 and for NaN on x86 (the samples there are NaN or meaningless,
-    # but a row inside the table all the same).
-    return float(np.int64(-9223372036854775807 - 1) % np.int64(size))
-
-
-@jit.kernel
-def _texel_cell(x, z, half_x, ext_x, ext_z, nx, nz, top_col, offset, row_len):
-    """(table row, tx, tz) of a bilinear sample at x, z (m) on one grid: ``_PackedGrids.sample``'s arithmetic
-    (x on the asphalt: finite)."""
-    fx = (x + half_x) / ext_x * nx - 0.5
-    fz = z / ext_z * nz - 0.5
-    i0 = np.floor(fx)
-    j0 = np.floor(fz)
-    column = np.int64(min(max(i0, -1.0), top_col) + offset)
-    return np.int64(_wrap(j0, nz)) * row_len + column, fx - i0, fz - j0
-
-
-@jit.kernel
-def _lerp(t0, t1, t2, t3, tx, tz):
-    """The bilinear blend of four float32 taps with float64 weights, in the twin's order."""
-    ux = 1.0 - tx
-    top = np.float64(t0) * ux + np.float64(t1) * tx
-    bot = np.float64(t2) * ux + np.float64(t3) * tx
-    return top * (1.0 - tz) + bot * tz
-
-
-# Points whose two table rows _standing_points copies out before it uses any: the table (17 MB) is cold in a frame,
-# and a loop that loads and then computes point by point waits for each cache miss in turn (~4× the warm time).
-_GATHER_CHUNK = 64
-
-
-@jit.kernel
-def _standing_points(table, fc, fi, x, z, index, m, crack_at, puddle_at, standing, shelter):
-    """``_road_depths`` before the kerb streams at on-road points x, z (float64 m): the standing water (mm) and the
-    shelter into ``standing`` and ``shelter``, at points ``index[:m]`` (all points when m < 0). Both grids of
-    ``_PackedGrids.sample`` (constants ``fc``, ``fi`` by grid) and the formulas, the twin's operations in its
-    order (the helpers take scalars only: one taking arrays costs more per call than a point). Chunk by chunk,
-    the texels of every point are gathered first (independent loads, so their misses overlap), then blended."""
-    count = x.size if m < 0 else m
-    rows = np.empty((_GATHER_CHUNK, 2), np.int64)
-    weights = np.empty((_GATHER_CHUNK, 4))
-    for start in range(0, count, _GATHER_CHUNK):
-        stop = min(start + _GATHER_CHUNK, count)
-        touched = np.float32(0.0)
-        for j in range(start, stop):
-            k = j if m < 0 else index[j]
-            xk = x[k]
-            zk = z[k]
-            q = j - start
-            a, tx, tz = _texel_cell(xk, zk, fc[0, 0], fc[0, 1], fc[0, 2], fc[0, 3], fc[0, 4], fc[0, 5], fc[0, 6],
-                                    fi[0, 1])
-            b, tx_b, tz_b = _texel_cell(xk, zk, fc[1, 0], fc[1, 1], fc[1, 2], fc[1, 3], fc[1, 4], fc[1, 5],
-                                        fc[1, 6], fi[1, 1])
-            touched += table[a, 0] + table[b, 0]
-            rows[q, 0] = a
-            rows[q, 1] = b
-            weights[q, 0] = tx
-            weights[q, 1] = tz
-            weights[q, 2] = tx_b
-            weights[q, 3] = tz_b
-        if touched != touched:  # (keeps the loads: their value is not needed)
-            weights[0, 0] = weights[0, 0]
-        for j in range(start, stop):
-            k = j if m < 0 else index[j]
-            q = j - start
-            a, b = rows[q, 0], rows[q, 1]
-            tx, tz, tx_b, tz_b = weights[q, 0], weights[q, 1], weights[q, 2], weights[q, 3]
-            h = _lerp(table[a, 0], table[a, 1], table[a, 2], table[a, 3], tx, tz)
-            h_smooth = _lerp(table[a, 4], table[a, 5], table[a, 6], table[a, 7], tx, tz)
-            n = _lerp(table[b, 0], table[b, 1], table[b, 2], table[b, 3], tx_b, tz_b)
-            sh = _lerp(table[b, 4], table[b, 5], table[b, 6], table[b, 7], tx_b, tz_b)
-            crack = CRACK_MAX_MM * _clamp01((crack_at - h) / CRACK_DEPTH_SPAN)
-            ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
-            puddle = PUDDLE_MAX_MM * _clamp01((puddle_at - ground) / PUDDLE_DEPTH_SPAN)
-            wet = crack if (crack >= puddle or crack != crack) else puddle
-            standing[k] = wet * (1.0 - sh)
-            shelter[k] = sh
-
-
-@jit.kernel
-def _standing_where_wet_kernel(table, fc, fi, floors, crack_at, puddle_at, kerb, row_scale, col_scale, cols,
-                               cells, max_rows, x, z, out, shelter, scratch):
-    """``_standing_where_wet`` before the kerb streams: standing water (mm) into ``out`` (zeros on entry) at the
-    points of x, z (float64 (k,) m) that the dry-cell table does not rule out; the indices of the on-road points
-    beyond ``kerb`` (m, where the kerb streams may run) into ``scratch[1]``. Returns how many, or −1 when an
-    on-road point lies beyond ``max_rows`` puddle-map rows of z = 0 (the caller then samples everything).
-    ``shelter``: float64 scratch of ≥ k; ``scratch``: int64 (2, ≥ k)."""
-    maybe = scratch[0]
-    near = scratch[1]
-    m = 0
-    wet = 0
-    for k in range(x.size):
-        xk = x[k]
-        ax = abs(xk)
-        if not ax <= ROAD_HALF_WIDTH_M:
-            continue
-        rows = z[k] * row_scale
-        if not (-max_rows < rows and rows < max_rows):
-            return -1
-        col = min(math.floor((xk + ROAD_HALF_WIDTH_M) * col_scale), cols - 1.0)
-        cell = np.int64(_wrap(math.floor(rows) * cols + col, cells))
-        if ax > kerb:
-            near[m] = k
-            m += 1
-        elif not (floors[0, cell] < crack_at or floors[1, cell] < puddle_at):
-            continue
-        maybe[wet] = k
-        wet += 1
-    _standing_points(table, fc, fi, x, z, maybe, wet, crack_at, puddle_at, out, shelter)
-    return m
-
 
 def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
     """Standing water (mm) and the shelter at on-road points x, z (float64 (k,) m): ``_standing_water_mm`` and
@@ -456,7 +321,7 @@ def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
     puddle level (Python floats)."""
     if jit.active():
         standing, shelter = np.empty(x.size), np.empty(x.size)
-        _standing_points(grids.table, grids.kernel_constants, grids.kernel_ints, np.ascontiguousarray(x),
+        _kernels._standing_points(grids.table, grids.kernel_constants, grids.kernel_ints, np.ascontiguousarray(x),
                          np.ascontiguousarray(z), _NO_INDEX, -1, crack_at, puddle_at, standing, shelter)
     else:
         (h, h_smooth), (n, shelter) = grids.sample(x, z)
@@ -488,6 +353,8 @@ def _checked_levels(cracks, puddles, puddle_amount, wetness) -> tuple[float, flo
 def _depths(grids, x, z, crack_at: float, puddle_at: float, wet: float, gutter_k: float):
     """(standing, film) mm at float64 x, z (m) of one shape. Only the asphalt holds water: the maps are sampled
     there alone (callers such as the ripples ask for whole strips of cells, about half over the pavements)."""
+    if jit.active():
+        return _depths_compiled(grids, x, z, crack_at, puddle_at, wet, gutter_k)
     on_road = np.abs(x) <= ROAD_HALF_WIDTH_M
     if on_road.all():  # e.g. the wheels' points: no gather and scatter
         road, shelter = _road_depths(grids, x.reshape(-1), z.reshape(-1), crack_at, puddle_at, gutter_k)
@@ -497,6 +364,24 @@ def _depths(grids, x, z, crack_at: float, puddle_at: float, wet: float, gutter_k
         road, shelter = _road_depths(grids, x[on_road], z[on_road], crack_at, puddle_at, gutter_k)
         standing[on_road] = road
         film[on_road] = wet * (1.0 - shelter)
+    return standing, film
+
+
+def _depths_compiled(grids, x, z, crack_at: float, puddle_at: float, wet: float, gutter_k: float):
+    """``_depths`` with the kernels on: the on-road test, the samples, the film and the kerb band in one loop
+    (``film_points``); the kerb streams (a power law) stay NumPy's, at the points ``_road_depths`` gives them."""
+    flat_x, flat_z = np.ascontiguousarray(x).reshape(-1), np.ascontiguousarray(z).reshape(-1)
+    standing, film = np.empty(x.shape), np.empty(x.shape)
+    shelter, index = grids.kernel_scratch(flat_x.size)
+    kerb = _kerb_band_start(gutter_k) if gutter_k > 0.0 else math.inf
+    flat = standing.reshape(-1)
+    m, near = _kernels.film_points(grids.table, grids.kernel_constants, grids.kernel_ints, flat_x, flat_z, crack_at,
+                                   puddle_at, wet, kerb, flat, film.reshape(-1), shelter, index)
+    if gutter_k > 0.0 and m:
+        # _road_depths' choice: every on-road point of a small query, the kerb band's alone of a larger one.
+        at = index[0, :m] if m < KERB_BAND_MIN_POINTS else index[1, :near]
+        if at.size:
+            flat[at] = np.maximum(flat.take(at), gutter_depth_mm(flat_x.take(at), flat_z.take(at), gutter_k))
     return standing, film
 
 
@@ -553,7 +438,7 @@ def _standing_where_wet(grids, floors, levels, kerb, scale, x, z, crack_at, pudd
         flat_x, flat_z = np.ascontiguousarray(x).reshape(-1), np.ascontiguousarray(z).reshape(-1)
         out = np.zeros(x.shape)
         shelter, scratch = grids.kernel_scratch(flat_x.size)
-        m = _standing_where_wet_kernel(grids.table, grids.kernel_constants, grids.kernel_ints, floors,
+        m = _kernels._standing_where_wet_kernel(grids.table, grids.kernel_constants, grids.kernel_ints, floors,
                                        levels[0, 0], levels[1, 0], kerb, *scale, DRY_TEST_MAX_ROWS, flat_x, flat_z,
                                        out.reshape(-1), shelter, scratch)
         if m < 0:
@@ -598,3 +483,8 @@ def film_depth_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=No
     """
     standing, film = water_depths_mm(x_m, z_m, cracks, puddles, puddle_amount, seed, world, wetness, gutter_k)
     return np.maximum(standing, film)
+
+
+# The compiled twins, by attribute at call time (they import this module's constants: whichever module is imported
+# first, both are complete before a sample is asked for).
+import rain_core.water_film_kernels as _kernels  # noqa: E402

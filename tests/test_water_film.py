@@ -105,3 +105,29 @@ def test_small_queries_take_the_dry_test_and_give_the_references_bits(kernel_pat
             standing, film = _reference(xs, zs, *levels[:3], levels[3], world, levels[4], levels[5])
             sampler = water_film.film_depth_sampler(*levels[:4], world, levels[4], levels[5])
             assert np.array_equal(sampler(xs, zs), np.maximum(standing, film))
+
+
+def test_wet_queries_of_any_size_give_the_references_bits(kernel_path):
+    """With the wet film (the compiled path samples, makes the film and finds the kerb band in one loop): queries
+    either side of KERB_BAND_MIN_POINTS, all on the asphalt or not, 2-D and scalar, give the reference's depths."""
+    world = water_film.default_world()
+    x, z = _points(np.random.default_rng(33), 2000)
+    x[-700:] = np.clip(x[-700:], -6.99, 6.99)  # the last points all on the asphalt, many in the kerb band
+    band = water_film.KERB_BAND_MIN_POINTS
+    for n in (1, 7, band - 1, band, band + 1, 640):
+        xs, zs = x[-n:], z[-n:]
+        for levels in ((1.0, 1.0, 0.5, 0, 1.0, 0.1), (0.6, 0.3, 1.0, 2, 0.4, 0.0), (0.0, 0.9, 0.5, 1, 0.7, 0.03)):
+            standing, film = _reference(xs, zs, *levels[:3], levels[3], world, levels[4], levels[5])
+            got = water_film.water_depths_mm(xs, zs, *levels[:4], world, levels[4], levels[5])
+            assert np.array_equal(got[0], standing) and np.array_equal(got[1], film)
+            sampler = water_film.film_depth_sampler(*levels[:4], world, levels[4], levels[5])
+            assert np.array_equal(sampler(xs, zs), np.maximum(standing, film))
+        mixed = slice(0, n)  # the first points: some off the asphalt
+        standing, film = _reference(x[mixed], z[mixed], 1.0, 1.0, 0.5, 0, world, 1.0, 0.1)
+        assert np.array_equal(water_film.film_depth_sampler(1.0, 1.0, 0.5, 0, world, 1.0, 0.1)(x[mixed], z[mixed]),
+                              np.maximum(standing, film))
+    grid = water_film.water_depths_mm(x[-60:].reshape(6, 10), z[-60:].reshape(6, 10), 1.0, 1.0, 0.5, 0, world, 1.0,
+                                      0.1)
+    flat = _reference(x[-60:], z[-60:], 1.0, 1.0, 0.5, 0, world, 1.0, 0.1)
+    for g, f in zip(grid, flat, strict=True):
+        assert g.shape == (6, 10) and np.array_equal(g.reshape(-1), f)
