@@ -56,6 +56,7 @@ class KernelScratch:
         self.owner = np.empty(entries, np.int64)
         self.ekey = np.empty(entries, np.int64)
         self.out = np.empty(cap, np.int64)
+        self.mid = np.empty((3, cap))
         self.gone = np.empty(cap, bool)  # sweep_blades
         self.cell_mark = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)  # drops_in_cells
         self.cell_count = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)

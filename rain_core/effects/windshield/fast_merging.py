@@ -52,7 +52,7 @@ class FastMerging:
             g[4, :n_go] = np.sqrt(ds_g * ds_g + dt_g * dt_g) if step_len is None else step_len
         status, n_roots, n_gone = kernels.merge_drops(
             self._buf, n, n_moved, self._fresh_buf, n_go, ks.go, ks.gcol, ks.gidx, ks.active, ks.parent, ks.nodes,
-            ks.mark, ks.sums, ks.count, ks.head, ks.nxt, ks.owner, ks.ekey, ks.out)
+            ks.mark, ks.sums, ks.count, ks.head, ks.nxt, ks.owner, ks.ekey, ks.out, ks.mid)
         if status < 0:
             return False
         if n_roots:
