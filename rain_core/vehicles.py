@@ -317,6 +317,10 @@ class Vehicle:
         self.previous_wheel_contacts = self.previous_wheel_contacts + np.array([0.0, 0.0, dz])
 
 
+_INSIDE = np.zeros((4, 3))  # contacts standing for a pose whose wheels are all inside the kerb lines (x = 0)
+_INSIDE.flags.writeable = False
+
+
 def _check_dt(dt_s: float) -> float:
     return checks.time_step(dt_s, MAX_STEP_DT_S)
 
@@ -351,18 +355,34 @@ class EgoCar(Vehicle):
         n = max(1, math.ceil(dt_s / EGO_SUBSTEP_S - 1e-9))
         h = dt_s / n
         contacts = self.previous_wheel_contacts
+        # Every wheel lies within ``reach`` of the centre across x: while |x| + reach stays inside the kerb lines
+        # no wheel can cross one, and the sub-step's contacts are not made (a pose inside counts as _INSIDE).
+        reach = self._wheel_reach()
         for _ in range(n):
             if self.collider is None:
                 self._substep(h, throttle, brake, steer, bool(reverse))
                 continue
             before = contacts
             self._substep(h, throttle, brake, steer, bool(reverse))
-            contacts = self.wheel_contacts()
-            up, down = kerb_crossings(before, contacts)
-            if up or down:
-                self.speed_m_s = kerb_speed(self.speed_m_s, up, down)
+            contacts = self._contacts_near_kerb(reach)
+            if before is not _INSIDE or contacts is not _INSIDE:
+                up, down = kerb_crossings(before, contacts)
+                if up or down:
+                    self.speed_m_s = kerb_speed(self.speed_m_s, up, down)
             if self.collider.resolve(self):  # pushed out of something: the wheels moved with the body
-                contacts = self.wheel_contacts()
+                contacts = self._contacts_near_kerb(reach)
+
+    def _wheel_reach(self) -> float:
+        """An upper bound (m) of any wheel contact's |x − position x|: the contacts' local reach (|c·lx + s·lz| ≤
+        hypot(lx, lz), wheel_contacts_local's ±track/2, ±wheelbase/2) and a µm for the rounding of to_world's."""
+        return math.hypot(self.spec.track_m / 2.0, self.spec.wheelbase_m / 2.0) + 1e-6
+
+    def _contacts_near_kerb(self, reach: float) -> np.ndarray:
+        """wheel_contacts(), or _INSIDE (every wheel is inside the kerb lines, as they are) when the centre is
+        further than ``reach`` inside them."""
+        if abs(float(self.position[0])) + reach < layout.ROAD_HALF_WIDTH_M:
+            return _INSIDE
+        return self.wheel_contacts()
 
     def _substep(self, h: float, throttle: float, brake: float, steer: float, reverse: bool) -> None:
         spec = self.spec

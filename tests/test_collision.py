@@ -260,3 +260,38 @@ def test_kerb_crossings_count_wheels_that_changed_side():
         after[:, 0] = rng.choice([-edge - 0.1, -edge, edge, edge + 0.1, 0.0], 4) + rng.normal(0.0, 0.05, 4)
         was, now = np.abs(before[:, 0]) > edge, np.abs(after[:, 0]) > edge
         assert kerb_crossings(before, after) == (int((now & ~was).sum()), int((was & ~now).sum()))
+
+
+def test_sub_steps_without_contacts_far_from_the_kerbs_are_the_full_steps(collider):
+    """EgoCar.step makes a sub-step's wheel contacts only where a wheel may reach a kerb line: over drives across
+    the kerbs, along them and into the walls, every step ends where the loop that made them all ends, bit for bit,
+    with the same kerb losses."""
+    from rain_core.collision import kerb_crossings
+
+    def reference_step(car, dt, throttle, brake, steer):  # EgoCar.step's loop with every sub-step's contacts
+        car.previous_wheel_contacts = car.wheel_contacts()
+        n = max(1, math.ceil(dt / 0.01 - 1e-9))
+        contacts = car.previous_wheel_contacts
+        for _ in range(n):
+            before = contacts
+            car._substep(dt / n, throttle, brake, steer, False)
+            contacts = car.wheel_contacts()
+            up, down = kerb_crossings(before, contacts)
+            if up or down:
+                car.speed_m_s = kerb_speed(car.speed_m_s, up, down)
+            if car.collider.resolve(car):
+                contacts = car.wheel_contacts()
+
+    rng = np.random.default_rng(17)
+    crossings = 0
+    for x, yaw in ((layout.LANE_CENTRES_X[1], 0.0), (5.4, 0.12), (-5.3, -0.2), (6.2, 0.0), (1.75, 0.6)):
+        fast, slow = _car(collider, x=x, yaw=yaw, speed=14.0), _car(collider, x=x, yaw=yaw, speed=14.0)
+        for _ in range(150):
+            controls = (rng.uniform(0.0, 1.0), rng.uniform(0.0, 0.2), rng.uniform(-1.0, 1.0))
+            dt = float(rng.choice([1 / 30, 1 / 60, 0.1]))
+            fast.step(dt, *controls)
+            reference_step(slow, dt, *controls)
+            assert fast.position.tobytes() == slow.position.tobytes()
+            assert (fast.yaw, fast.speed_m_s, fast.steer_rad) == (slow.yaw, slow.speed_m_s, slow.steer_rad)
+            crossings += sum(kerb_crossings(slow.previous_wheel_contacts, slow.wheel_contacts()))
+    assert crossings > 5
