@@ -311,25 +311,16 @@ def _packed_grids(seed: int, world) -> _PackedGrids:
     return _PackedGrids(seed, world)
 
 
-_NO_INDEX = np.zeros(0, np.int64)  # _standing_points' index when it samples every point
-
-
-
 def _road_depths(grids: _PackedGrids, x, z, crack_at, puddle_at, gutter_k):
     """Standing water (mm) and the shelter at on-road points x, z (float64 (k,) m): ``_standing_water_mm`` and
     the gutter streams as ``water_depths_mm`` computes them. crack_at = cracks·CRACK_LEVEL, puddle_at = the
-    puddle level (Python floats)."""
-    if jit.active():
-        standing, shelter = np.empty(x.size), np.empty(x.size)
-        _kernels._standing_points(grids.table, grids.kernel_constants, grids.kernel_ints, np.ascontiguousarray(x),
-                         np.ascontiguousarray(z), _NO_INDEX, -1, crack_at, puddle_at, standing, shelter)
-    else:
-        (h, h_smooth), (n, shelter) = grids.sample(x, z)
-        # np.clip's values, without its Python-level wrapper (two ufuncs: the same numbers, NaN included).
-        crack = CRACK_MAX_MM * np.minimum(np.maximum((crack_at - h) / CRACK_DEPTH_SPAN, 0.0), 1.0)
-        ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
-        puddle = PUDDLE_MAX_MM * np.minimum(np.maximum((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0), 1.0)
-        standing = np.maximum(crack, puddle) * (1.0 - shelter)
+    puddle level (Python floats). The NumPy twins' path (with the kernels on, _depths_compiled does this)."""
+    (h, h_smooth), (n, shelter) = grids.sample(x, z)
+    # np.clip's values, without its Python-level wrapper (two ufuncs: the same numbers, NaN included).
+    crack = CRACK_MAX_MM * np.minimum(np.maximum((crack_at - h) / CRACK_DEPTH_SPAN, 0.0), 1.0)
+    ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
+    puddle = PUDDLE_MAX_MM * np.minimum(np.maximum((puddle_at - ground) / PUDDLE_DEPTH_SPAN, 0.0), 1.0)
+    standing = np.maximum(crack, puddle) * (1.0 - shelter)
     if gutter_k > 0.0:
         if x.size < KERB_BAND_MIN_POINTS:
             return np.maximum(standing, gutter_depth_mm(x, z, gutter_k)), shelter
