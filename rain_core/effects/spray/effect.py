@@ -148,13 +148,15 @@ class SprayEffect(Effect):
         vel = tuple(frame.ego.velocity().tolist()) if frame.ego is not None else (0.0, 0.0, 0.0)
         # camera.basis()[2] (the normalised forward) without the right and up vectors it also makes. (Not cached:
         # the driver's camera turns a little every frame.)
+        # The dot stays NumPy's (BLAS may fuse it); its square root and the three divisions are IEEE's in floats too.
         fwd = np.asarray(camera.forward, dtype=np.float64)
-        norm = np.sqrt(fwd.dot(fwd))
+        norm = math.sqrt(fwd.dot(fwd))
+        fx, fy, fz = fwd.tolist()
         if norm > 0:
-            fwd = fwd / norm
+            fx, fy, fz = fx / norm, fy / norm, fz / norm
         owned = owned_uniforms(prog)
         owned.update({"u_clock": float(now), "u_shift_periods": float(round(rc.shift_z / layout.PERIOD_M)),
-                      "u_camera_vel": vel, "u_cam_forward": tuple(fwd.tolist())})
+                      "u_camera_vel": vel, "u_cam_forward": (fx, fy, fz)})
         exposure_s = getattr(getattr(frame.settings, "camera", None), "exposure_s", 0.02)
         key = (exposure_s, rc.size[0], rc.size[1], camera.near_m, camera.far_m, camera.fov_y_deg)
         owned.update_for("static", key, lambda: {
