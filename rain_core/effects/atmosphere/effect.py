@@ -31,7 +31,7 @@ from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import ColorView, RenderTarget, float_target
-from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform
+from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms
 from rain_core.settings import AtmosphereSection
 
 
@@ -117,12 +117,18 @@ class AtmosphereEffect(Effect):
         self._post_draws = state.glow_strength > 0.0 or scatter
 
     # --- GL -------------------------------------------------------------------------------------------------
-    def _program(self, rc: RenderContext, frag: str) -> tuple[moderngl.Program, moderngl.VertexArray]:
-        if frag not in self._programs:
+    def _program(self, rc: RenderContext, frag: str, axis: int | None = None
+                 ) -> tuple[moderngl.Program, moderngl.VertexArray]:
+        """The program of ``frag`` and its vertex array; ``axis`` (the blur's) makes one program per direction."""
+        key = frag if axis is None else (frag, axis)
+        if key not in self._programs:
             lib = self._shaders or rc.shaders
-            self._programs[frag] = prog = lib.program("common/fullscreen.vert", frag)
-            self._vaos[frag] = self.ctx.vertex_array(prog, [])
-        return self._programs[frag], self._vaos[frag]
+            # BLUR_AXIS is not read by the shader: it only keys a second program in the library, so each direction
+            # keeps its u_step and the two are not rewritten every frame (same code, same pixels).
+            defines = None if axis is None else {"BLUR_AXIS": axis}
+            self._programs[key] = prog = lib.program("common/fullscreen.vert", frag, defines=defines)
+            self._vaos[key] = self.ctx.vertex_array(prog, [])
+        return self._programs[key], self._vaos[key]
 
     def _glow_targets(self, size: tuple[int, int], factor: int) -> list[RenderTarget]:
         low = (max(1, -(-size[0] // factor)), max(1, -(-size[1] // factor)))
@@ -150,8 +156,7 @@ class AtmosphereEffect(Effect):
 
     def _draw_post(self, rc: RenderContext) -> None:
         ctx = self.ctx
-        ctx.disable(moderngl.DEPTH_TEST)
-        ctx.disable(moderngl.BLEND)
+        ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND)  # one call for both flags
         self._depth_sampler.use(units.ATMOSPHERE_DEPTH)
         rc.hdr.depth.use(units.ATMOSPHERE_DEPTH)
         a, b = self._glow_targets(rc.size, self._glow_factor)
@@ -187,11 +192,11 @@ class AtmosphereEffect(Effect):
         a.fbo.use()
         down_vao.render(moderngl.TRIANGLES, vertices=3)
         sigma = min(self.glow_sigma_px / self._glow_factor, MAX_BLUR_RADIUS / 3.0)
-        blur, blur_vao = self._program(rc, "atmosphere/blur.frag")
-        owned = owned_uniforms(blur)
-        owned.update({"u_src": units.ATMOSPHERE_GLOW, "u_sigma_px": sigma, "u_radius": blur_radius(sigma)})
-        for step, src, dst in (((1, 0), a, b), ((0, 1), b, a)):
-            set_uniform(blur, "u_step", step)  # changes between the two draws: always written
+        radius = blur_radius(sigma)
+        for axis, step, src, dst in ((0, (1, 0), a, b), (1, (0, 1), b, a)):
+            blur, blur_vao = self._program(rc, "atmosphere/blur.frag", axis)  # one program per direction
+            owned_uniforms(blur).update({"u_src": units.ATMOSPHERE_GLOW, "u_sigma_px": sigma, "u_radius": radius,
+                                         "u_step": step})
             src.color.use(units.ATMOSPHERE_GLOW)
             dst.fbo.use()
             blur_vao.render(moderngl.TRIANGLES, vertices=3)

@@ -223,9 +223,8 @@ class DripsEffect(Effect):
             "u_slots": SLOTS, "u_shutter_s": float(shutter), "u_max_period_s": float(MAX_PERIOD_S),
             "u_pixel_rad": 2.0 * math.tan(math.radians(fov_y_deg) / 2.0) / rc.size[1]})
         ctx = self.ctx
-        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)  # one call for both flags
         rc.hdr.fbo.depth_mask = False  # test against the scene's depth, never write it
-        ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA
         owned = owned_uniforms(prog)
         for first, count, z_base in self._ranges:  # written where they differ from the last draw's (one range: rarely)

@@ -12,6 +12,8 @@ Units: m, s, m/s; D in mm."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from rain_core import physics
@@ -100,10 +102,14 @@ def drop_table(heights_m, lam_instances: float) -> np.ndarray:
 def time_split(t: float) -> tuple[int, float, int]:
     """t (s, float64) → (whole seconds of t mod TIME_PERIOD_S, the fraction, the epoch mod 2^32): what the GPU
     gets, so that float32 keeps full precision at any t."""
-    epoch = np.floor(t / TIME_PERIOD_S)
+    # In Python floats (twice a frame): np.floor's value is x itself where x is whole (-0.0 kept), else math.floor's;
+    # the rest is the same float64 arithmetic (tests/effects/rainfall/test_cpu_paths.py keeps NumPy's as the oracle).
+    x = t / TIME_PERIOD_S
+    fl = math.floor(x)
+    epoch = x if fl == x else float(fl)
     tau = t - epoch * TIME_PERIOD_S
-    whole = min(int(np.floor(tau)), TIME_PERIOD_S - 1)
-    return whole, float(tau - whole), int(epoch) & 0xFFFFFFFF
+    whole = min(math.floor(tau), TIME_PERIOD_S - 1)
+    return whole, tau - whole, int(epoch) & 0xFFFFFFFF
 
 
 def cycles(m: np.ndarray, phase: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:

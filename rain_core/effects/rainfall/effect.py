@@ -39,13 +39,13 @@ from rain_core.effects.rainfall.vehicle_fate import vehicle_uniform_pairs, vehic
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import owned_uniforms, set_uniforms
+from rain_core.gfx.uniforms import owned_uniforms, set_uniform, set_uniforms
 
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
 PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
-# The light uniforms: rc.set_frame_uniforms writes the frame's into a program that declares them (drop.glsl does),
-# and render() then writes the lights that reach the boxes over them where those differ.
+# The light uniforms: drop.glsl declares them as plain uniforms (FRAME_OWN_LIGHTS); _use writes the lights that
+# reach the boxes, where they changed, and keeps rc.set_frame_uniforms from writing the frame's (_frame_block_only).
 _LIGHT_NAMES = ("u_light_pos", "u_light_dir", "u_light_color", "u_light_count")
 
 
@@ -59,6 +59,25 @@ def _light_struct(count: int) -> struct.Struct:
 _ENV_INPUTS = ("u_sun_dir", "u_sun_illum", "u_sky_zenith", "u_sky_horizon", "u_ground_albedo", "u_extinction_per_m",
                "u_airlight", "u_medium_extinction_per_m", "u_airlight_sun", "u_airlight_sun_dir", "u_phase_g",
                "u_phase_back_g", "u_phase_back_weight")
+
+
+def _frame_block_only(prog, rc, bind: bool = True) -> None:
+    """rc.set_frame_uniforms(prog) without writing the frame's light list: the frame block bound, and the plain
+    frame uniforms written unless they are the light list, which _use writes filtered (OwnedUniforms: only when it
+    changed). Writing the frame's 24 lights only to overwrite them was 8 GL calls a frame. Nothing else may write
+    these programs' lights (OwnedUniforms compares with what _use wrote last). bind=False: the block this context
+    holds is bound already (the streaks' draw just before bound it; nothing in between binds another)."""
+    blocks = rc.frame_blocks
+    if blocks is None:
+        rc.set_frame_uniforms(prog)  # raises as it does there
+        return
+    values, data = rc._frame_state()
+    info = blocks.program_info(prog)
+    if info.has_block and bind:
+        blocks.use(data)
+    for target, value in info.plain_values(values):
+        if target.name not in _LIGHT_NAMES:  # none today (drop.glsl's plain frame names are the lights)
+            set_uniform(prog, target.name, value)
 
 
 def _f32(values) -> bytes:
@@ -211,7 +230,7 @@ class RainfallEffect(Effect):
             rel_x = float(cam[0]) - float(car[0])
             rel_z = float(cam[2]) - float(car[2])
             rel_z -= PERIOD_M * round(rel_z / PERIOD_M)
-            vx, vy, vz = (float(c) for c in ego.velocity())
+            vx, vy, vz = ego.velocity().tolist()  # float64 (3,): the same floats as float() of each
             omega = float(getattr(ego, "yaw_rate_rad_s", 0.0))
             return np.array((vx + omega * rel_z, vy, vz - omega * rel_x))
         pos = np.asarray(frame.camera.position, dtype=np.float64)
@@ -269,28 +288,27 @@ class RainfallEffect(Effect):
         # In floats (a few dozen lights; NumPy's many small calls cost more, cold, after the other passes): the
         # gap from the box in float64, its squared length summed as NumPy's einsum sums three terms ((x, z) then
         # y), against w² rounded to float32 as NumPy's float32 product (w < 0: a low beam).
+        # Each gap as max(lo - x, x - hi, 0.0) gives it (lo < hi), in branches: the builtin max was half the loop.
         vals = _light_struct(count).unpack_from(pos_b)
         ranges = array("f", [w * w for w in vals[3::4]])
+        it = iter(vals)
         keep = []
-        for i, r2 in enumerate(ranges):
-            x, y, z = vals[4 * i: 4 * i + 3]
-            gx = max(lx - x, x - hx, 0.0)
-            gy = max(ly - y, y - hy, 0.0)
-            gz = max(lz - z, z - hz, 0.0)
+        for i, r2, x, y, z, _w in zip(range(count), ranges, it, it, it, it, strict=True):
+            gx = lx - x if x < lx else (x - hx if x > hx else 0.0)
+            gy = ly - y if y < ly else (y - hy if y > hy else 0.0)
+            gz = lz - z if z < lz else (z - hz if z > hz else 0.0)
             if gx * gx + gz * gz + gy * gy < r2:
                 keep.append(i)
         n = len(keep)
         if n == count:
             return rc.lights
+        pad = bytes(size - 16 * n)
         if n == 0 or keep[-1] == n - 1:  # the nearest n (pack_nearest sorts by distance): a prefix of each buffer
-            pad = bytes(size - 16 * n)
             return pos_b[:16 * n] + pad, dir_b[:16 * n] + pad, col_b[:16 * n] + pad, n
-        # The three arrays packed in one pass (one gather, one tobytes), then cut into their three byte strings.
-        arr = np.frombuffer(pos_b + dir_b + col_b, np.float32).reshape(3, -1, 4)
-        packed = np.zeros_like(arr)
-        packed[:, :n] = arr[:, keep]
-        data = packed.tobytes()
-        return data[:size], data[size:2 * size], data[2 * size:], n
+        # The kept lights' 16 bytes each, in order, then the zero padding (what a gather into zeros gave).
+        return (b"".join([pos_b[16 * i: 16 * i + 16] for i in keep]) + pad,
+                b"".join([dir_b[16 * i: 16 * i + 16] for i in keep]) + pad,
+                b"".join([col_b[16 * i: 16 * i + 16] for i in keep]) + pad, n)
 
     def _draw_environment(self, rc) -> None:
         """Draw what a drop shows into the environment map, unless nothing it reads changed since it was drawn:
@@ -305,8 +323,7 @@ class RainfallEffect(Effect):
         if not self._optics_set:
             set_uniforms(self.env_prog, optics_uniforms())
             self._optics_set = True
-        self.ctx.disable(moderngl.BLEND)
-        self.ctx.disable(moderngl.DEPTH_TEST)
+        self.ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
         self._env_fbo.use()
         self._env_vao.render(moderngl.TRIANGLES, vertices=3)
         rc.hdr.fbo.use()
@@ -406,12 +423,10 @@ class RainfallEffect(Effect):
         return (("u_cam_vel", tuple(self.camera_velocity_m_s.tolist())), ("u_exposure_s", float(s.camera.exposure_s)),
                 ("u_near", float(rc.frame.camera.near_m)))
 
-    def _use(self, prog, rc, upd: RainUpdate, frame_pairs, lights, own_pairs) -> None:
+    def _use(self, prog, rc, upd: RainUpdate, frame_pairs, lights, own_pairs, bind: bool = True) -> None:
         """Bind the frame's uniforms to prog and write this effect's where they changed (OwnedUniforms)."""
-        rc.set_frame_uniforms(prog)
+        _frame_block_only(prog, rc, bind)
         cache = owned_uniforms(prog)
-        for name, value in zip(_LIGHT_NAMES, rc.lights, strict=True):
-            cache.assume(name, value)  # what set_frame_uniforms just wrote
         cache.update_once(self._constant_pairs(upd))
         cache.update_pairs(frame_pairs)
         cache.update_pairs(zip(_LIGHT_NAMES, lights, strict=True))
@@ -431,22 +446,23 @@ class RainfallEffect(Effect):
         self._draw_environment(rc)
         self._env_tex.use(units.RAINFALL_ENV)
         self._bind_static()
-        ctx.enable(moderngl.BLEND)
+        ctx.enable(moderngl.BLEND | moderngl.DEPTH_TEST)  # one call for both flags
         ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE)
-        ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
         rc.hdr.fbo.depth_mask = False
+        bound = False  # whether the streaks' draw bound this context's frame block
         try:
             if self.sim.capacity and upd.drawn_expected > 0.0:
                 self._use(self.streak_prog, rc, upd, frame_pairs, lights, self._streak_pairs(rc, s))
                 self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
+                bound = True
             if s.rainfall.splashes and upd.splashes and upd.splash_accept > 0.0:
                 count, tau = splash_clock(upd.time_s)
                 own = [("u_splash_count", count), ("u_splash_tau", tau), ("u_splash_accept", upd.splash_accept),
                        ("u_splash_weight", upd.splash_weight), ("u_splash_lam", upd.splash_lam),
                        ("u_wetness", upd.wetness), ("u_puddles", upd.puddles)]
                 own += splash_box_pairs(upd.boxes, SPLASH_LAYER, rc.shift_z)
-                self._use(self.splash_prog, rc, upd, frame_pairs, lights, own)
+                self._use(self.splash_prog, rc, upd, frame_pairs, lights, own, bind=not bound)
                 self._splash_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.splash_capacity)
         finally:
             rc.hdr.fbo.depth_mask = True

@@ -221,8 +221,9 @@ class RainfallSim:
         self._layout(inp.container_m)
         boxes = layer_boxes(inp.camera_position, inp.camera_forward, inp.container_m)
         scale = inp.density_scale * self.fade
-        lo, hi = boxes.lo[SPLASH_LAYER], boxes.hi[SPLASH_LAYER]
-        area = float((hi[0] - lo[0]) * (hi[2] - lo[2]))
+        lo_x, _, lo_z = boxes.lo[SPLASH_LAYER].tolist()  # Python floats: the same float64 products
+        hi_x, _, hi_z = boxes.hi[SPLASH_LAYER].tolist()
+        area = (hi_x - lo_x) * (hi_z - lo_z)
         key = (self.rate_eff, scale, area)
         if key != self._thin_key:  # the rate settles after the ramp: then nothing here is recomputed
             a, b, c = thinning(self.rate_eff, scale, float(self.density.sum()))
@@ -232,7 +233,8 @@ class RainfallSim:
             self._thin_key = key
         a, b, c, drawn, per_s, weight, lam = self._thin
         outer = 0.5 * inp.container_m
-        near = cull_vehicles(inp.vehicles, inp.camera_position[[0, 2]], 2.0 * outer) if inp.vehicles else []
+        cam = inp.camera_position
+        near = cull_vehicles(inp.vehicles, (cam[0], cam[2]), 2.0 * outer) if inp.vehicles else []
         upd = RainUpdate(
             time_s=t, boxes=boxes, rate_mm_h=self.rate_eff, wind_m_s=wind, wind_integral_m=self.wind_integral.copy(),
             thin_a=a, thin_b=b, thin_c=c, density=self.density, starts=self.starts, drawn_expected=drawn,

@@ -132,7 +132,7 @@ def vehicle_uniform_pairs(vehicles, shift_z: float, around_z: float) -> tuple:
     pose = [0.0] * (4 * MAX_VEHICLES)
     shift_z, around_z = float(shift_z), float(around_z)
     for i, veh in enumerate(vehicles):
-        x, y, z = (float(v) for v in veh.position)
+        x, y, z = np.asarray(veh.position, np.float64).tolist()  # float() of each, in one call
         pose[4 * i: 4 * i + 4] = (x, y, float(wrap_near(z - shift_z, around_z)), float(veh.yaw))
     lo, hi, planes = _pieces(tuple(veh.spec for veh in vehicles))[1]
     return (("u_veh_pose", _POSE.pack(*pose)), ("u_veh_lo", lo), ("u_veh_hi", hi), ("u_veh_plane", planes),

@@ -44,3 +44,33 @@ def test_the_medium_is_modelled_once_and_again_when_its_inputs_change(gl_ctx, ki
     assert effect.frame_uniforms(kit.frame(camera, world, settings, 2.0, 18.0))["u_extinction_per_m"] \
         < thicker["u_extinction_per_m"] and len(calls) == 4  # another rate: modelled again
     effect.release()
+
+
+def test_each_blur_direction_keeps_its_own_program_and_step(gl_ctx, shaders, kit):
+    """The two blur draws use one program each (so u_step is written once, not twice a frame): after frames
+    drawn with another renderer's atmosphere in between and a glow resolution change, the horizontal program
+    still holds (1, 0) and the vertical (0, 1), and the glow equals a fresh renderer's."""
+    world = kit.world([kit.box((0.0, 1.5, 570.0), (0.4, 0.4, 0.4), (2.0, 2.0, 2.0))])
+    camera = look_at((0.0, 1.5, 600.0), (0.0, 1.5, 500.0), fov_y_deg=40.0)
+    settings = Settings()
+    settings.atmosphere.glow = 2.0
+    renderers = [kit.renderer(gl_ctx, shaders, world, (64, 36)) for _ in range(2)]
+    try:
+        frame = kit.frame(camera, world, settings, 30.0, 22.0)
+        for resolution in (0.5, 0.25):
+            settings.atmosphere.glow_resolution = resolution
+            for r in renderers * 2:
+                r.render(frame)
+            effect = renderers[0].effects[0]
+            blur = {key[1]: prog for key, prog in effect._programs.items() if isinstance(key, tuple)}
+            assert blur[0] is not blur[1]
+            assert tuple(blur[0]["u_step"].value) == (1, 0) and tuple(blur[1]["u_step"].value) == (0, 1)
+            fresh = kit.renderer(gl_ctx, shaders, world, (64, 36))
+            try:
+                fresh.render(frame)
+                renderers[0].render(frame)
+                assert np.array_equal(renderers[0].hdr_image(), fresh.hdr_image())
+            finally:
+                kit.release(fresh)
+    finally:
+        kit.release(*renderers)

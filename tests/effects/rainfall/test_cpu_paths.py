@@ -20,9 +20,11 @@ from rain_core.effects.rainfall.constants import (
     LAYER_SCALES,
     MAX_VEHICLES,
     SPLASH_LAYER,
+    TIME_PERIOD_S,
     TOP_PAD_M,
     TOP_SLOPE,
 )
+from rain_core.effects.rainfall.drops import time_split
 from rain_core.effects.rainfall.effect import RainfallEffect
 from rain_core.effects.rainfall.sim import RainfallSim
 from rain_core.effects.rainfall.vehicle_fate import (
@@ -348,3 +350,55 @@ def test_environment_key_holds_the_lighting_and_each_medium_uniform():
     assert draw() == 3
     lighting = object()  # another hour or overcast
     assert draw() == 4 and draw() == 4
+
+
+def _time_split_numpy(t):
+    """time_split's NumPy form (the oracle of its float form)."""
+    epoch = np.floor(t / TIME_PERIOD_S)
+    tau = t - epoch * TIME_PERIOD_S
+    whole = min(int(np.floor(tau)), TIME_PERIOD_S - 1)
+    return whole, float(tau - whole), int(epoch) & 0xFFFFFFFF
+
+
+def test_time_split_in_floats_equals_the_numpy_form_bit_for_bit():
+    rng = np.random.default_rng(17)
+    times = [0.0, -0.0, 1.0, TIME_PERIOD_S, -TIME_PERIOD_S, 3.0 * TIME_PERIOD_S - 1e-12, -1e-300, 5e-324,
+             float(2 ** 40 * TIME_PERIOD_S), 1e15 + 0.5]
+    times += rng.uniform(-1e5, 1e5, 2000).tolist() + (rng.integers(-50, 50, 500) * TIME_PERIOD_S).astype(float).tolist()
+    times += (10.0 ** rng.uniform(-6, 12, 2000)).tolist() + (np.arange(3000) / 30.0).tolist()
+    for t in times:
+        got, want = time_split(t), _time_split_numpy(t)
+        assert [type(v) for v in got] == [type(v) for v in want], t
+        assert struct.pack("=qdq", *got) == struct.pack("=qdq", *want), t
+
+
+def test_the_frames_light_list_is_not_written_into_the_rain_programs(gl_ctx, shaders, rain, monkeypatch):
+    """The rain programs get their lights from _use alone (the filtered list, where it changed): the frame's own
+    list, which set_frame_uniforms would write first, never reaches them; what they hold is this frame's
+    filtered list (_check_programs) at every frame, culled or not."""
+    import moderngl
+
+    s = rain.settings(rate=12.0, mode="driver", budget=3000, hour=22.0, container_m=20.0)
+    scene, effect = rain.scene(gl_ctx, shaders, s, seed=4)
+    writes = []
+    write = moderngl.Uniform.write
+
+    def spy(uniform, data):
+        writes.append((uniform.name, bytes(data)))
+        return write(uniform, data)
+
+    try:
+        culled = 0
+        for _ in range(6):
+            scene.step(1.0 / 30.0)
+            writes.clear()
+            monkeypatch.setattr(moderngl.Uniform, "write", spy)
+            frame = scene.render()
+            monkeypatch.setattr(moderngl.Uniform, "write", write)
+            rc = scene.renderer.render_context(frame)
+            if _check_programs(effect, rc):
+                culled += 1
+                assert ("u_light_pos", rc.lights[0]) not in writes
+        assert culled
+    finally:
+        scene.release()
