@@ -38,8 +38,9 @@ from rain_core.effects.ripples.wakes import wake_bumps
 from rain_core.effects.ripples.wheels import FilmDepthFn, WheelBatch
 from rain_core.effects.ripples.window import field_grid
 
-# The raindrop kernel's stand-in for "every cell is water" (one compiled signature: float32 (1, 1)).
-_NO_WATER = np.ones((1, 1), np.float32)
+# The raindrop kernel's stand-in for "every cell is water" (one compiled signature: bool (1, 1), the float32
+# solver's mask dtype).
+_NO_WATER = np.ones((1, 1), np.bool_)
 # The solvers that need no OpenGL context, by backend name.
 CPU_SOLVERS = {"reference": WaveSolver, "numpy32": WaveSolverF32}
 # Raindrop candidates per frame are at most this many times max_drops_per_frame (a window with little water
@@ -418,7 +419,7 @@ class RippleField:
             queue(batch)
             return round(batch.count * self._rain_water_fraction())
         water = self.solver.water_mask
-        if jit.active() and self.solver.mask_dtype is np.float32:  # the float32 solver: one loop
+        if jit.active() and isinstance(self.solver, WaveSolverF32):  # the float32 solver: one loop
             if self._rain_out.shape[1] < batch.count:  # the candidates are capped: this grows a few times at most
                 self._rain_out, self._rain_wet = np.empty((4, batch.count)), np.empty(batch.count, bool)
             law = batch.law

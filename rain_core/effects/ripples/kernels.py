@@ -23,7 +23,7 @@ _M32 = 0xFFFFFFFF
 @jit.kernel
 def leapfrog(z, zp, mask, use_mask, k, alpha, kc2):
     """``k`` leapfrog sub-steps of the float32 (n, n) levels ``z`` (current) and ``zp`` (previous), in place:
-    zp ← z + α(z − zp) + k_c²(Σ 4 neighbours − 4z) on the interior (× ``mask``, float32 0/1, where
+    zp ← z + α(z − zp) + k_c²(Σ 4 neighbours − 4z) on the interior (× ``mask``, bool or 0/1, where
     ``use_mask``), then the two swap roles. The twin's float32 operations in its order. Returns whether the
     levels ended swapped (k odd: the new current level is in the array passed as ``zp``)."""
     n = z.shape[0]
@@ -50,7 +50,7 @@ def leapfrog(z, zp, mask, use_mask, k, alpha, kc2):
                 s = s * kk
                 p = p + s
                 if use_mask:
-                    p = p * mask[i, j]
+                    p = p * np.float32(mask[i, j])  # × exactly 0 or 1, in float32 as the twin
                 out[j] = p
             out[0] = zero
             out[n - 1] = zero
@@ -144,7 +144,7 @@ def deposit_bumps(z, zp, mask, use_mask, xs, zs, radii, amounts, cell_m, min_rad
                         deposited += 1
                         cell = row * n + col
                         if use_mask:
-                            v = v * mf[cell]
+                            v = v * np.float64(mf[cell])
                         f = np.float32(v)
                         zf[cell] += f
                         pf[cell] += f
@@ -173,7 +173,7 @@ def raindrop_bumps(key, count, n, cell_m, water, use_water, cdf, grid, p_d, dp_d
                    crater_m_per_mm, peak_per_momentum, out, wet):
     """``raindrops.raindrops`` of a batch without its index: the rows of ``out`` (float64 (4, ≥ count)) take
     (x m, z m, crater radius m, dent m) of the candidates 0 … count − 1 of stream ``key`` whose centre's cell
-    holds water (``water`` (n, n) float32 > 0.5, where ``use_water``), in index order; returns how many. The
+    holds water (``water`` (n, n) bool or 0/1: > 0.5, where ``use_water``), in index order; returns how many. The
     same integer hashes, np.interp's inverse CDF (``cdf`` → ``grid``, mm) and the momentum table (``p_d``,
     ``dp_d`` kg·m/s over [d_min_mm, d_max_mm]), operation for operation. ``wet``: bool scratch of ≥ count."""
     xs = out[0]

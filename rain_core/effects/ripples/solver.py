@@ -265,9 +265,9 @@ class WaveSolver:
 
     @property
     def water_mask(self) -> np.ndarray | None:
-        """(n, n) 1 where water may move, 0 where held (``mask_dtype``: float for the NumPy solvers, which
-        multiply by it; bool on the GPU, whose CPU copy only scrolls and uploads); None when every interior cell
-        is water."""
+        """(n, n) 1 where water may move, 0 where held (``mask_dtype``: float64 for the reference, which multiplies
+        by it; bool for the float32 solver, whose steps multiply by it as 0.0 / 1.0, and on the GPU, whose CPU
+        copy only scrolls and uploads); None when every interior cell is water."""
         return self._mask
 
     def reset(self, height0=None):

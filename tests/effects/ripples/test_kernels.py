@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from rain_core import jit, physics
+from rain_core.effects.ripples import field as field_module
 from rain_core.effects.ripples import kernels
 from rain_core.effects.ripples.field import RippleField
 from rain_core.effects.ripples.raindrops import raindrops
@@ -255,3 +256,23 @@ def test_wake_kernel_gives_the_twins_bumps():
     assert (c0 == 0).any() and (c0 == 1).any() and ((c0 > 0) & (c0 % 3 == 0)).sum() > 10  # a real test
     for g, want in zip(b1, b0, strict=True):
         np.testing.assert_array_equal(g, want)
+
+
+class _FloatMaskSolver(WaveSolverF32):
+    """The float32 solver with the 0/1 float32 mask it kept before its mask became bytes."""
+
+    mask_dtype = np.float32
+
+
+def test_the_byte_mask_steps_as_the_float_mask_did(kernel_path, monkeypatch):
+    """The float32 solver keeps its water mask as bytes (a quarter of what the stencil, the scroll and the
+    raindrops read): the same drops, bumps and levels bit for bit as with a 0/1 float32 mask, through scrolls,
+    the mask's strips and bands, rain, wakes and spray."""
+    assert WaveSolverF32(8, 0.05, 0.35).mask_dtype is np.bool_
+    byte = _replay(40)
+    monkeypatch.setitem(field_module.CPU_SOLVERS, "numpy32", _FloatMaskSolver)
+    floats = _replay(40)
+    assert byte[1] == floats[1] and sum(r["drops"] for r in byte[1]) > 500
+    for a, b in zip(byte[0], floats[0], strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert np.abs(byte[0][-1]).max() > 0.0
