@@ -2,10 +2,10 @@
 uploads every frame, instead of a chain of small NumPy calls.
 
 Their NumPy twins stay the fallback and the oracle: ``splats.DropRows.rows`` (:func:`drop_rows`),
-``splats.film_splats`` (:func:`film_rows`) and the effect's coarse film bits, ``film_thickness_m`` × 1e6
-through ``splats.half_bits`` (:func:`coarse_half_bits`, which divides by ρ × area itself). The same float64
-operations in the same order, each rounded to float32 once where the twin casts: the same bits
-(tests/effects/windshield/test_render_kernels.py). Units: m, m/s, kg.
+``splats.film_splats`` (:func:`film_rows`, :func:`impact_rows`) and the effect's coarse film bits,
+``film_thickness_m`` × 1e6 through ``splats.half_bits`` (:func:`coarse_half_bits`, which divides by ρ × area
+itself). The same float64 operations in the same order, each rounded to float32 once where the twin casts: the
+same bits (tests/effects/windshield/test_render_kernels.py). Units: m, m/s, kg.
 """
 
 from __future__ import annotations
@@ -87,6 +87,39 @@ def film_rows(trails, impacts, min_width_m, trail_um, min_splash_m, max_splashes
             out[row, 3] = t
             out[row, 4] = r
             out[row, 5] = impacts[i, 3] * 1e6
+            out[row, 6] = 2.0
+            out[row, 7] = (row - k + seed0) % 65536
+            row += 1
+    return row
+
+
+@jit.kernel
+def impact_rows(s, t, d_mm, splash, obj, a_obj, to_film, r_per_mm, rho_pi, min_splash_m, max_splashes, k, seed0,
+                row, out):
+    """``film_rows``' splash rows of one sub-step's impacts, from the columns the fast path keeps them as
+    (``WindshieldSim.impact_columns``: s, t m, raindrop diameter mm, splash fraction, the rows ``obj``
+    (ascending) that became drops with their radius ``a_obj`` m, film kg) instead of ``frame_impacts``' (m, 4)
+    array: its splash radius (d_mm × ``r_per_mm``, or the drop's radius, × (1.5 + 4 splash)) and film thickness
+    (kg / (``rho_pi`` × r × r)) with its operations. Rows from ``row`` on, ``k`` the trail rows before the
+    splashes (the seed counts from there); returns the next row."""
+    j = 0
+    n_obj = obj.shape[0]
+    for i in range(s.shape[0]):
+        if row - k >= max_splashes:
+            break
+        if j < n_obj and obj[j] == i:
+            r = a_obj[j]
+            j += 1
+        else:
+            r = d_mm[i] * r_per_mm
+        r *= 1.5 + 4.0 * splash[i]
+        if r >= min_splash_m:
+            out[row, 0] = s[i]
+            out[row, 1] = t[i]
+            out[row, 2] = s[i]
+            out[row, 3] = t[i]
+            out[row, 4] = r
+            out[row, 5] = to_film[i] / (rho_pi * r * r) * 1e6
             out[row, 6] = 2.0
             out[row, 7] = (row - k + seed0) % 65536
             row += 1

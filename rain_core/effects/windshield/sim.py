@@ -90,6 +90,8 @@ from rain_core.physics import G_M_S2, RHO_WATER
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
 _GRID_O = (-1.0, -0.2)  # grid._GRID_ORIGIN, as floats for the sort key
+SPLASH_R_PER_MM = 1e-3 * (math.pi / (6.0 * VOLUME_PER_RADIUS3)) ** (1.0 / 3.0)  # a whole raindrop's radius ∝ d
+RHO_PI = RHO_WATER * math.pi  # (frame_impacts' film thickness: kg / (RHO_PI × r × r))
 _G0, _G1 = _grid_shape(GRID_CELL_M)
 _GRID_O2 = np.array(_GRID_O)
 _NO_ROWS = np.zeros(0, np.int64)
@@ -397,15 +399,21 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         for s, t, d_mm, splash, obj, a_obj, to_film in self._impacts:
             end = row + len(s)
             block = out[row:end]
-            r = d_mm * (1e-3 * (math.pi / (6.0 * VOLUME_PER_RADIUS3)) ** (1.0 / 3.0))  # a whole drop's radius ∝ d
+            r = d_mm * SPLASH_R_PER_MM
             r[obj] = a_obj
             r *= 1.5 + 4.0 * splash
             block[:, 0] = s
             block[:, 1] = t
             block[:, 2] = r
-            block[:, 3] = to_film / (RHO_WATER * math.pi * r * r)
+            block[:, 3] = to_film / (RHO_PI * r * r)
             row = end
         return out
+
+    def impact_columns(self) -> list[tuple]:
+        """The last step's impacts as the arrivals keep them, a tuple a sub-step: (s, t (m), raindrop diameter (mm),
+        splash fraction, the indices (ascending) of those that became drops, their radius (m), film (kg)), the
+        columns ``frame_impacts`` assembles (the water pass reads them directly: render_kernels.impact_rows)."""
+        return self._impacts
 
     def frame_trails(self) -> np.ndarray:
         """Paths of running drops in the last step: (n, 5) s0, t0, s1, t1 (m), drop radius (m)."""

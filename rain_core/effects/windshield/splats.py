@@ -24,6 +24,7 @@ from rain_core.effects.windshield.constants import BEAD_BINS, TRAIL_FILM_M
 from rain_core.effects.windshield.drop_rows import VT as _VT
 from rain_core.effects.windshield.drop_rows import A as _A
 from rain_core.effects.windshield.drop_rows import S as _S
+from rain_core.effects.windshield.sim import RHO_PI, SPLASH_R_PER_MM
 from rain_core.physics import RHO_WATER
 
 # A drop buffer instance (the vertex format "4f 1f/i"): (s, t, vs, vt) m, m/s and the contact radius (m) of a
@@ -140,6 +141,7 @@ def drop_splats(sim, texel_m: float | None = None) -> np.ndarray:
 
 
 _MAX_SPLASHES = 4096  # the most splash speckles a frame draws
+_NO_IMPACTS = np.zeros((0, 4))
 _TRAIL_UM = TRAIL_FILM_M * 1e6 * 4 / math.pi  # a trail line's film (µm) × its visible width / the drop radius
 
 
@@ -155,13 +157,24 @@ class FilmRows:
         if not jit.active():
             return film_splats(sim, texel_m)
         trails = np.ascontiguousarray(sim.frame_trails(), np.float64)  # (the fast path's are already)
-        impacts = np.ascontiguousarray(sim.frame_impacts(), np.float64)
-        need = len(trails) + min(len(impacts), _MAX_SPLASHES)
+        blocks = sim.impact_columns() if hasattr(sim, "impact_columns") else None
+        # The fast path's impacts straight from their columns: frame_impacts' (m, 4) array costs a dozen NumPy
+        # calls over a frame's ~1,500 impacts.
+        impacts = _NO_IMPACTS if blocks is not None else np.ascontiguousarray(sim.frame_impacts(), np.float64)
+        n_impacts = len(impacts) if blocks is None else sum(len(cols[0]) for cols in blocks)
+        need = len(trails) + min(n_impacts, _MAX_SPLASHES)
         if need > len(self._out):
             self._out = np.zeros((max(need, 2 * len(self._out), 256), 8), np.float32)
+        out = self._out
+        seed0 = 7 * sim.arrival_count
         total = render_kernels.film_rows(trails, impacts, 0.6 * texel_m, _TRAIL_UM, 0.5 * texel_m, _MAX_SPLASHES,
-                                         7 * sim.arrival_count, self._out)
-        return self._out[:total]
+                                         seed0, out)
+        if blocks:
+            k = len(trails)
+            for s, t, d_mm, splash, obj, a_obj, to_film in blocks:
+                total = render_kernels.impact_rows(s, t, d_mm, splash, obj, a_obj, to_film, SPLASH_R_PER_MM, RHO_PI,
+                                                   0.5 * texel_m, _MAX_SPLASHES, k, seed0, total, out)
+        return out[:total]
 
 
 def film_splats(sim, texel_m: float) -> np.ndarray:

@@ -142,3 +142,23 @@ def test_the_effects_coarse_film_bits_are_the_twins(gl_ctx, shaders):
         wet += int(np.count_nonzero(want) > 100)
     assert wet > 30
     effect.release()
+
+
+@needs_numba
+def test_film_rows_from_the_impact_columns_over_sub_steps_and_the_cap_are_the_twins():
+    # Long frames in a downpour at speed: several sub-steps' blocks of impacts a frame, and past 4,096 of them the
+    # rows stop (the cap counted across the blocks). The rows made from the columns are the twin's to the bit.
+    sim = WindshieldSim(seed=5)
+    inputs = GlassInputs.for_speed(150.0, 80.0, drop_budget=3000, wiper_mode="low")
+    film_rows = FilmRows()
+    seen = {"blocks": 0, "capped": 0}
+    for dt in (0.1, 0.1, 1 / 30, 0.1, 0.05):
+        sim.step(dt, inputs)
+        with jit.forced(True):
+            film = film_rows.rows(sim, 1.2 / 512)
+        with jit.forced(False):
+            want = film_splats(sim, 1.2 / 512)
+        assert film.shape == want.shape and film.tobytes() == want.tobytes()
+        seen["blocks"] += int(len(sim.impact_columns()) > 1)
+        seen["capped"] += int(len(sim.frame_impacts()) > 4096)
+    assert seen["blocks"] >= 3 and seen["capped"] >= 1
