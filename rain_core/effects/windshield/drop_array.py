@@ -34,7 +34,7 @@ class KernelScratch:
     """Work arrays of the compiled kernels (``kernels``) for a drop array of capacity ``cap``: made once, kept
     (not copied with the simulation), so a step allocates nothing large."""
 
-    def __init__(self, cap: int):
+    def __init__(self, cap: int, extra_rows: int = 0):
         self.cap = cap
         self.go = np.empty(cap, np.int64)  # move_drops: the drops that slid, and their motion
         self.gcol = np.empty((6, cap))
@@ -69,6 +69,10 @@ class KernelScratch:
         self.order = np.empty(4 * cap, np.int64)
         self.tmp = np.zeros((cap, _COLS))  # (the shapes of the drop array: sort_rows may swap them)
         self.tmp_fresh = np.zeros(cap, bool)
+        # The drops' float32 rows the sort's full copy wrote (sort_rows), with room for ``extra_rows`` bead rows
+        # after them (splats.DropRows), and the drops' version (DropArray.version) they are of, or -1.
+        self.rows32 = np.zeros((cap + extra_rows, 5), np.float32)
+        self.rows32_of = -1
         self.film_loss = np.empty(FILM_CELLS * FILM_CELLS)  # evaporate_film
         self.thick = np.empty(FILM_CELLS * FILM_CELLS, np.int64)
 
@@ -99,8 +103,17 @@ class DropArray:
         """The compiled kernels' work arrays, for the drop array's capacity."""
         ks = self._ks
         if ks is None or ks.cap < len(self._buf):
-            ks = self._ks = KernelScratch(len(self._buf))
+            ks = self._ks = KernelScratch(len(self._buf), self.beads.size)
         return ks
+
+    def drop_rows32(self) -> np.ndarray | None:
+        """The drops' float32 rows (s, t, vs, vt, contact radius: ``splats.DROP_ROW``) as the last sort wrote them
+        while it copied every row, with room for the beads' rows after them; None when the drops changed since
+        (``version``), or the last sort moved few rows (it did not copy them all) or ran the NumPy twin."""
+        ks = self._ks
+        if ks is None or ks.rows32_of != self.version:
+            return None
+        return ks.rows32
 
     @property
     def pos(self) -> np.ndarray:
@@ -245,16 +258,20 @@ class DropArray:
         """Keep the drops in merge-grid cell order (grid.grid_keys), as the reference does."""
         if self._dirty:
             self._flush_placed()
+        if self._ks is not None:
+            self._ks.rows32_of = -1  # (a later sub-step moves drops without a new version)
         n = self._n
         if n < 2:
             return
         if jit.active():
             ks = self._scratch()
-            if kernels.sort_rows(self._buf, self._fresh_buf, n, ks.hist, ks.order, ks.tmp, ks.tmp_fresh) == 2:
+            if kernels.sort_rows(self._buf, self._fresh_buf, n, ks.hist, ks.order, ks.tmp, ks.tmp_fresh,
+                                 ks.rows32) == 2:
                 # The sorted rows are in the scratch: it becomes the drop array, the old array the scratch.
                 self._buf, ks.tmp = ks.tmp, self._buf
                 self._fresh_buf, ks.tmp_fresh = ks.tmp_fresh, self._fresh_buf
                 self._rows = self._buf.view(_ROW).ravel()
+                ks.rows32_of = self.version  # what changes the drops from here on counts a new version
             return
         keys = self._buf[:n, _KEY]
         if not np.count_nonzero(keys[1:] < keys[:-1]):

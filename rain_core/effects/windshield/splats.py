@@ -48,7 +48,9 @@ def half_bits(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
 
 class DropRows:
     """Builds the drop buffer's rows (``DROP_ROW``) of a simulation frame after frame into one array it keeps
-    (grown when the drops outnumber it): each call's rows are valid until the next call."""
+    (grown when the drops outnumber it): each call's rows are valid until the next call. With the compiled kernels,
+    the rows the simulation's last sort wrote (``drop_rows32``) where they hold: those are valid until the
+    simulation changes (the effect keys its rows on its version)."""
 
     def __init__(self):
         self._out = np.zeros((0, 5), np.float32)
@@ -116,6 +118,12 @@ class DropRows:
             frames = np.array(_blade_frames(sim))
         else:  # no bin has water: the kernel draws no line, whatever the blades' frames
             frames = self._no_frames
+        sorted_rows = sim.drop_rows32() if hasattr(sim, "drop_rows32") else None
+        if sorted_rows is not None and len(sorted_rows) >= n + beads.size:
+            # The drops' rows as the step's last sort wrote them: only the beads' rows are written after them.
+            total = n + render_kernels.drop_rows(block, 0, _S, _A, beads, self._w_scale_flat, self._ends_flat,
+                                                 frames, sorted_rows[n:])
+            return sorted_rows[:total].view(DROP_ROW)[:, 0]
         total = render_kernels.drop_rows(block, n, _S, _A, beads, self._w_scale_flat, self._ends_flat, frames,
                                          self._out)
         return self._out[:total].view(DROP_ROW)[:, 0]

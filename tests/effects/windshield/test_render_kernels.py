@@ -162,3 +162,45 @@ def test_film_rows_from_the_impact_columns_over_sub_steps_and_the_cap_are_the_tw
         seen["blocks"] += int(len(sim.impact_columns()) > 1)
         seen["capped"] += int(len(sim.frame_impacts()) > 4096)
     assert seen["blocks"] >= 3 and seen["capped"] >= 1
+
+
+@needs_numba
+def test_drop_rows_written_by_the_sort_are_used_only_while_the_drops_stay_as_sorted():
+    # The sort's full copy writes the drops' float32 rows (drop_rows32); DropRows takes them while the drops'
+    # version is the sort's. A change after the step (a setter), a later sort that moves nothing, and a copy of
+    # the simulation each leave them out: the rows stay the twin's.
+    import copy
+
+    inputs = GlassInputs.for_speed(100.0, 30.0, drop_budget=3000, wiper_mode="low")
+    sim = WindshieldSim(seed=7)
+    builder = DropRows()
+
+    def assert_rows_are_the_twins(s):
+        with jit.forced(True):
+            rows = builder.rows(s).tobytes()
+        with jit.forced(False):
+            assert rows == DropRows().rows(s).tobytes()
+
+    with jit.forced(True):
+        for _ in range(25):
+            sim.step(1 / 30, inputs)
+    assert sim.drop_rows32() is not None  # (drops sliding at speed: the sort copied every row)
+    assert_rows_are_the_twins(sim)
+    sim.pos = sim.pos + 1e-3
+    assert sim.drop_rows32() is None
+    assert_rows_are_the_twins(sim)
+    with jit.forced(True):
+        sim.step(0.1, inputs)  # three sub-steps
+        assert sim.drop_rows32() is not None
+        assert_rows_are_the_twins(sim)
+        sim.mass = sim.mass * 1.5
+        assert_rows_are_the_twins(sim)
+        sim.step(1 / 30, inputs)
+        assert sim.drop_rows32() is not None
+        sim._sort_drops()  # in order already: nothing copied, nothing kept
+        assert sim.drop_rows32() is None
+        sim.step(1 / 30, inputs)
+    twin = copy.deepcopy(sim)
+    assert twin.drop_rows32() is None
+    assert_rows_are_the_twins(twin)
+    assert_rows_are_the_twins(sim)

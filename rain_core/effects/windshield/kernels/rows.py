@@ -8,7 +8,7 @@ from rain_core.effects.windshield.constants import (
     M_OBJECT_MIN,
 )
 from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
-from rain_core.effects.windshield.drop_rows import KEY, M, S, T
+from rain_core.effects.windshield.drop_rows import KEY, A, M, S, T
 from rain_core.effects.windshield.kernels.common import film_cell, inside
 
 
@@ -63,13 +63,15 @@ def _counts_to_starts(hist):
 
 
 @jit.kernel
-def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
+def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh, rows32):
     """``DropArray._sort_drops`` (after the position columns are written): rows [:n] in stable order of their
     merge-grid KEY (integers below 2^18: two 9-bit passes of a radix sort), only the span of rows that change
     places rewritten. ``hist``: int64 scratch of 512, ``order`` int64 scratch of 4n, ``tmp`` (rows) and
     ``tmp_fresh`` scratch of the shapes of ``buf`` and ``fresh``. Returns 0 (in order already), 1 (sorted in
     place) or 2 (most rows move: the sorted rows [:n] are in ``tmp`` and ``tmp_fresh``, for the caller to swap
-    with ``buf`` and ``fresh``: one pass over the rows instead of two)."""
+    with ``buf`` and ``fresh``: one pass over the rows instead of two; that pass also writes the sorted drops'
+    float32 rows s, t, vs, vt, radius into ``rows32``, (≥ n, 5): ``splats.DropRows`` reads them instead of the
+    array, whose rows are cold in the cache by the time the effect asks)."""
     ordered = True
     for i in range(1, n):
         if buf[i, KEY] < buf[i - 1, KEY]:
@@ -110,16 +112,21 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh):
         hi -= 1
     cols = buf.shape[1]
     # Most rows move: all of them are written in order into tmp once, and the caller swaps the arrays.
-    swap = 2 * (hi - lo) > n
-    if swap:
-        lo, hi = 0, n
+    if 2 * (hi - lo) > n:
+        for j in range(n):
+            r = src[j]
+            for c in range(cols):
+                tmp[j, c] = buf[r, c]
+            tmp_fresh[j] = fresh[r]
+            for c in range(4):  # S … VT: adjacent columns (drop_rows)
+                rows32[j, c] = buf[r, S + c]
+            rows32[j, 4] = buf[r, A]
+        return 2
     for j in range(lo, hi):
         r = src[j]
         for c in range(cols):
             tmp[j, c] = buf[r, c]
         tmp_fresh[j] = fresh[r]
-    if swap:
-        return 2
     for j in range(lo, hi):
         for c in range(cols):
             buf[j, c] = tmp[j, c]
