@@ -202,13 +202,27 @@ class RenderContext:
     def camera_position(self) -> np.ndarray:
         """Camera position (m) in the wrapped frame (read-only; made once per camera and shift: the draw lists,
         the frame block, the shadow and the mirrors ask for it)."""
+        return self._camera_cache()[3]
+
+    def _camera_floats(self) -> tuple[float, float, float]:
+        """``camera_position`` as a tuple of floats (the frame block's u_camera_pos)."""
+        return self._camera_cache()[4]
+
+    def _camera_cache(self) -> tuple:
         camera = self.frame.camera
         cached = self.__dict__.get("_cam_cache")
         if cached is None or cached[0] is not camera or cached[1] is not camera.position or cached[2] != self.shift_z:
-            position = np.asarray(camera.position, dtype=np.float64) - np.array([0.0, 0.0, self.shift_z])
+            # In floats: x − 0.0 is x (−0.0 included), so only z is subtracted, as the array subtraction would
+            position = camera.position
+            if type(position) is np.ndarray and position.dtype.kind == "f":
+                x, y, z = position.tolist()
+            else:
+                x, y, z = (float(v) for v in position)
+            floats = (x, y, z - float(self.shift_z))
+            position = np.array(floats)
             position.flags.writeable = False
-            cached = self.__dict__["_cam_cache"] = (camera, camera.position, self.shift_z, position)
-        return cached[3]
+            cached = self.__dict__["_cam_cache"] = (camera, camera.position, self.shift_z, position, floats)
+        return cached
 
     def wrap(self, world_points) -> np.ndarray:
         """World positions (…, 3) m → the wrapped frame the GPU uses."""
@@ -227,7 +241,7 @@ class RenderContext:
         key = (self.view, self.projection, self.frame, self.lights)
         values = {
             "u_view_proj": mat4_bytes(self.view_proj),
-            "u_camera_pos": tuple(self.camera_position.tolist()),
+            "u_camera_pos": self._camera_floats(),
             "u_time": self.frame.time_s,
             **_lighting_values(self.frame.lighting),
             "u_light_count": self.lights[3],
@@ -286,5 +300,37 @@ class RenderContext:
         key = (self.view, self.projection)
         cached = self.__dict__.get("_inv_cache")
         if cached is None or cached[0][0] is not key[0] or cached[0][1] is not key[1]:
-            cached = self.__dict__["_inv_cache"] = (key, inverse(self.view_proj))
+            cached = self.__dict__["_inv_cache"] = (key, inverse_view_proj(self.view_proj))
         return cached[1]
+
+
+# (rows of the view-projection inverted last, its inverse): the road's mirror view and the main view of a frame
+# are each other's mirror image about y = 0, and the second inverse is then the first with one row negated.
+_LAST_INVERSE: list = [None]
+_NEGATE_ROW_1 = np.array([[1.0], [-1.0], [1.0], [1.0]])
+
+
+def _mirrored_in_y(a: list, b: list) -> bool:
+    """Whether 4×4 ``a`` equals ``b`` with its column 1 negated (b @ diag(1, −1, 1, 1)); zeros of either sign
+    match."""
+    for ra, rb in zip(a, b, strict=True):
+        if ra[0] != rb[0] or ra[1] != -rb[1] or ra[2] != rb[2] or ra[3] != rb[3]:
+            return False
+    return True
+
+
+def inverse_view_proj(view_proj: np.ndarray) -> np.ndarray:
+    """``linalg.inverse(view_proj)``, the same bits, read-only. When ``view_proj`` is the matrix inverted last
+    times diag(1, −1, 1, 1) — the road reflection's view is the main view times that mirror — the inverse is the
+    last one with row 1 negated, without a second LAPACK call (~50 µs between the frame's GL work): negating a
+    column of A negates the same column of its LU factors (the pivots compare magnitudes) and the same row of the
+    solution, every rounding being symmetric. tests/gfx/test_linalg.py checks the bits on mirrored cameras."""
+    rows = view_proj.tolist()
+    last = _LAST_INVERSE[0]
+    if last is not None and _mirrored_in_y(rows, last[0]):
+        out = last[1] * _NEGATE_ROW_1
+    else:
+        out = inverse(view_proj)
+    out.flags.writeable = False
+    _LAST_INVERSE[0] = (rows, out)
+    return out

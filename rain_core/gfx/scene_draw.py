@@ -15,7 +15,7 @@ from rain_core import layout
 from rain_core.gfx import units
 from rain_core.gfx.frame import RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms
+from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, rows_bytes
 from rain_core.mesh import VERTEX_ATTRIBUTES, VERTEX_FORMAT
 
 # Share of direct sun/lamp light that reaches the cabin interior (the roof and pillars shade most of it).
@@ -160,9 +160,9 @@ class SceneDrawer:
             hit = models.get(id(vehicle))
             if hit is not None and hit[0] is vehicle and hit[1] == shift_z:
                 return hit[2]
-        model = vehicle.model_matrix().copy()
-        model[2, 3] -= shift_z
-        data = mat4_bytes(model)
+        rows = vehicle.model_matrix().tolist()
+        rows[2][3] -= shift_z  # the float64 subtraction of model[2, 3] -= shift_z, without copying the array
+        data = rows_bytes(rows)
         if models is not None:
             models[id(vehicle)] = (vehicle, shift_z, data)
         return data

@@ -368,3 +368,27 @@ def test_frame_uniforms_count_every_change_and_the_block_follows(gl_ctx):
         assert frame_block.unpack(renderer.frame_blocks.read_bound())["u_shadow_params"] == (2.0, 0.25, 0.5)
     finally:
         scene.release()
+
+
+def test_camera_position_is_the_array_formula_and_follows_the_camera(gl_ctx):
+    """camera_position (floats, only z shifted) equals position − (0, 0, shift_z) as arrays, −0.0 included; the
+    frame block's u_camera_pos is the same, and a moved camera (new array or new camera) is seen."""
+    scene = _scene(gl_ctx, 12.0)
+    try:
+        scene.step(1 / 30)
+        frame = scene.render()
+        renderer = scene.renderer
+        prog = renderer.scene.scene_prog
+        for position in ([-0.0, 1.25, 123.4], [3.5, -0.0, -0.0], [1.0, 2.0, 1e6 + 0.3], [0.1, 0.2, -712.25]):
+            camera = dataclasses.replace(frame.camera, position=np.array(position))
+            rc = renderer.render_context(dataclasses.replace(frame, camera=camera))
+            expected = np.asarray(camera.position, dtype=np.float64) - np.array([0.0, 0.0, rc.shift_z])
+            assert rc.camera_position.tobytes() == expected.tobytes()
+            assert not rc.camera_position.flags.writeable
+            rc.set_frame_uniforms(prog)
+            block = frame_block.unpack(renderer.frame_blocks.read_bound())
+            assert block["u_camera_pos"] == tuple(float(np.float32(v)) for v in expected)
+            camera.position = np.array(position) + 1.0  # replaced in place on the camera: seen
+            assert rc.camera_position.tobytes() == (expected + 1.0).tobytes()
+    finally:
+        scene.release()

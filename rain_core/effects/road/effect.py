@@ -78,6 +78,8 @@ class RoadEffect(Effect):
         self._film_values = None  # (levels key, film uniforms) last bound
         self._scene_static = None  # (settings key, scene uniforms that only the settings change)
         self._cabin_spec = None  # (car spec, cabin box)
+        self._cabin_inv = None  # (ego model array, shift_z, u_road_cabin bytes)
+        self._cabin_ahead = False  # the mirror pass makes the main view's u_road_cabin (see bind_scene)
 
     def set_world(self, world) -> None:
         """Take the road heightmap and roofs of ``world`` (done on the first update from ``frame.world`` when
@@ -205,6 +207,7 @@ class RoadEffect(Effect):
         size = (max(1, round(rc.size[0] * scale)), max(1, round(rc.size[1] * scale)))
         target = self._reflection_target(size)
         self._mirror_pass = True
+        self._cabin_ahead = bool(rc.frame.camera.inside_car and rc.frame.ego is not None)
         try:
             rc.renderer.draw_mirror_view(rc, target, mirror_about_road(rc.frame.camera), MIRROR_Y, MIRROR_CLIP_PLANE)
         finally:
@@ -256,12 +259,27 @@ class RoadEffect(Effect):
             out.set("u_road_rain_rings_tile", (1.0, 0.0))
         ego = rc.frame.ego
         if rc.frame.camera.inside_car and ego is not None and not mirror:
-            model = ego.model_matrix().copy()
-            model[2, 3] -= rc.shift_z
-            out.set("u_road_cabin", mat4_bytes(inverse(model)))
+            out.set("u_road_cabin", self._cabin_inverse(ego, rc.shift_z))
             out.set("u_road_cabin_box", self._cabin_box(ego.spec))
         else:
+            if mirror and self._cabin_ahead and ego is not None:
+                # The main view's inverse made now, just after this view's sky inverse: LAPACK's code is then in
+                # cache (a cold call, as in the scene pass after the reflection's GL work, costs ~50 µs more).
+                self._cabin_inverse(ego, rc.shift_z)
             out.set("u_road_cabin_box", (0.0, 0.0, 0.0, 0.0))
+
+    def _cabin_inverse(self, ego, shift_z: float) -> bytes:
+        """u_road_cabin: the inverse of the ego's model matrix in the wrapped frame, kept while its read-only model
+        array (the same object while the pose stays) and the shift are the same."""
+        model = ego.model_matrix()
+        cached = self._cabin_inv
+        if cached is not None and cached[0] is model and cached[1] == shift_z:
+            return cached[2]
+        shifted = model.copy()
+        shifted[2, 3] -= shift_z
+        data = mat4_bytes(inverse(shifted))
+        self._cabin_inv = (model, shift_z, data) if not model.flags.writeable else None
+        return data
 
     def _scene_values(self, road) -> dict:
         """The scene shader's road inputs that only the settings change (units, debug view, waves)."""

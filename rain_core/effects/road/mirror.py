@@ -32,7 +32,20 @@ MIRROR_CLIP_PLANE = (0.0, 1.0, 0.0, -MIRROR_CLIP_Y_M)
 def mirror_about_road(camera: Camera) -> Camera:
     """The camera mirrored about the road plane y = 0 (position and forward; ``up`` stays +Y). Used for the
     reflection pass's lights and eye position; its view matrix is the original's times diag(1, −1, 1)."""
-    flip = np.array([1.0, -1.0, 1.0])
-    return dataclasses.replace(camera, position=np.asarray(camera.position, dtype=np.float64) * flip,
-                               forward=np.asarray(camera.forward, dtype=np.float64) * flip,
-                               up=np.array([0.0, 1.0, 0.0]), inside_car=False)
+    # In floats (each frame): the products an array times (1, −1, 1) makes, elementwise, so the same bits
+    px, py, pz = _floats(camera.position)
+    fx, fy, fz = _floats(camera.forward)
+    position = np.array((px * 1.0, py * -1.0, pz * 1.0))
+    forward = np.array((fx * 1.0, fy * -1.0, fz * 1.0))
+    if type(camera) is Camera:  # the fields dataclasses.replace would pass, without its per-field walk
+        return Camera(position, forward, np.array([0.0, 1.0, 0.0]), camera.fov_y_deg, camera.near_m, camera.far_m,
+                      False, camera.focus_m)
+    return dataclasses.replace(camera, position=position, forward=forward, up=np.array([0.0, 1.0, 0.0]),
+                               inside_car=False)
+
+
+def _floats(v) -> list:
+    """A 3-vector as Python floats (an ndarray by one tolist: float32 widens exactly, as np.asarray does)."""
+    if type(v) is np.ndarray and v.dtype.kind == "f":
+        return v.tolist()
+    return [float(x) for x in v]

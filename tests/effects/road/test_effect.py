@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from rain_core import layout
 from rain_core.camera import Camera
 from rain_core.effects import road
 from rain_core.gfx.targets import float_target
@@ -277,3 +278,31 @@ def test_benchmark_quick_writes_table_and_plot(gl_ctx, tmp_path):
     errors = [float(line.split("|")[4]) for line in text.splitlines() if line.startswith("| 0.125 |")
               or line.startswith("| 1 |")]
     assert errors[-1] == 0.0 and errors[0] > 0.0  # scale 1 is the reference; a coarse texture differs
+
+
+def test_cabin_inverse_follows_the_ego_with_and_without_the_mirror_pass(gl_ctx):
+    """u_road_cabin (made ahead in the reflection pass, kept per model array and shift) is the inverse of the ego's
+    model in the wrapped frame after every move, with reflections on and off, and after a pose set in place."""
+    from rain_core.gfx.linalg import inverse
+    from rain_core.gfx.uniforms import mat4_bytes
+
+    settings = _settings()
+    effect = road.RoadEffect(gl_ctx, settings)
+    scene = Scene(gl_ctx, SIZE, settings, seed=1, effects=[effect], gpu_timing=False)
+    try:
+        scene.ego.speed_m_s = 20.0
+        prog = scene.renderer.scene.scene_prog
+        for step, reflections in enumerate((True, True, False, False, True)):
+            set_value(settings, "road.reflections", reflections)
+            if step == 3:
+                scene.ego.position = scene.ego.position + np.array([0.0, 0.0, 40.0])  # a new pose, not a step
+            else:
+                scene.step(1 / 30)
+            frame = scene.render()
+            assert effect.needs_reflection(frame) is reflections
+            shift_z = math.floor(float(frame.camera.position[2]) / layout.PERIOD_M) * layout.PERIOD_M
+            model = frame.ego.model_matrix().copy()
+            model[2, 3] -= shift_z
+            assert prog["u_road_cabin"].read() == mat4_bytes(inverse(model))
+    finally:
+        scene.release()
