@@ -13,6 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rain_core import jit
+from rain_core.gfx.light_kernels import gather_nearest
+
 MAX_LIGHTS = 32  # per frame, nearest to the camera; keep in sync with shaders/common/lighting.glsl
 
 
@@ -304,10 +307,21 @@ def pack_nearest(lights: LightSet, camera_position_wrapped, max_lights: int = MA
     set's rows packed once (``packed_rows``): the renderer packs each view's lights every frame (main and road
     mirror) from one candidate set."""
     cam = np.asarray(camera_position_wrapped, dtype=np.float64)
+    if jit.active():
+        # one call (light_kernels.gather_nearest) into a buffer kept per size: the bytes returned are copies
+        packed = _PACKED.get(max_lights)
+        if packed is None:
+            packed = _PACKED[max_lights] = np.zeros((3, max_lights, 4), np.float32)
+        count = gather_nearest(lights.position, cam, lights.packed_rows(), packed)
+        data, size = packed.tobytes(), 16 * max_lights
+        return data[:size], data[size:2 * size], data[2 * size:], count
     order = ((lights.position - cam) ** 2).sum(axis=1).argsort(kind="stable")[:max_lights]  # methods: no wrappers
     packed = np.zeros((3, max_lights, 4), np.float32)
     packed[:, : len(order)] = lights.packed_rows()[:, order]
     return packed[0].tobytes(), packed[1].tobytes(), packed[2].tobytes(), len(order)
+
+
+_PACKED: dict[int, np.ndarray] = {}  # max_lights → pack_nearest's kernel output, reused (its bytes are copied)
 
 
 def light_set_for_frame(lamps, vehicles, camera_position, lighting: Lighting, shift_z: float, period_m: float,

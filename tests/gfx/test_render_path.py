@@ -208,3 +208,28 @@ def test_mirror_views_keep_their_own_programs_values_across_live_changes(gl_ctx)
         if fresh is not None:
             fresh.release()
         scene.release()
+
+
+def _random_lights(rng, count):
+    from rain_core.lighting import LightSet
+
+    return LightSet(rng.normal(size=(count, 3)) * rng.uniform(1.0, 100.0), rng.normal(size=(count, 3)),
+                    rng.uniform(0.0, 1000.0, count), rng.uniform(0.0, 1.0, (count, 3)), rng.uniform(0.0, 1.0, count),
+                    rng.uniform(0.0, 1.0, count), rng.uniform(1.0, 50.0, count), rng.random(count) < 0.5)
+
+
+def test_pack_nearest_is_pack_lights_of_the_nearest(kernel_path):
+    """Both paths of pack_nearest (light_kernels.gather_nearest and its NumPy twin) give pack_lights' bytes of
+    nearest_lights, ties (lamps mirrored across the street, repeated positions) in index order; the kernel's
+    reused buffer leaves nothing of a longer list behind."""
+    rng = np.random.default_rng(21)
+    for count in (0, 1, 2, 5, 31, 32, 33, 60, 200, 3):
+        for trial in range(12):
+            lights = _random_lights(rng, count)
+            if count > 4 and trial % 2:
+                lights.position[1::2] = lights.position[0::2][: count // 2] * [-1.0, 1.0, 1.0]
+            camera = rng.normal(size=3) * 20.0
+            camera[0] = 0.0  # on the mirror line: equal distances
+            for slots in (MAX_LIGHTS, 8, 1):
+                expected = pack_lights(nearest_lights(lights, camera, slots), slots)
+                assert pack_nearest(lights, camera, slots) == expected
