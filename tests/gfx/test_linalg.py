@@ -43,8 +43,8 @@ def test_mat4_bytes_of_special_values_is_numpys():
     for _ in range(200):
         m = rng.normal(size=(4, 4))
         m[rng.random((4, 4)) < 0.4] = rng.choice(specials)
-        for a in (m, m.astype(np.float32)):
-            with np.errstate(over="ignore", invalid="ignore"):
+        with np.errstate(over="ignore", invalid="ignore"):  # NumPy warns where a value overflows float32
+            for a in (m, m.astype(np.float32)):
                 expected = np.ascontiguousarray(np.asarray(a, dtype=np.float32).T).tobytes()
                 assert mat4_bytes(a) == expected
                 assert rows_bytes(a.tolist()) == expected
