@@ -11,17 +11,27 @@
 #define RAIN_MAX_VEHICLES 8            // constants.MAX_VEHICLES
 #define RAIN_TURB_STEPS 3              // constants.TURBULENCE_STEPS
 
+// What changes every frame, for the streak and splash programs alike, in one block (std140; packed by
+// rain_block.py, bound at RAIN_FRAME_BINDING): one buffer write a frame instead of a dozen uniform writes.
+layout(std140) uniform RainFrame {
+    vec3 u_box_lo[LAYERS];         // m, wrapped frame
+    vec3 u_box_off[LAYERS];        // m: (∫wind − lo) mod ext (x, z); (BOX_BOTTOM − lo_y) mod height (y)
+    vec3 u_box_turb[LAYERS];       // m: TURB_EPS·∫wind mod ext (x, z)
+    vec4 u_veh_pose[RAIN_MAX_VEHICLES];  // x, y, z (wrapped frame), yaw
+    vec3 u_wind;                   // m/s
+    int u_time_whole;              // s, floor(t mod RAIN_TIME_PERIOD)
+    float u_time_frac;             // s, the rest
+    uint u_epoch;                  // floor(t / RAIN_TIME_PERIOD) mod 2^32
+    vec3 u_splash_lo;              // m, wrapped frame (splash.vert)
+    uint u_splash_count;           // whole splash periods of t, mod 2^32
+    vec3 u_splash_off;             // m, (−lo) mod ext in the world frame (x, z)
+    float u_splash_tau;            // the fraction
+    vec3 u_cam_vel;                // m/s, world (streak.vert)
+};
 uniform uint u_seed_key;               // drops.seed_key(seed)
 uniform int u_layer_start[LAYERS];    // first instance of each layer
 uniform sampler2D u_drop_table;        // RGBA32F (TABLE_SIZE × LAYERS): D mm, passes per period, v m/s, v_true
-uniform int u_time_whole;              // s, floor(t mod RAIN_TIME_PERIOD)
-uniform float u_time_frac;             // s, the rest
-uniform uint u_epoch;                  // floor(t / RAIN_TIME_PERIOD) mod 2^32
-uniform vec3 u_box_lo[LAYERS];         // m, wrapped frame
 uniform vec3 u_box_ext[LAYERS];        // m, box sizes: the drops' periods
-uniform vec3 u_box_off[LAYERS];        // m: (∫wind − lo) mod ext (x, z); (BOX_BOTTOM − lo_y) mod height (y)
-uniform vec3 u_box_turb[LAYERS];       // m: TURB_EPS·∫wind mod ext (x, z)
-uniform vec3 u_wind;                   // m/s
 uniform float u_turb_eps;              // drops.TURB_EPS
 uniform vec3 u_thin;                   // (A, B, c): r(D) = A·exp(−B·D), drawn when keep < min(1, r/c)
 // Occluders: the top-down roof height maps (m, −1e4 where open), z repeating with the world's period.
@@ -33,7 +43,6 @@ uniform float u_period_world;          // m, the world's period along z
 uniform float u_ground_y;              // m
 // Vehicles: pose (x, y, z wrapped frame, yaw); per piece a local box and two planes (n, d): inside ⇔ n·p ≤ d.
 uniform int u_veh_count;
-uniform vec4 u_veh_pose[RAIN_MAX_VEHICLES];
 uniform vec4 u_veh_lo[2 * RAIN_MAX_VEHICLES];
 uniform vec4 u_veh_hi[2 * RAIN_MAX_VEHICLES];
 uniform vec4 u_veh_plane[4 * RAIN_MAX_VEHICLES];

@@ -8,15 +8,11 @@
 // Splash slot j has one impact per period, at a phase from its index; the impact's place (world-anchored in the
 // splash layer's box), its drop and whether it is drawn come from hash(j, period count). Twin: RainfallSim.splashes.
 uniform uint u_splash_key;
-uniform uint u_splash_count;   // whole periods of t, mod 2^32
-uniform float u_splash_tau;    // the fraction
 uniform float u_splash_period; // s
 uniform float u_splash_accept; // share of the impacts drawn (the rate)
 uniform float u_splash_weight; // real impacts per drawn splash
 uniform float u_splash_lam;    // 1/mm, Marshall–Palmer slope
-uniform vec3 u_splash_lo;      // m, wrapped frame
 uniform vec3 u_splash_ext;     // m
-uniform vec3 u_splash_off;     // m, (−lo) mod ext in the world frame (x, z)
 uniform float u_splash_v[16];  // m/s, fall speed at D = 1.5 … 6 mm
 uniform float u_wetness;
 uniform float u_puddles;

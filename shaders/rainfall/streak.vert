@@ -5,7 +5,6 @@
 #include "rainfall/drop.glsl"
 #include "rainfall/drops.glsl"
 
-uniform vec3 u_cam_vel;             // m/s, world
 uniform float u_exposure_s;         // s
 uniform float u_near;               // m
 uniform vec3 u_box_fade[LAYERS];    // m

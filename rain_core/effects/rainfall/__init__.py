@@ -89,7 +89,8 @@ R = 0 after the ramp → ``active`` is False: no update, no pass. Switched off (
 forgets the history, so switching back on starts at the set rate. Per frame the CPU computes the boxes, the
 ramp, the thinning and ~60 uniforms; the GPU draws the environment map (64×32 texels), then one instanced quad
 per instance (culled in the vertex shader, before any lighting, when thinned out, outside the view, or
-occluded) and one billboard per splash slot. Nothing is uploaded per frame but uniforms. Texture units:
+occluded) and one billboard per splash slot. Nothing is uploaded per frame but uniforms (what changes every
+frame in one uniform block, ``rain_block.RainFrame``, shared by both programs). Texture units:
 ``units.RAINFALL_DROPS`` (drop table), ``RAINFALL_ENV`` (environment), ``RAINFALL_OCCLUDER`` and
 ``RAINFALL_OCCLUDER_COARSE`` (roof maps), ``RAINFALL_ROAD_HEIGHT`` (puddles, for the splash kinds).
 
@@ -99,7 +100,8 @@ Modules
 split), ``rates`` (budget share, thinning, splash flux), ``boxes`` (the container), ``vehicle_fate`` (vehicles as
 convex pieces), ``sim`` (``RainfallSim``: the per-frame uniforms, and the twin of every drop and splash),
 ``measure`` (weighted counts for tests and the benchmark), ``streaks`` (the NumPy twin of the streak shader),
-``optics`` (the drop's optics: the env.frag quadrature and its twin, the streak coverage) —
+``optics`` (the drop's optics: the env.frag quadrature and its twin, the streak coverage), ``box_uniforms`` and
+``rain_block`` (the per-frame uniforms and block packed from floats) —
 all NumPy only, no GL — and ``effect`` (``RainfallEffect``, the GL side, imported on first use).
 """
 

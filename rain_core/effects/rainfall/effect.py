@@ -15,7 +15,7 @@ import moderngl
 import numpy as np
 
 from rain_core import layout
-from rain_core.effects.rainfall.box_uniforms import box_pairs, splash_box_pairs
+from rain_core.effects.rainfall.box_uniforms import box_floats, box_shape_pairs, splash_box_pairs
 from rain_core.effects.rainfall.boxes import Boxes, wrap_near
 from rain_core.effects.rainfall.constants import (
     ALPHA_MAX,
@@ -32,10 +32,16 @@ from rain_core.effects.rainfall.constants import (
 )
 from rain_core.effects.rainfall.drops import TURB_EPS, time_split
 from rain_core.effects.rainfall.optics import optics_uniforms
+from rain_core.effects.rainfall.rain_block import (
+    RAIN_FRAME_BINDING,
+    RAIN_FRAME_BYTES,
+    pack_rain_frame,
+    rain_frame_from_uniforms,
+)
 from rain_core.effects.rainfall.shape import SHAPE_DIAMETERS_MM, drop_shape_factors
 from rain_core.effects.rainfall.sim import SPLASH_V_M_S, RainfallSim, RainInput, RainUpdate, box_offsets, splash_clock
 from rain_core.effects.rainfall.streaks import StreakCamera
-from rain_core.effects.rainfall.vehicle_fate import vehicle_uniform_pairs, vehicle_uniforms
+from rain_core.effects.rainfall.vehicle_fate import vehicle_pose_floats, vehicle_shape_pairs, vehicle_uniforms
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
@@ -80,6 +86,13 @@ def _frame_block_only(prog, rc, bind: bool = True) -> None:
             set_uniform(prog, target.name, value)
 
 
+def _bind_rain_frame_block(prog) -> None:
+    """Point prog's RainFrame block at RAIN_FRAME_BINDING (a program's setting: once per program)."""
+    block = prog.get("RainFrame", None)
+    if block is not None:
+        block.binding = RAIN_FRAME_BINDING
+
+
 def _f32(values) -> bytes:
     return np.ascontiguousarray(values, dtype=np.float32).tobytes()
 
@@ -119,6 +132,12 @@ class RainfallEffect(Effect):
         self._optics_set = False  # the drop optics' quadrature (optics.py): constant, written once
         self._env_key: tuple | None = None  # what the environment map was last drawn for (_draw_environment)
         self._splash_vao = ctx.vertex_array(self.splash_prog, [])
+        # The per-frame block (rain_block.py), this effect's own buffer: written when its bytes change, bound at
+        # each draw (another rainfall effect on the context binds its own there).
+        self._frame_buffer = ctx.buffer(reserve=RAIN_FRAME_BYTES)
+        self._frame_data: bytes | None = None
+        for prog in (self.streak_prog, self.splash_prog):
+            _bind_rain_frame_block(prog)
         self.sim: RainfallSim | None = None
         self._world = None
         self._table_tex = None
@@ -130,7 +149,7 @@ class RainfallEffect(Effect):
         self._prev_cam: tuple[np.ndarray, float] | None = None
         self.camera_velocity_m_s = np.zeros(3)
         self.last_update: RainUpdate | None = None
-        self._prepared: tuple | None = None  # (rc, its lights, the update, _lights, _frame_pairs) made in update
+        self._prepared: tuple | None = None  # (rc, its lights, the update, _lights, _frame_values) made in update
         self._constants: tuple | None = None  # (its key, the uniforms that rarely change: _constant_pairs)
         area, width = drop_shape_factors(SHAPE_DIAMETERS_MM)
         self._shape_area = area.astype(np.float32)
@@ -266,7 +285,7 @@ class RainfallEffect(Effect):
         if upd.rate_mm_h > 0.0 and getattr(rc, "lights", None) is not None:
             # The transparent pass's lights and uniforms, made now: this context draws it, and here the CPU is
             # not shared with the rasteriser still drawing the passes before (llvmpipe: ~3x the time there).
-            self._prepared = (rc, rc.lights, upd, self._lights(rc, upd.boxes), self._frame_pairs(upd, rc, s))
+            self._prepared = (rc, rc.lights, upd, self._lights(rc, upd.boxes), self._frame_values(upd, rc, s))
 
     def streak_camera(self, rc) -> StreakCamera:
         """The camera as the streak shader sees it this frame (for the NumPy twin)."""
@@ -403,25 +422,37 @@ class RainfallEffect(Effect):
         self._constants = (key, pairs)
         return pairs
 
-    def _frame_pairs(self, upd: RainUpdate, rc, s) -> list:
-        """(name, value) of the uniforms both programs get that may change every frame (drop_uniforms' and the
-        view's), values as float32 bytes, numbers or tuples of floats."""
-        whole, frac, epoch = time_split(upd.time_s)
+    def _frame_values(self, upd: RainUpdate, rc, s) -> tuple[list, bytes]:
+        """(pairs, block) for both programs: (name, value) of the plain uniforms that may change between frames
+        (float32 bytes, numbers or tuples of floats; written where they changed), and the RainFrame block's bytes
+        (what changes every frame: drop_uniforms', splash_uniforms' and the streaks' camera velocity)."""
         size = rc.size
+        shift_z = rc.shift_z
+        lo, ext, off, turb = box_floats(upd.boxes, upd.wind_integral_m, shift_z)
         pairs = [
             ("u_viewport", (float(size[0]), float(size[1]))),
             ("u_focal_px", float(rc.projection[1, 1]) * size[1] / 2.0),
             ("u_brightness", float(s.rainfall.streak_brightness)),
-            ("u_time_whole", whole), ("u_time_frac", frac), ("u_epoch", epoch),
-            ("u_wind", tuple(upd.wind_m_s.tolist())), ("u_thin", (upd.thin_a, upd.thin_b, upd.thin_c)),
+            ("u_thin", (upd.thin_a, upd.thin_b, upd.thin_c)),
+            *box_shape_pairs(upd.boxes, ext), *vehicle_shape_pairs(upd.vehicles),
         ]
-        pairs += box_pairs(upd.boxes, upd.wind_integral_m, rc.shift_z)
-        pairs += vehicle_uniform_pairs(upd.vehicles, rc.shift_z, float(rc.camera_position[2]))
-        return pairs
+        (_, splash_lo), splash_ext, (_, splash_off) = splash_box_pairs(upd.boxes, SPLASH_LAYER, shift_z)
+        pairs.append(splash_ext)  # the splash program's (the streak program lacks it: skipped)
+        count, tau = splash_clock(upd.time_s)
+        block = pack_rain_frame(lo, off, turb, vehicle_pose_floats(upd.vehicles, shift_z, float(rc.camera_position[2])),
+                                upd.wind_m_s.tolist(), time_split(upd.time_s), splash_lo, count, splash_off, tau,
+                                self.camera_velocity_m_s.tolist())
+        return pairs, block
+
+    def _use_frame_block(self, data: bytes) -> None:
+        """Bind the RainFrame buffer holding ``data`` (written only when it differs from what it holds)."""
+        if data != self._frame_data:
+            self._frame_buffer.write(data)
+            self._frame_data = data
+        self._frame_buffer.bind_to_uniform_block(RAIN_FRAME_BINDING)
 
     def _streak_pairs(self, rc, s) -> tuple:
-        return (("u_cam_vel", tuple(self.camera_velocity_m_s.tolist())), ("u_exposure_s", float(s.camera.exposure_s)),
-                ("u_near", float(rc.frame.camera.near_m)))
+        return (("u_exposure_s", float(s.camera.exposure_s)), ("u_near", float(rc.frame.camera.near_m)))
 
     def _use(self, prog, rc, upd: RainUpdate, frame_pairs, lights, own_pairs, bind: bool = True) -> None:
         """Bind the frame's uniforms to prog and write this effect's where they changed (OwnedUniforms)."""
@@ -440,12 +471,13 @@ class RainfallEffect(Effect):
         ctx = rc.ctx
         ready, self._prepared = self._prepared, None  # used once: no context kept alive past its frame
         if ready is not None and ready[0] is rc and ready[1] is rc.lights and ready[2] is upd:
-            lights, frame_pairs = ready[3], ready[4]
+            lights, (frame_pairs, block) = ready[3], ready[4]
         else:  # another context than update's (a test, a probe)
-            lights, frame_pairs = self._lights(rc, upd.boxes), self._frame_pairs(upd, rc, s)
+            lights, (frame_pairs, block) = self._lights(rc, upd.boxes), self._frame_values(upd, rc, s)
         self._draw_environment(rc)
         self._env_tex.use(units.RAINFALL_ENV)
         self._bind_static()
+        self._use_frame_block(block)
         ctx.enable(moderngl.BLEND | moderngl.DEPTH_TEST)  # one call for both flags
         ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE)
         ctx.disable(moderngl.CULL_FACE)
@@ -457,11 +489,8 @@ class RainfallEffect(Effect):
                 self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
                 bound = True
             if s.rainfall.splashes and upd.splashes and upd.splash_accept > 0.0:
-                count, tau = splash_clock(upd.time_s)
-                own = [("u_splash_count", count), ("u_splash_tau", tau), ("u_splash_accept", upd.splash_accept),
-                       ("u_splash_weight", upd.splash_weight), ("u_splash_lam", upd.splash_lam),
-                       ("u_wetness", upd.wetness), ("u_puddles", upd.puddles)]
-                own += splash_box_pairs(upd.boxes, SPLASH_LAYER, rc.shift_z)
+                own = (("u_splash_accept", upd.splash_accept), ("u_splash_weight", upd.splash_weight),
+                       ("u_splash_lam", upd.splash_lam), ("u_wetness", upd.wetness), ("u_puddles", upd.puddles))
                 self._use(self.splash_prog, rc, upd, frame_pairs, lights, own, bind=not bound)
                 self._splash_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.splash_capacity)
         finally:
@@ -478,6 +507,7 @@ class RainfallEffect(Effect):
         if self._probe is None:
             self._probe = self.shaders.program("rainfall/debug_drops.vert", "rainfall/debug_drops.frag",
                                                defines={"LAYERS": len(LAYER_SCALES)})
+            _bind_rain_frame_block(self._probe)
         tex = self.ctx.texture((PROBE_WIDTH, rows), 4, dtype="f4")
         fbo = self.ctx.framebuffer(color_attachments=[tex])
         vao = self.ctx.vertex_array(self._probe, [])
@@ -486,7 +516,9 @@ class RainfallEffect(Effect):
             fbo.clear(0.0, 0.0, 0.0, 0.0)
             self.ctx.disable(moderngl.BLEND)
             self.ctx.disable(moderngl.DEPTH_TEST)
-            set_uniforms(self._probe, self.drop_uniforms(upd, shift_z, around_z))
+            values = self.drop_uniforms(upd, shift_z, around_z)
+            set_uniforms(self._probe, values)
+            self._use_frame_block(rain_frame_from_uniforms(values))
             set_uniforms(self._probe, u_probe_width=PROBE_WIDTH, u_probe_size=(float(PROBE_WIDTH), float(rows)))
             self._bind_static()
             vao.render(moderngl.POINTS, vertices=n)
@@ -505,7 +537,8 @@ class RainfallEffect(Effect):
                 obj.release()
         self._static_tex = {}
         self._table_tex = None
-        for obj in (self._streak_vao, self._splash_vao, self._env_vao, self._env_fbo, self._env_tex):
+        for obj in (self._streak_vao, self._splash_vao, self._env_vao, self._env_fbo, self._env_tex,
+                    self._frame_buffer):
             obj.release()
         if self._owns_shaders:
             self.shaders.release()
@@ -521,8 +554,9 @@ class RainfallEffect(Effect):
         if not self.sim.capacity or upd.drawn_expected <= 0.0:
             return
         s = self._settings(rc.frame)
-        self._use(self.streak_prog, rc, upd, self._frame_pairs(upd, rc, s), self._lights(rc, upd.boxes),
-                  self._streak_pairs(rc, s))
+        frame_pairs, block = self._frame_values(upd, rc, s)
+        self._use_frame_block(block)
+        self._use(self.streak_prog, rc, upd, frame_pairs, self._lights(rc, upd.boxes), self._streak_pairs(rc, s))
         self._env_tex.use(units.RAINFALL_ENV)  # colour only, but never another pass's texture on that unit
         self._bind_static()
         target.fbo.use()

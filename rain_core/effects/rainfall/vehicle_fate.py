@@ -129,14 +129,26 @@ def vehicle_uniform_pairs(vehicles, shift_z: float, around_z: float) -> tuple:
     """``vehicle_uniforms`` as (name, value) pairs with the arrays as their float32 bytes, built from floats (the
     renderer's per-frame form: the pieces' bytes are kept per spec sequence, the poses packed directly)."""
     vehicles = vehicles[:MAX_VEHICLES]
+    return (("u_veh_pose", _POSE.pack(*vehicle_pose_floats(vehicles, shift_z, around_z))),
+            *vehicle_shape_pairs(vehicles))
+
+
+def vehicle_pose_floats(vehicles, shift_z: float, around_z: float) -> list:
+    """u_veh_pose of the first MAX_VEHICLES vehicles as 4·MAX_VEHICLES Python floats (unused slots 0)."""
     pose = [0.0] * (4 * MAX_VEHICLES)
     shift_z, around_z = float(shift_z), float(around_z)
-    for i, veh in enumerate(vehicles):
+    for i, veh in enumerate(vehicles[:MAX_VEHICLES]):
         x, y, z = np.asarray(veh.position, np.float64).tolist()  # float() of each, in one call
         pose[4 * i: 4 * i + 4] = (x, y, float(wrap_near(z - shift_z, around_z)), float(veh.yaw))
+    return pose
+
+
+def vehicle_shape_pairs(vehicles) -> tuple:
+    """u_veh_lo, u_veh_hi, u_veh_plane (float32 bytes, kept per spec sequence) and u_veh_count of the first
+    MAX_VEHICLES vehicles: they change only when the vehicles near the camera do."""
+    vehicles = vehicles[:MAX_VEHICLES]
     lo, hi, planes = _pieces(tuple(veh.spec for veh in vehicles))[1]
-    return (("u_veh_pose", _POSE.pack(*pose)), ("u_veh_lo", lo), ("u_veh_hi", hi), ("u_veh_plane", planes),
-            ("u_veh_count", len(vehicles)))
+    return ("u_veh_lo", lo), ("u_veh_hi", hi), ("u_veh_plane", planes), ("u_veh_count", len(vehicles))
 
 
 _PIECE_ARRAYS: dict[tuple, tuple[tuple, tuple]] = {}
