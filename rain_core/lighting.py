@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rain_core import jit
-from rain_core.gfx.light_kernels import gather_nearest
+from rain_core.lighting_kernels import gather_nearest
 
 MAX_LIGHTS = 32  # per frame, nearest to the camera; keep in sync with shaders/common/lighting.glsl
 
@@ -308,7 +308,7 @@ def pack_nearest(lights: LightSet, camera_position_wrapped, max_lights: int = MA
     mirror) from one candidate set."""
     cam = np.asarray(camera_position_wrapped, dtype=np.float64)
     if jit.active():
-        # one call (light_kernels.gather_nearest) into a buffer kept per size: the bytes returned are copies
+        # one call (lighting_kernels.gather_nearest) into a buffer kept per size: the bytes returned are copies
         packed = _PACKED.get(max_lights)
         if packed is None:
             packed = _PACKED[max_lights] = np.zeros((3, max_lights, 4), np.float32)

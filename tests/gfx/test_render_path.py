@@ -219,7 +219,7 @@ def _random_lights(rng, count):
 
 
 def test_pack_nearest_is_pack_lights_of_the_nearest(kernel_path):
-    """Both paths of pack_nearest (light_kernels.gather_nearest and its NumPy twin) give pack_lights' bytes of
+    """Both paths of pack_nearest (lighting_kernels.gather_nearest and its NumPy twin) give pack_lights' bytes of
     nearest_lights, ties (lamps mirrored across the street, repeated positions) in index order; the kernel's
     reused buffer leaves nothing of a longer list behind."""
     rng = np.random.default_rng(21)
