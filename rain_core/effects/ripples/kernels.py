@@ -16,8 +16,12 @@ import math
 import numpy as np
 
 from rain_core import jit
+from rain_core.effects.ripples.cache_hints import prefetch
 
 _M32 = 0xFFFFFFFF
+# The bump deposit fetches the cells of the bump this many ahead of the one it adds (cache_hints.prefetch): far
+# enough for the fetch to arrive during the bumps between, near enough for the lines to still be there.
+PREFETCH_AHEAD = 4
 
 
 @jit.kernel
@@ -56,6 +60,26 @@ def leapfrog(z, zp, mask, use_mask, k, alpha, kc2):
             out[n - 1] = zero
         cur, prev = prev, cur
     return k % 2 == 1
+
+
+@jit.kernel
+def _prefetch_bump(zf, pf, mf, use_mask, n, col, row, w):
+    """Fetch the cache lines of both flat levels (and the mask) under the window of a bump at (``col``, ``row``)
+    cells of reach ``w`` cells, when it spans a few rows (a raindrop's 4, a wheel's 6): a hint, no values
+    change. The ends of each window row (a raindrop's row of 4 float32 cells lies on one or two lines)."""
+    c0, r0 = np.int64(math.floor(col)), np.int64(math.floor(row))
+    lo_r, hi_r = max(1, r0 - w), min(n - 2, r0 + w)
+    if hi_r - lo_r > 8:  # a wide bump: its rows are long runs, which the hardware prefetcher follows
+        return
+    lo_c, hi_c = max(1, c0 - w), min(n - 2, c0 + w)
+    for rr in range(lo_r, hi_r + 1):
+        first, last = rr * n + lo_c, rr * n + hi_c
+        prefetch(zf, first)
+        prefetch(zf, last)
+        prefetch(pf, first)
+        prefetch(pf, last)
+        if use_mask:
+            prefetch(mf, first)
 
 
 @jit.kernel
@@ -115,6 +139,9 @@ def deposit_bumps(z, zp, mask, use_mask, xs, zs, radii, amounts, cell_m, min_rad
     pf = zp.reshape(-1)
     mf = mask.reshape(-1)
     for o in range(kept):
+        if o + PREFETCH_AHEAD < kept:
+            q = sorted_bumps[o + PREFETCH_AHEAD]
+            _prefetch_bump(zf, pf, mf, use_mask, n, xs[q] / h, zs[q] / h, reach[q])
         b = sorted_bumps[o]
         x, y, r, a, w = xs[b], zs[b], r_eff[b], peak[b], reach[b]
         c0 = np.int64(math.floor(x / h))

@@ -276,3 +276,55 @@ def test_the_byte_mask_steps_as_the_float_mask_did(kernel_path, monkeypatch):
     for a, b in zip(byte[0], floats[0], strict=True):
         np.testing.assert_array_equal(a, b)
     assert np.abs(byte[0][-1]).max() > 0.0
+
+
+@needs_numba
+def test_deposit_kernel_with_its_cache_hints_equals_its_plain_python_self():
+    """The deposit fetches the cells of bumps ahead (cache_hints.prefetch, a no-op in Python): the compiled
+    kernel adds the same float32 values bit for bit as its own Python function (libm's cos on both sides),
+    with the mask and without, bumps near the edges and of several reaches included."""
+    from rain_core.effects.ripples.cache_hints import prefetch
+    from rain_core.effects.ripples.constants import FOOTPRINT_BATCH_CELLS, MIN_FOOTPRINT_CELLS
+
+    assert prefetch(np.zeros(3), 1) is None
+    n, h = 40, 0.05
+    rng = np.random.default_rng(11)
+    k = 300
+    xs, zs = rng.uniform(-0.1, n * h, k), rng.uniform(-0.1, n * h, k)
+    radii = rng.choice((0.01, 0.07, 0.12, 0.3), k)
+    amounts = rng.uniform(-1e-3, 1e-3, k)
+    start = rng.standard_normal((2, n, n)).astype(np.float32) * np.float32(1e-3)
+    for mask, use_mask in ((np.ones((1, 1), bool), False), (rng.random((n, n)) > 0.3, True)):
+        levels = []
+        for fn in (kernels.deposit_bumps, kernels.deposit_bumps.py_func):
+            z, zp = start[0].copy(), start[1].copy()
+            cells = fn(z, zp, mask, use_mask, xs, zs, radii, amounts, h, MIN_FOOTPRINT_CELLS * h, (n - 1) * h,
+                       FOOTPRINT_BATCH_CELLS, np.empty((2, k)), np.empty((2, k), np.int64),
+                       np.empty(n + 3, np.int64))
+            levels.append((cells, z, zp))
+        (c0, z0, p0), (c1, z1, p1) = levels
+        assert c0 == c1 > 1000
+        np.testing.assert_array_equal(z0, z1)
+        np.testing.assert_array_equal(p0, p1)
+
+
+def test_prefetch_changes_no_value(kernel_path):
+    """A compiled loop with the hint on every element sums what the plain loop sums (and the hint is a no-op in
+    Python)."""
+    from rain_core.effects.ripples.cache_hints import prefetch
+
+    def total(a):
+        s = 0.0
+        for i in range(a.size):
+            prefetch(a, min(i + 8, a.size - 1))
+            s += a[i]
+        return s
+
+    if jit.active():
+        import numba
+
+        run = numba.njit(total)
+    else:
+        run = total
+    a = np.random.default_rng(1).random(1000)
+    assert run(a) == total(a) == sum(a.tolist())
