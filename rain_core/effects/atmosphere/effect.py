@@ -31,7 +31,7 @@ from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import ColorView, RenderTarget, float_target
-from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms
+from rain_core.gfx.uniforms import OwnedUniforms, mat4_bytes, owned_uniforms, set_uniform
 from rain_core.settings import AtmosphereSection
 
 
@@ -61,6 +61,7 @@ class AtmosphereEffect(Effect):
         self._glow_factor = 1
         self._programs: dict[str, moderngl.Program] = {}
         self._vaos: dict[str, moderngl.VertexArray] = {}
+        self._entries: dict = {}  # key → (program, vertex array, OwnedUniforms): _program
         self._targets: tuple[int, tuple[int, int], list[RenderTarget]] | None = None  # (factor, size, [a, b])
         self._hdr_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
@@ -118,17 +119,20 @@ class AtmosphereEffect(Effect):
 
     # --- GL -------------------------------------------------------------------------------------------------
     def _program(self, rc: RenderContext, frag: str, axis: int | None = None
-                 ) -> tuple[moderngl.Program, moderngl.VertexArray]:
-        """The program of ``frag`` and its vertex array; ``axis`` (the blur's) makes one program per direction."""
+                 ) -> tuple[moderngl.Program, moderngl.VertexArray, OwnedUniforms]:
+        """The program of ``frag``, its vertex array and its OwnedUniforms; ``axis`` (the blur's) makes one program
+        per direction."""
         key = frag if axis is None else (frag, axis)
-        if key not in self._programs:
+        entry = self._entries.get(key)
+        if entry is None:
             lib = self._shaders or rc.shaders
             # BLUR_AXIS is not read by the shader: it only keys a second program in the library, so each direction
             # keeps its u_step and the two are not rewritten every frame (same code, same pixels).
             defines = None if axis is None else {"BLUR_AXIS": axis}
             self._programs[key] = prog = lib.program("common/fullscreen.vert", frag, defines=defines)
-            self._vaos[key] = self.ctx.vertex_array(prog, [])
-        return self._programs[key], self._vaos[key]
+            self._vaos[key] = vao = self.ctx.vertex_array(prog, [])
+            entry = self._entries[key] = (prog, vao, owned_uniforms(prog))  # held: no weak lookup a frame
+        return entry
 
     def _glow_targets(self, size: tuple[int, int], factor: int) -> list[RenderTarget]:
         low = (max(1, -(-size[0] // factor)), max(1, -(-size[1] // factor)))
@@ -137,10 +141,18 @@ class AtmosphereEffect(Effect):
             self._targets = (factor, low, [float_target(self.ctx, low, 4, "f2") for _ in range(2)])
         return self._targets[2]
 
-    def _frame_uniforms(self, prog: moderngl.Program, rc: RenderContext) -> None:
-        """The frame's uniforms (the medium included) and the inverse camera the depth reconstruction needs."""
-        rc.set_frame_uniforms(prog)
-        owned_uniforms(prog).set("u_inv_view_proj", self._inv_view_proj(rc))
+    def _frame_uniforms(self, prog: moderngl.Program, owned: OwnedUniforms, rc: RenderContext,
+                        bind: bool = True) -> None:
+        """The frame's uniforms (the medium included) and the inverse camera the depth reconstruction needs.
+        bind=False: this context's frame block is bound already (glow_down's, just before; the blur programs bind
+        none), so only the plain frame uniforms are written (none today), not the block bound again."""
+        if bind or rc.frame_blocks is None:
+            rc.set_frame_uniforms(prog)
+        else:
+            values, _ = rc._frame_state()
+            for target, value in rc.frame_blocks.program_info(prog).plain_values(values):
+                set_uniform(prog, target.name, value)
+        owned.set("u_inv_view_proj", self._inv_view_proj(rc))
 
     def _inv_view_proj(self, rc: RenderContext) -> bytes:
         """mat4 bytes of inverse(projection·view), once per render context (both post programs need it; the
@@ -160,17 +172,19 @@ class AtmosphereEffect(Effect):
         self._depth_sampler.use(units.ATMOSPHERE_DEPTH)
         rc.hdr.depth.use(units.ATMOSPHERE_DEPTH)
         a, b = self._glow_targets(rc.size, self._glow_factor)
-        if self.state.glow_strength > 0.0:
+        glowed = self.state.glow_strength > 0.0
+        if glowed:
             self._glow(rc, a, b)
-        prog, vao = self._program(rc, "atmosphere/composite.frag")
-        self._frame_uniforms(prog, rc)
+        prog, vao, owned = self._program(rc, "atmosphere/composite.frag")
+        self._frame_uniforms(prog, owned, rc, bind=not glowed)
         a.color.use(units.ATMOSPHERE_GLOW)
-        # Only this effect writes these names in its programs: unchanged values are skipped (most frames, all).
-        owned_uniforms(prog).update({
-            "u_glow": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH, "u_glow_factor": self._glow_factor,
-            "u_glow_strength": self.state.glow_strength, "u_scatter_count": self._scatter_count,
-            "u_scatter_samples": SCATTER_SAMPLES, "u_scatter_per_m": self.state.scatter_per_m,
-            "u_scatter_max_m": SCATTER_MAX_M})
+        # Only this effect writes these names in its programs: made and compared only when what they are made of
+        # changes (the key holds every value that is not a constant).
+        key = (self._glow_factor, self.state.glow_strength, self._scatter_count, self.state.scatter_per_m)
+        owned.update_for("composite", key, lambda: {
+            "u_glow": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH, "u_glow_factor": key[0],
+            "u_glow_strength": key[1], "u_scatter_count": key[2], "u_scatter_samples": SCATTER_SAMPLES,
+            "u_scatter_per_m": key[3], "u_scatter_max_m": SCATTER_MAX_M})
         # The composite reads the scene's depth, so it writes through a framebuffer without that depth attached.
         self._hdr_fbo.fbo(rc.hdr.color).use()
         ctx.enable(moderngl.BLEND)
@@ -184,19 +198,20 @@ class AtmosphereEffect(Effect):
 
     def _glow(self, rc: RenderContext, a: RenderTarget, b: RenderTarget) -> None:
         """c·w box-averaged into ``a``, then blurred a → b → a."""
-        down, down_vao = self._program(rc, "atmosphere/glow_down.frag")
-        self._frame_uniforms(down, rc)
+        down, down_vao, owned = self._program(rc, "atmosphere/glow_down.frag")
+        self._frame_uniforms(down, owned, rc)
         rc.hdr.color.use(units.ATMOSPHERE_GLOW)
-        owned_uniforms(down).update({"u_color": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH,
-                                     "u_factor": self._glow_factor})
+        factor = self._glow_factor
+        owned.update_for("glow_down", factor, lambda: {"u_color": units.ATMOSPHERE_GLOW,
+                                                       "u_depth": units.ATMOSPHERE_DEPTH, "u_factor": factor})
         a.fbo.use()
         down_vao.render(moderngl.TRIANGLES, vertices=3)
         sigma = min(self.glow_sigma_px / self._glow_factor, MAX_BLUR_RADIUS / 3.0)
         radius = blur_radius(sigma)
         for axis, step, src, dst in ((0, (1, 0), a, b), (1, (0, 1), b, a)):
-            blur, blur_vao = self._program(rc, "atmosphere/blur.frag", axis)  # one program per direction
-            owned_uniforms(blur).update({"u_src": units.ATMOSPHERE_GLOW, "u_sigma_px": sigma, "u_radius": radius,
-                                         "u_step": step})
+            _, blur_vao, owned = self._program(rc, "atmosphere/blur.frag", axis)  # one program per direction
+            owned.update_for("blur", sigma, lambda step=step: {"u_src": units.ATMOSPHERE_GLOW, "u_sigma_px": sigma,
+                                                               "u_radius": radius, "u_step": step})
             src.color.use(units.ATMOSPHERE_GLOW)
             dst.fbo.use()
             blur_vao.render(moderngl.TRIANGLES, vertices=3)
@@ -212,6 +227,7 @@ class AtmosphereEffect(Effect):
         for vao in self._vaos.values():
             vao.release()
         self._vaos.clear()
+        self._entries.clear()
         self._programs.clear()  # owned by the (shared, caching) ShaderLibrary: not ours to release
         self._hdr_fbo.release()
         self._depth_sampler.release()

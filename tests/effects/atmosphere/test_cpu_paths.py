@@ -9,6 +9,7 @@ from rain_core.camera import look_at
 from rain_core.effects import atmosphere as atm
 from rain_core.effects.atmosphere.model import atmosphere_state, atmosphere_uniforms
 from rain_core.settings import Settings
+from rain_core.world import StreetLamp
 
 
 def test_the_medium_is_modelled_once_and_again_when_its_inputs_change(gl_ctx, kit, monkeypatch):
@@ -74,3 +75,37 @@ def test_each_blur_direction_keeps_its_own_program_and_step(gl_ctx, shaders, kit
                 kit.release(fresh)
     finally:
         kit.release(*renderers)
+
+
+def test_post_uniforms_follow_live_setting_changes(gl_ctx, shaders, kit):
+    """The post programs' uniforms are made only when their inputs change (update_for): after each live change
+    of the glow, its resolution, the light scattering and the rain, every program holds this frame's values."""
+    world = kit.world([kit.box((0.0, 1.5, 570.0), (0.4, 0.4, 0.4), (2.0, 2.0, 2.0))], lamps=[
+        StreetLamp(np.array([0.0, 7.0, 560.0]), np.array([0.0, -1.0, 0.0]), 6000.0, np.ones(3))])
+    camera = look_at((0.0, 1.5, 600.0), (0.0, 1.5, 500.0), fov_y_deg=40.0)
+    settings = Settings()
+    renderer = kit.renderer(gl_ctx, shaders, world, (64, 36))
+    effect = renderer.effects[0]
+    changes = [lambda: None, lambda: setattr(settings.atmosphere, "glow", 3.0),
+               lambda: setattr(settings.atmosphere, "glow_resolution", 0.25),
+               lambda: setattr(settings.atmosphere, "light_scattering", 2.0), lambda: None]
+    try:
+        for rate, change in zip((8.0, 8.0, 8.0, 8.0, 40.0), changes, strict=True):
+            change()
+            frame = kit.frame(camera, world, settings, rate, 22.0)
+            renderer.render(frame)
+            state = effect.state
+            composite = effect._programs["atmosphere/composite.frag"]
+            assert composite["u_glow_factor"].value == effect._glow_factor
+            assert composite["u_glow_strength"].value == np.float32(state.glow_strength)
+            assert composite["u_scatter_count"].value == effect._scatter_count
+            assert composite["u_scatter_per_m"].value == np.float32(state.scatter_per_m)
+            if state.glow_strength > 0.0:
+                assert effect._programs["atmosphere/glow_down.frag"]["u_factor"].value == effect._glow_factor
+                sigma = min(effect.glow_sigma_px / effect._glow_factor, atm.glow.MAX_BLUR_RADIUS / 3.0)
+                for axis in (0, 1):
+                    blur = effect._programs[("atmosphere/blur.frag", axis)]
+                    assert blur["u_sigma_px"].value == np.float32(sigma)
+                    assert blur["u_radius"].value == atm.glow.blur_radius(sigma)
+    finally:
+        kit.release(renderer)
