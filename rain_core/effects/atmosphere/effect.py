@@ -31,7 +31,7 @@ from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import ColorView, RenderTarget, float_target
-from rain_core.gfx.uniforms import OwnedUniforms, mat4_bytes, owned_uniforms, set_uniform
+from rain_core.gfx.uniforms import OwnedUniforms, mat4_bytes, owned_uniforms
 from rain_core.settings import AtmosphereSection
 
 
@@ -146,12 +146,7 @@ class AtmosphereEffect(Effect):
         """The frame's uniforms (the medium included) and the inverse camera the depth reconstruction needs.
         bind=False: this context's frame block is bound already (glow_down's, just before; the blur programs bind
         none), so only the plain frame uniforms are written (none today), not the block bound again."""
-        if bind or rc.frame_blocks is None:
-            rc.set_frame_uniforms(prog)
-        else:
-            values, _ = rc._frame_state()
-            for target, value in rc.frame_blocks.program_info(prog).plain_values(values):
-                set_uniform(prog, target.name, value)
+        rc.set_frame_uniforms(prog, bind=bind)
         owned.set("u_inv_view_proj", self._inv_view_proj(rc))
 
     def _inv_view_proj(self, rc: RenderContext) -> bytes:

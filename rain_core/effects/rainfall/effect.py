@@ -45,13 +45,14 @@ from rain_core.effects.rainfall.vehicle_fate import vehicle_pose_floats, vehicle
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.uniforms import owned_uniforms, set_uniform, set_uniforms
+from rain_core.gfx.uniforms import owned_uniforms, set_uniforms
 
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
 PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
 # The light uniforms: drop.glsl declares them as plain uniforms (FRAME_OWN_LIGHTS); _use writes the lights that
-# reach the boxes, where they changed, and keeps rc.set_frame_uniforms from writing the frame's (_frame_block_only).
+# reach the boxes, where they changed, and rc.set_frame_uniforms skips the frame's. Nothing else may write these
+# programs' lights (OwnedUniforms compares with what _use wrote last).
 _LIGHT_NAMES = ("u_light_pos", "u_light_dir", "u_light_color", "u_light_count")
 
 
@@ -65,25 +66,6 @@ def _light_struct(count: int) -> struct.Struct:
 _ENV_INPUTS = ("u_sun_dir", "u_sun_illum", "u_sky_zenith", "u_sky_horizon", "u_ground_albedo", "u_extinction_per_m",
                "u_airlight", "u_medium_extinction_per_m", "u_airlight_sun", "u_airlight_sun_dir", "u_phase_g",
                "u_phase_back_g", "u_phase_back_weight")
-
-
-def _frame_block_only(prog, rc, bind: bool = True) -> None:
-    """rc.set_frame_uniforms(prog) without writing the frame's light list: the frame block bound, and the plain
-    frame uniforms written unless they are the light list, which _use writes filtered (OwnedUniforms: only when it
-    changed). Writing the frame's 24 lights only to overwrite them was 8 GL calls a frame. Nothing else may write
-    these programs' lights (OwnedUniforms compares with what _use wrote last). bind=False: the block this context
-    holds is bound already (the streaks' draw just before bound it; nothing in between binds another)."""
-    blocks = rc.frame_blocks
-    if blocks is None:
-        rc.set_frame_uniforms(prog)  # raises as it does there
-        return
-    values, data = rc._frame_state()
-    info = blocks.program_info(prog)
-    if info.has_block and bind:
-        blocks.use(data)
-    for target, value in info.plain_values(values):
-        if target.name not in _LIGHT_NAMES:  # none today (drop.glsl's plain frame names are the lights)
-            set_uniform(prog, target.name, value)
 
 
 def _bind_rain_frame_block(prog) -> None:
@@ -456,7 +438,7 @@ class RainfallEffect(Effect):
 
     def _use(self, prog, rc, upd: RainUpdate, frame_pairs, lights, own_pairs, bind: bool = True) -> None:
         """Bind the frame's uniforms to prog and write this effect's where they changed (OwnedUniforms)."""
-        _frame_block_only(prog, rc, bind)
+        rc.set_frame_uniforms(prog, bind=bind, skip=_LIGHT_NAMES)
         cache = owned_uniforms(prog)
         cache.update_once(self._constant_pairs(upd))
         cache.update_pairs(frame_pairs)
@@ -524,6 +506,7 @@ class RainfallEffect(Effect):
             vao.render(moderngl.POINTS, vertices=n)
             data = np.frombuffer(fbo.read(components=4, dtype="f4"), np.float32).reshape(rows * PROBE_WIDTH, 4)
         finally:
+            self.ctx.detect_framebuffer(0).use()  # never leave a released framebuffer bound
             vao.release()
             fbo.release()
             tex.release()
