@@ -18,10 +18,15 @@ def gl_ctx():
 @pytest.fixture(autouse=True)
 def _gl_current(request):
     """Make the session context current for every test that uses it: a test that opens a window (or another
-    context) leaves that one current, and GL calls would then go to the wrong context."""
+    context) leaves that one current, and GL calls would then go to the wrong context. Such a test must also
+    leave no GL error behind: the tests share the context, and an error left (a released framebuffer left
+    bound, say) would fail a later, unrelated test."""
     if {"gl_ctx", "shaders"} & set(request.fixturenames):
-        with request.getfixturevalue("gl_ctx"):
+        ctx = request.getfixturevalue("gl_ctx")
+        with ctx:
             yield
+            error = ctx.error
+        assert error == "GL_NO_ERROR", f"{request.node.nodeid} left {error} on the shared GL context"
     else:
         yield
 

@@ -31,6 +31,7 @@ def glsl_probe(ctx: moderngl.Context, shaders, p0, v0, tau, u, age, mu):
     vao = ctx.vertex_array(prog, [(vbo, "4f 4f 4f 1f", "in_p0", "in_v0", "in_u", "in_mu")])
     vao.transform(out, mode=moderngl.POINTS, vertices=n)
     res = np.frombuffer(out.read(), np.float32).reshape(n, 7).astype(np.float64)
+    ctx.detect_framebuffer(0).use()  # never leave a released framebuffer bound
     for obj in (vao, vbo, out, fbo):
         obj.release()
     return res[:, :3], res[:, 3:6], res[:, 6]

@@ -17,18 +17,6 @@ from rain_core.mesh import MAT_CONCRETE, concat, from_trimesh
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
-@pytest.fixture(autouse=True)
-def _clean_gl(request):
-    """Each GL test leaves no GL error behind, and a live framebuffer bound (the session shares one context)."""
-    if "gl_ctx" not in request.fixturenames and "shaders" not in request.fixturenames:
-        yield
-        return
-    gl_ctx = request.getfixturevalue("gl_ctx")
-    assert gl_ctx.error == "GL_NO_ERROR"
-    yield
-    assert gl_ctx.error == "GL_NO_ERROR"
-
-
 def _box(center, extents, albedo, material=MAT_CONCRETE):
     mesh = trimesh.creation.box(extents=extents)
     mesh.apply_translation(center)
