@@ -181,16 +181,6 @@ def merge_drops(buf, n, n_moved, fresh, n_go, go, gcol, gidx, active, parent, no
                 if total + cells > cap:
                     status = -1
                     break
-                if cells == 1:  # most boxes lie in one cell: no loops
-                    key = lo0 * _N1 + lo1
-                    ekey[total] = key
-                    owner[total] = x
-                    nxt[total] = head[key]
-                    head[key] = total
-                    n_pairs += count[key]
-                    count[key] += 1
-                    total += 1
-                    continue
                 for c0 in range(lo0, hi0 + 1):
                     for c1 in range(lo1, hi1 + 1):
                         key = c0 * _N1 + c1
