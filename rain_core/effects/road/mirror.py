@@ -37,9 +37,6 @@ def mirror_about_road(camera: Camera) -> Camera:
     fx, fy, fz = _floats(camera.forward)
     position = np.array((px * 1.0, py * -1.0, pz * 1.0))
     forward = np.array((fx * 1.0, fy * -1.0, fz * 1.0))
-    if type(camera) is Camera:  # the fields dataclasses.replace would pass, without its per-field walk
-        return Camera(position, forward, np.array([0.0, 1.0, 0.0]), camera.fov_y_deg, camera.near_m, camera.far_m,
-                      False, camera.focus_m)
     return dataclasses.replace(camera, position=position, forward=forward, up=np.array([0.0, 1.0, 0.0]),
                                inside_car=False)
 
