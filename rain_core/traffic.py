@@ -284,17 +284,9 @@ class Traffic:
             self._substep(h)
         self._wrap()
 
-    def _lane_members(self, lane: int, d: np.ndarray) -> list[tuple[Vehicle, float, float, float]]:
-        """(vehicle, s m, half length m, speed along the lane m/s) for every vehicle in the lane, ego included."""
-        members = [(v, float(v.position @ d), v.spec.length_m / 2.0, v.speed_m_s)
-                   for v, l in zip(self.vehicles, self.lanes, strict=True) if l == lane]
-        if self.ego is not None and _in_lane(self.ego, lane):
-            members.append((self.ego, float(self.ego.position @ d), self.ego.spec.length_m / 2.0,
-                            float(self.ego.velocity() @ d)))
-        return members
-
     def _all_lane_members(self) -> list[list[tuple[Vehicle, float, float, float]]]:
-        """``_lane_members`` of every lane, in one pass over the vehicles (the same tuples in the same order)."""
+        """For each lane, (vehicle, s m, half length m, speed along the lane m/s) of every vehicle in it, the ego
+        included in each lane it is in (between two: both), in one pass over the vehicles."""
         members: list[list] = [[] for _ in _LANE_DIRECTIONS]
         for v, lane in zip(self.vehicles, self.lanes, strict=True):
             members[lane].append((v, float(v.position @ _LANE_DIRECTIONS[lane]), v.spec.length_m / 2.0, v.speed_m_s))

@@ -473,8 +473,20 @@ def test_wheel_contacts_of_a_vehicle_that_keeps_its_yaw_follow_its_moves():
     assert v.wheel_contacts().tobytes() == v.to_world(_contacts_local(v.spec)).tobytes()
 
 
+def _lane_members(traffic, lane: int, d: np.ndarray) -> list:
+    """One lane's members as the traffic made them lane by lane before _all_lane_members (the reference)."""
+    from rain_core.traffic import _in_lane
+
+    members = [(v, float(v.position @ d), v.spec.length_m / 2.0, v.speed_m_s)
+               for v, l in zip(traffic.vehicles, traffic.lanes, strict=True) if l == lane]
+    ego = traffic.ego
+    if ego is not None and _in_lane(ego, lane):
+        members.append((ego, float(ego.position @ d), ego.spec.length_m / 2.0, float(ego.velocity() @ d)))
+    return members
+
+
 def test_all_lane_members_are_each_lanes_members():
-    """Traffic._all_lane_members (one pass) gives what _lane_members gives lane by lane, the ego between two lanes
+    """Traffic._all_lane_members (one pass) gives what the lane-by-lane formula gives, the ego between two lanes
     included (it is then a member of both)."""
     from rain_core.traffic import _lane_direction
 
@@ -485,7 +497,7 @@ def test_all_lane_members_are_each_lanes_members():
         ego.position[0] = x
         ego.yaw_rate_rad_s = 0.1
         traffic.step(1 / 30)
-        want = [traffic._lane_members(lane, _lane_direction(lane)) for lane in range(len(layout.LANE_CENTRES_X))]
+        want = [_lane_members(traffic, lane, _lane_direction(lane)) for lane in range(len(layout.LANE_CENTRES_X))]
         assert traffic._all_lane_members() == want
         assert sum(any(m[0] is ego for m in lane) for lane in want) == lanes_with_ego
 
