@@ -273,6 +273,30 @@ def heavy_rain_settings(budget: int, rate_mm_h: float = RAIN_MM_H, camera: str =
     return settings
 
 
+def with_overrides(settings, overrides):
+    """``settings`` with each (path, value) of ``overrides`` set through ``set_value`` (which validates it)."""
+    from rain_core.settings import set_value
+
+    for path, value in overrides:
+        set_value(settings, path, value)
+    return settings
+
+
+def parse_override(text: str) -> tuple[str, object]:
+    """``PATH=VALUE`` (``--set``): the value is read as a TOML value, as in a scenario file (``0.5``, ``true``,
+    ``"chase"``); a bare word that is not TOML is taken as a string (``camera.mode=chase``)."""
+    import tomllib
+
+    path, sep, raw = text.partition("=")
+    if not sep or not path.strip():
+        raise argparse.ArgumentTypeError(f"--set takes PATH=VALUE (e.g. quality.render_scale=0.5), got {text!r}")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    return path.strip(), value
+
+
 class _Brake:
     """A drive input that holds the car still (the parked case)."""
 
@@ -285,9 +309,10 @@ def _effect_of(pass_name: str) -> str:
 
 def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 0.0, frames: int = 30,
                  warmup: int = 8, gpu_timing: bool = True, dt_s: float = 1.0 / 30.0, seed: int = 1,
-                 counter: GLCounter | None = None, ripples_backend: str = "auto") -> dict:
+                 counter: GLCounter | None = None, ripples_backend: str = "auto", overrides=()) -> dict:
     """Render ``warmup + frames`` frames of one case; medians over the last ``frames``. ``ripples_backend``:
     the ripples effect's solver ("auto" times the paths on this machine; on llvmpipe it picks numpy32).
+    ``overrides``: (settings path, value) pairs set on top of the heavy-rain settings (``--set``).
 
     Returns {"rows": {name: {cpu_ms, gl_ms, gl_calls, queries, upload_kb, uniform_kb, read_kb, gpu_ms, gpu_share}},
     "frame": {…the same for the whole frame…, wall_ms}, "passes": [pass names in order], …}. Rows are the
@@ -315,7 +340,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
     Renderer._timed = timed
     scene = None
     try:
-        scene = Scene(ctx, size, settings=heavy_rain_settings(budget), seed=seed, gpu_timing=gpu_timing)
+        scene = Scene(ctx, size, settings=with_overrides(heavy_rain_settings(budget), overrides), seed=seed,
+                      gpu_timing=gpu_timing)
         for effect in scene.effects:
             if effect.name == "ripples":
                 effect.backend = ripples_backend  # read when the field is built, on the first active frame
@@ -476,7 +502,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
         path = "NumPy (no rain_core.jit in this tree)"
 
     return (f"# Whole frames at heavy rain ({RAIN_MM_H:g} mm/h, wetness/cracks/puddles 1, driver camera, noon), "
-            f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}\n\n"
+            f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}"
+            + "".join(f", {path} = {value!r}" for path, value in getattr(args, "overrides", ())) + "\n\n"
             f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
             "framebuffer binds, uniform writes, context state, object creation, timer queries) are wrapped by "
@@ -528,6 +555,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--jit", choices=("auto", "on", "off"), default="auto",
                    help="the CPU simulations' compiled kernels (auto: on where Numba is installed; off: their NumPy "
                         "twins, for before/after on one tree)")
+    p.add_argument("--set", dest="overrides", type=parse_override, action="append", default=[],
+                   metavar="PATH=VALUE", help="a setting on top of the heavy-rain ones, by its settings path, e.g. "
+                                              "quality.render_scale=0.5 (repeatable)")
     p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
                    help="leave the renderer's timer queries off (no GPU columns)")
     args = p.parse_args(argv)
@@ -544,6 +574,13 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.warmup = args.warmup or (4 if args.quick else 8)
     if args.frames < 1 or args.warmup < 0:
         p.error("--frames must be >= 1 and --warmup >= 0")
+    if args.overrides:  # validated here, before any frame is drawn
+        from rain_core.settings import Settings, SettingsError
+
+        try:
+            with_overrides(Settings(), args.overrides)
+        except SettingsError as exc:
+            p.error(f"--set: {exc}")
     return args
 
 
@@ -559,7 +596,8 @@ def main(argv=None) -> int:
         for speed in args.speeds:
             for budget in args.budgets:
                 result = measure_case(ctx, args.size, budget, speed, args.frames, args.warmup, args.gpu_timing,
-                                      counter=counter, ripples_backend=args.ripples_backend)
+                                      counter=counter, ripples_backend=args.ripples_backend,
+                                      overrides=args.overrides)
                 results.append(result)
                 print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
     md = (header(args, counter.overhead_ns, renderer) + "\n## Summary\n\n" + summary_table(results) + "\n\n"

@@ -6,8 +6,9 @@ from __future__ import annotations
 import math
 
 import moderngl
+import pytest
 
-from rain_core.bench.frame import GLCounter, measure_case, parse_args
+from rain_core.bench.frame import GLCounter, heavy_rain_settings, measure_case, parse_args, with_overrides
 
 
 def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
@@ -24,6 +25,9 @@ def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
     assert result["rows"]["sim: scene.step"]["cpu_ms"] > 0.0
     for row in result["rows"].values():
         assert all(math.isfinite(v) for v in row.values())
+        assert row["gpu_ms"] >= 0.0
+    # the rain's own GPU time is part of the frame's (one frame late: finite once a second frame was timed)
+    assert 0.0 <= frame["rain_gpu_ms"] <= frame["gpu_ms"]
     assert math.isfinite(counter.overhead_ns) and counter.overhead_ns >= 0.0
 
 
@@ -37,3 +41,17 @@ def test_counter_restores_moderngl():
 def test_quick_options():
     args = parse_args(["--quick", "--size", "64x36"])
     assert args.size == (64, 36) and args.budgets == (10_000, 1_000_000) and args.frames < 30
+
+
+def test_set_overrides_settings_by_path_and_rejects_bad_values(capsys):
+    args = parse_args(["--set", "quality.render_scale=0.5", "--set", "camera.mode=chase",
+                       "--set", "atmosphere.scatter_lights = 2"])
+    assert args.overrides == [("quality.render_scale", 0.5), ("camera.mode", "chase"),
+                              ("atmosphere.scatter_lights", 2)]
+    settings = with_overrides(heavy_rain_settings(10_000), args.overrides)
+    assert settings.quality.render_scale == 0.5 and settings.camera.mode == "chase"
+    assert settings.atmosphere.scatter_lights == 2 and settings.quality.particle_budget == 10_000
+    for bad in ("quality.render_scale=9", "quality.nope=1", "render_scale"):
+        with pytest.raises(SystemExit):
+            parse_args(["--set", bad])
+    assert "render_scale" in capsys.readouterr().err
