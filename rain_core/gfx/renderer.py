@@ -248,6 +248,9 @@ class Renderer:
         added = [lights for e in active if (lights := e.frame_lights(frame)) is not None and len(lights)]
         self._effect_lights = concat_lights(added) if added else None
         rc = self.render_context(frame)
+        # projection @ view now, just after the view's own BLAS product: first asked after the shadow's and the
+        # reflection's draws (the door mirrors' plan), it ran cold.
+        rc.view_proj  # noqa: B018 - made and kept by the context
         rc.active = active
         rc.shared = SharedResources()
         for effect in active:  # e.g. the rain medium, which every program of the frame sees
