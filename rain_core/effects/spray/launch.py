@@ -331,6 +331,8 @@ for _k in range(5):
     _UNIFORM_SPAN_TABLE[_k, :_UNIFORM_ROWS[_k]] = _UNIFORM_SPAN[_k][:, 0]
 _MIST_LO_ROW, _MIST_SPAN_ROW = _MIST_LO[:, 0].copy(), _MIST_SPAN[:, 0].copy()
 _MIST_CONSTS = np.array([WAKE_LIFT_HEIGHT_M, MIST_SIGMA0_M, MIST_D_MM, MIST_DIFFUSIVITY])
+# kernels.launch_to_records takes the four per-bucket tables as one argument.
+LAUNCH_TABLES = (_BUCKET_TABLE, _UNIFORM_LO_TABLE, _UNIFORM_SPAN_TABLE, _WAVE_TABLE)
 
 
 def draws_needed(n: int) -> int:
@@ -345,9 +347,18 @@ def launch_parcels_compiled(rng, geo: WheelGeometry, w, bounds, nd: int, age_now
     by ``kernels.launch``: the same generator calls in the same order here (into ``draws``, a flat float64
     buffer of at least draws_needed(len(w)), with their offsets in ``offs`` (7,) int64), the arithmetic there.
     ``vehicle``: spawn's (V, 20) vehicle table; ``vehicle_consts`` (V, ≥ 2) height and half length."""
-    n = len(w)
+    draw_launches(rng, bounds, nd, len(w), draws, offs, out[2])
+    p0, v0, d_mm, sigma0, growth, air, updraught = out
+    kernels.launch(w, bounds, nd, age_now, draws, offs, wheel_table(geo), vehicle, vehicle_consts, _BUCKET_TABLE,
+                   _UNIFORM_LO_TABLE, _UNIFORM_SPAN_TABLE, _WAVE_TABLE, _MIST_LO_ROW, _MIST_SPAN_ROW, _MIST_CONSTS,
+                   p0, v0, d_mm, sigma0, growth, air, updraught)
+
+
+def draw_launches(rng, bounds, nd: int, n: int, draws, offs, d_mm) -> None:
+    """The generator calls of :func:`launch_parcels_compiled` for n parcels (droplets [:nd], bucket k in rows
+    bounds[k]:bounds[k + 1], then mist), in the twins' order: the droplets' size normals into ``d_mm``, the other
+    draws into ``draws`` with their offsets in ``offs`` (what ``kernels.launch`` reads)."""
     nm = n - nd
-    d_mm = out[2]
     pos = 0
     if nd:
         rng.random(out=draws[:nd])  # the tread position's ``across``
@@ -369,7 +380,3 @@ def launch_parcels_compiled(rng, geo: WheelGeometry, w, bounds, nd: int, age_now
     if nm:
         offs[6] = pos
         rng.random(out=draws[pos:pos + 7 * nm].reshape(7, nm))
-    p0, v0, _, sigma0, growth, air, updraught = out
-    kernels.launch(w, bounds, nd, age_now, draws, offs, wheel_table(geo), vehicle, vehicle_consts, _BUCKET_TABLE,
-                   _UNIFORM_LO_TABLE, _UNIFORM_SPAN_TABLE, _WAVE_TABLE, _MIST_LO_ROW, _MIST_SPAN_ROW, _MIST_CONSTS,
-                   p0, v0, d_mm, sigma0, growth, air, updraught)

@@ -13,14 +13,20 @@ from rain_core import jit, layout, physics
 from rain_core.effects.spray import body, kernels
 from rain_core.effects.spray.flight import DRAG_TAIL_FIT, ground_time
 from rain_core.effects.spray.launch import (
+    _MIST_CONSTS,
+    _MIST_LO_ROW,
+    _MIST_SPAN_ROW,
+    LAUNCH_TABLES,
     MIST_LIFE_S,
     MIST_SIGMA_MAX,
     WAKE_TAU_S,
     carrier_air_and_tau,
+    draw_launches,
     draws_needed,
     launch_droplets_sorted,
     launch_mist,
     launch_parcels_compiled,
+    wheel_table,
 )
 from rain_core.effects.spray.optics import EXTINCTION_EFFICIENCY, extinction_area_m2
 from rain_core.effects.spray.parcels import (
@@ -93,6 +99,10 @@ class SpawnBuffers:
         self.record_floats = as_floats(self.records)
         self.birth = np.empty(n)
         self.death = np.empty(n)
+        # kernels.launch_to_records' scratch: each parcel's vehicle, life and fate.
+        self.vi = np.empty(n, dtype=np.int64)
+        self.life = np.empty(n)
+        self.fate = np.empty(n, dtype=np.int64)
 
     def ensure(self, n: int) -> SpawnBuffers:
         if n > self.size:
@@ -118,6 +128,15 @@ _FILE_CONSTS = np.array([layout.PERIOD_M, EXTINCTION_EFFICIENCY * 1.5, physics.R
                         dtype=np.float64)
 
 
+# kernels.launch_to_records' grouped constants: fly's (mist v_t, mist τ, g, the drag tail fit, kerb height, road
+# half width, Newton tolerance), the Gunn–Kinzer tables, the body test's steps, the fates.
+_FLY_CONSTS = np.array([_MIST_VT_M_S, WAKE_TAU_S, physics.G_M_S2, DRAG_TAIL_FIT, layout.KERB_HEIGHT_M,
+                        layout.ROAD_HALF_WIDTH_M, 1e-9])
+_GK = (_GK_X, _GK_X0, _GK_H, _GK_Y0, _GK_Y1, _GK_D0, _GK_D1)
+_BODY_STEPS = np.array([body.SAMPLES, body.ZOOM, body.ROUNDS], dtype=np.int64)
+_FATE_IDS = np.array([FATE_ROAD, FATE_BODY, FATE_AIR], dtype=np.int64)
+
+
 def _horizons(q90: list, life: np.ndarray, nd: int) -> tuple[float, float]:
     """Each ring's horizon (s): the running 90th percentile of its parcels' lives (``q90``, updated in place with
     this frame's droplets [:nd] and mist [nd:]), at least 50 ms."""
@@ -137,6 +156,12 @@ def _file_compiled(em, frame, geo, buf, nd, now, horizons, fate, life, mass, p0,
     k0, k, m = kernels.file_records(fate, life, horizons[0], horizons[1], nd, now, landings_on, mass, p0, v0, u, tau,
                                     birth, sigma0, growth, d_mm, vi, _vehicle_consts(geo), _FILE_CONSTS,
                                     em.stats.fates, buf.landings, buf.record_floats, buf.birth, buf.death)
+    _push_filed(em, buf, k0, k, m, len(life), nd)
+
+
+def _push_filed(em, buf, k0: int, k: int, m: int, n: int, nd: int) -> None:
+    """After ``kernels.file_records`` (k records, k0 of ring 0, m road landings, of n parcels, nd droplets): the
+    landings to the candidates, the records' ``rand`` draw (the twin's one call), the rings' push, the counts."""
     if m:
         em._candidates = np.concatenate([em._candidates, buf.landings[:m]])
     if k:
@@ -145,7 +170,6 @@ def _file_compiled(em, frame, geo, buf, nd, now, horizons, fate, life, mass, p0,
         for ring, sl in ((0, slice(0, k0)), (1, slice(k0, k))):
             if sl.stop > sl.start:
                 em.dirty[ring].extend(em.rings[ring].push(rec[sl], buf.birth[sl], buf.death[sl]))
-    n = len(life)
     st = em.stats
     st.parcels += nd
     st.last_parcels += nd
@@ -174,6 +198,10 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     buf = em._spawn_buffers.ensure(n)
     out = buf.launch
     compiled = jit.active()
+    if compiled and body_hit is body.body_hit_time_fast:
+        _launch_to_records(em, frame, geo, buf, nd, n, w, bounds, mass, birth, age_now, now, wind)
+        return
+    # Below: the NumPy twins, or the compiled kernels one by one around a body test a test plugged in.
     if compiled:
         launch_parcels_compiled(rng, geo, w, bounds, nd, age_now, tuple(a[:n] for a in out), _vehicle_table(geo),
                                 _vehicle_consts(geo), buf.draws, buf.offs)
@@ -199,15 +227,10 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     fate = np.empty(n, dtype=np.int64)
     if nd:
         d = slice(0, nd)
-        if compiled and body_hit is body.body_hit_time_fast:  # (tests may plug in another body test)
-            kernels.body_hit(p0, v0, u, tau, t_ground, _vehicle_table(geo), vi, age_now, nd, body.SAMPLES,
-                             body.ZOOM, body.ROUNDS, t_body)
-            t_body = t_body[d]
-        else:
-            rows = _vehicle_table(geo).take(vi[d], axis=0)  # one gather for all the per-vehicle quantities
-            vel = rows[:, 3:6]
-            t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d], rows[:, 0:3] - vel * age_now[d, None], vel,
-                              rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
+        rows = _vehicle_table(geo).take(vi[d], axis=0)  # one gather for all the per-vehicle quantities
+        vel = rows[:, 3:6]
+        t_body = body_hit(p0[d], v0[d], u[d], tau[d], t_ground[d], rows[:, 0:3] - vel * age_now[d, None], vel,
+                          rows[:, 6:9], rows[:, 9:12], rows[:, 12:20])
     if compiled:
         cap = rng.uniform(*MIST_LIFE_S, nm) if nm else _NO_CAPS
         q90 = buf.q90
@@ -260,6 +283,29 @@ def spawn_parcels_fast(em, frame, geo, nd: int, w, bounds, mass, birth, age_now,
     st.last_parcels += nd
     st.mist_puffs += nm
     st.last_mist += nm
+
+
+def _launch_to_records(em, frame, geo, buf, nd: int, n: int, w, bounds, mass, birth, age_now, now: float, wind) -> None:
+    """:func:`spawn_parcels_fast`'s compiled path in one kernel call: every draw the launches and the mist caps
+    need (the same calls in the same order as the five-kernel path below), then ``kernels.launch_to_records``,
+    then the records' ``rand`` draw and the rings' push (:func:`_push_filed`)."""
+    rng = em.rng
+    nm = n - nd
+    p0, v0, d_mm, sigma0, growth, air, updraught = (a[:n] for a in buf.launch)
+    draw_launches(rng, bounds, nd, n, buf.draws, buf.offs, d_mm)
+    cap = rng.uniform(*MIST_LIFE_S, nm) if nm else _NO_CAPS
+    u, speed, tau, t_ground, t_body = (a[:n] for a in buf.flight)
+    q90 = buf.q90
+    q90[0], q90[1] = em._life_q90
+    landings_on = bool(nd) and em._standing_water_possible(frame)
+    k0, k, m = kernels.launch_to_records(
+        w, bounds, nd, age_now, buf.draws, buf.offs, wheel_table(geo), _vehicle_table(geo), _vehicle_consts(geo),
+        LAUNCH_TABLES, _MIST_LO_ROW, _MIST_SPAN_ROW, _MIST_CONSTS, p0, v0, d_mm, sigma0, growth, air, updraught,
+        np.ascontiguousarray(wind, dtype=np.float64), _FLY_CONSTS, _GK, 40, u, speed, tau, t_ground, buf.vi,
+        _BODY_STEPS, t_body, cap, buf.life[:n], buf.fate[:n], _FATE_IDS, q90, now, landings_on, mass, birth,
+        _FILE_CONSTS, em.stats.fates, buf.landings, buf.record_floats, buf.birth, buf.death)
+    em._life_q90[0], em._life_q90[1] = q90.tolist()
+    _push_filed(em, buf, k0, k, m, n, nd)
 
 
 def _road_landings(em, frame, fate_d, p0, v0, u, tau, life, birth, mass) -> None:

@@ -254,3 +254,56 @@ def test_ring_push_by_the_kernel_equals_the_twins():
     assert comp_log == twin_log and any(len(r) == 2 for r, _, _ in twin_log)
     assert np.array_equal(comp.data, twin.data) and np.array_equal(comp.birth, twin.birth)
     assert np.array_equal(comp.death, twin.death)
+
+
+def _five_kernel_calls(em, frame, geo, buf, nd, n, w, bounds, mass, birth, age_now, now, wind):
+    """spawn._launch_to_records as it was before kernels.launch_to_records: the five kernels called one by one,
+    the mist caps drawn between the body test and the settle."""
+    rng = em.rng
+    out = tuple(a[:n] for a in buf.launch)
+    launch.launch_parcels_compiled(rng, geo, w, bounds, nd, age_now, out, spawn._vehicle_table(geo),
+                                   spawn._vehicle_consts(geo), buf.draws, buf.offs)
+    p0, v0, d_mm, sigma0, growth, air, updraught = out
+    u, speed, tau, t_ground, t_body = (a[:n] for a in buf.flight)
+    kernels.fly(p0, v0, d_mm, air, updraught, nd, np.ascontiguousarray(wind, dtype=np.float64), spawn._MIST_VT_M_S,
+                launch.WAKE_TAU_S, spawn._GK_X, spawn._GK_X0, spawn._GK_H, spawn._GK_Y0, spawn._GK_Y1, spawn._GK_D0,
+                spawn._GK_D1, physics.G_M_S2, flight.DRAG_TAIL_FIT, layout.KERB_HEIGHT_M, layout.ROAD_HALF_WIDTH_M,
+                1e-9, 40, u, speed, tau, t_ground)
+    vi = w // 4
+    life, fate = np.empty(n), np.empty(n, dtype=np.int64)
+    if nd:
+        kernels.body_hit(p0, v0, u, tau, t_ground, spawn._vehicle_table(geo), vi, age_now, nd, body.SAMPLES,
+                         body.ZOOM, body.ROUNDS, t_body)
+    cap = rng.uniform(*launch.MIST_LIFE_S, n - nd) if n > nd else np.zeros(0)
+    q90 = buf.q90
+    q90[0], q90[1] = em._life_q90
+    horizons = kernels.settle_horizons(t_body[:nd], t_ground, cap, speed, nd, life, fate, growth, parcels.FATE_ROAD,
+                                       parcels.FATE_BODY, parcels.FATE_AIR, q90)
+    em._life_q90[0], em._life_q90[1] = q90.tolist()
+    spawn._file_compiled(em, frame, geo, buf, nd, now, horizons, fate, life, mass, p0, v0, u, tau, birth, sigma0,
+                         growth, d_mm, vi)
+
+
+def test_launch_to_records_equals_the_five_kernel_calls(monkeypatch):
+    """kernels.launch_to_records (launch, fly, body test, settle and filing in one call, the caps drawn before
+    it) against the five kernels called one by one: over 150 frames the same rings, times, landings, stats,
+    percentiles and generator state, bit for bit."""
+    runs = []
+    for one_call in (True, False):
+        with monkeypatch.context() as m:
+            if not one_call:
+                m.setattr(spawn, "_launch_to_records", _five_kernel_calls)
+            with jit.forced(True):
+                em = SprayEmitter(seed=7, budget=3000, film_depth_fn=_puddle(4.0))
+                _, landed = _drive(em, _fleet(), 150)
+        runs.append((em, np.concatenate(landed)))
+    (one, one_landed), (five, five_landed) = runs
+    assert one.stats.parcels == five.stats.parcels > 10_000 and one.stats.mist_puffs == five.stats.mist_puffs > 0
+    assert np.array_equal(one.stats.fates, five.stats.fates) and np.array_equal(one_landed, five_landed)
+    for a, b in zip(one.rings, five.rings, strict=True):
+        assert a.head == b.head and a.last_death() == b.last_death()
+        assert np.array_equal(a.data, b.data) and np.array_equal(a.birth, b.birth)
+        assert np.array_equal(a.death, b.death)
+    assert np.array_equal(one._candidates, five._candidates) and np.array_equal(one._pending, five._pending)
+    assert one._life_q90 == five._life_q90
+    assert one.rng.bit_generator.state == five.rng.bit_generator.state

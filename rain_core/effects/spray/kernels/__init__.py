@@ -8,7 +8,8 @@ same order, so the results agree to rounding (libm's exp/log/sin/cos/pow against
 stopping test per parcel instead of over all of them: tests/effects/spray/test_kernels.py states the tolerances).
 Random numbers are drawn by the caller, in the twin's order, and passed in. Units: m, s, m/s, mm for drop sizes.
 
-The kernels by concern: ``flight``, ``body_test``, ``launches``, ``records``, ``wheel_state``.
+The kernels by concern: ``flight``, ``body_test``, ``launches``, ``records``, ``wheel_state``; ``spawn_frame``
+runs five of them in one call.
 """
 
 from rain_core.effects.spray.kernels.body_test import body_hit  # noqa: F401
@@ -24,4 +25,5 @@ from rain_core.effects.spray.kernels.records import (  # noqa: F401
     settle_horizons,
     tally,
 )
+from rain_core.effects.spray.kernels.spawn_frame import launch_to_records  # noqa: F401
 from rain_core.effects.spray.kernels.wheel_state import wheel_kinematics, wheel_water  # noqa: F401
