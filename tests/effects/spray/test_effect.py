@@ -88,6 +88,36 @@ def test_active_is_pure_and_observe_follows_the_frame(truck_scene):
     scene.release()
 
 
+def test_the_pass_writes_its_own_frames_motion_not_the_one_update_made(truck_scene):
+    """update makes the frame's camera velocity and forward for its draw; a draw of another frame (another camera,
+    the ego moved) writes that frame's own, and the next frame's update makes them again."""
+    from rain_core.camera import look_at
+
+    scene, effect = truck_scene()
+    try:
+        for _ in range(3):
+            scene.step(1 / 30)
+            frame = scene.render()
+        assert effect._motion[0] is frame  # made by update for the frame just drawn
+        prog = effect._program
+        eye = np.array([1.75, 1.2, 610.0])
+        cam = look_at(eye, np.array([6.0, 1.0, 580.0]), fov_y_deg=60.0)
+        scene.ego.speed_m_s *= 0.5  # the ego's velocity changes too
+        other = scene.frame(cam)
+        rc = SimpleNamespace(frame=other, shift_z=0.0, size=(96, 54))
+        effect._set_uniforms(prog, rc, 0.5)
+        f = cam.forward / np.linalg.norm(cam.forward)
+        assert np.allclose(prog["u_cam_forward"].value, f, atol=1e-6)
+        assert np.allclose(prog["u_camera_vel"].value, scene.ego.velocity(), atol=1e-6)
+        scene.step(1 / 30)
+        frame = scene.render()
+        assert effect._motion[0] is frame
+        assert np.allclose(prog["u_cam_forward"].value, frame.camera.forward / np.linalg.norm(frame.camera.forward),
+                           atol=1e-6)
+    finally:
+        scene.release()
+
+
 def test_the_forward_uniform_follows_the_camera(truck_scene):
     """The pass writes the camera's normalised forward (through OwnedUniforms: a new direction is written)."""
     from rain_core.camera import look_at
