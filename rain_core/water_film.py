@@ -27,7 +27,7 @@ from functools import lru_cache
 import numpy as np
 
 from rain_core import checks, jit, layout
-from rain_core.gutter import gutter_depth_mm
+from rain_core.gutter import gutter_depth_mm, upstream_length_m
 from rain_core.world import HEIGHTMAP_TEXEL_M, sample_heightmap
 
 # shaders/road/film.glsl holds the same numbers.
@@ -425,6 +425,8 @@ def _standing_where_wet(grids, floors, levels, kerb, scale, x, z, crack_at, pudd
     (``_PackedGrids.dry_floors``) allows a crack or a puddle (h or g below its level) or near the kerbs where the
     gutter may run (|x| > kerb); +0 elsewhere, which is what sampling gives there (the maps' bilinear samples stay
     within their taps' range to a few ulps, so the clamps give +0 crack and puddle, and the gutter is +0)."""
+    if jit.active() and _is_grid(x, z):
+        return _standing_on_grid(grids, floors, levels, kerb, scale, x, z, gutter_k, fallback)
     if jit.active():  # one loop over the points; the kerb streams (a power law) stay in NumPy
         flat_x, flat_z = np.ascontiguousarray(x).reshape(-1), np.ascontiguousarray(z).reshape(-1)
         out = np.zeros(x.shape)
@@ -459,6 +461,34 @@ def _standing_where_wet(grids, floors, levels, kerb, scale, x, z, crack_at, pudd
         out.reshape(-1)[on.take(index)] = _road_depths(grids, xs.take(index), zs.take(index), crack_at, puddle_at,
                                                        gutter_k)[0]
     return out
+
+
+def _is_grid(x, z) -> bool:
+    """Whether x, z (float64, one 2-D shape) are a grid: x the same down every column and z along every row, as
+    views (strides 0) give them, e.g. ``np.broadcast_to`` of a row of x and a column of z (the ripples' strips)."""
+    return x.ndim == 2 and x.strides[0] == 0 and z.strides[1] == 0 and x.size > 0
+
+
+def _standing_on_grid(grids, floors, levels, kerb, scale, x, z, gutter_k, fallback):
+    """``_standing_where_wet`` on a grid (``_is_grid``), compiled: each row's and each column's share of the
+    sampling done once (``_standing_grid_kernel``), and the kerb streams' power law once per row and kerb (the
+    stream's spread depends on z and the kerb alone) — the same operations on the same values: the same bits."""
+    xc, zr = np.ascontiguousarray(x[0]), np.ascontiguousarray(z[:, 0])
+    spread = _EMPTY_SPREAD
+    if kerb < ROAD_HALF_WIDTH_M:
+        # gutter_depth_mm's T = k·L^(3/8) at the −x then the +x kerb, on contiguous arrays as it computes them
+        sides = np.repeat(_KERB_SIDES, zr.size)
+        with np.errstate(invalid="ignore"):  # a non-finite z: the kernel sends it to the fallback
+            spread = (gutter_k * upstream_length_m(sides, np.concatenate((zr, zr))) ** 0.375).reshape(2, -1)
+    out = np.zeros(x.shape)
+    if _kernels._standing_grid_kernel(grids.table, grids.kernel_constants, grids.kernel_ints, floors, levels[0, 0],
+                                      levels[1, 0], kerb, *scale, DRY_TEST_MAX_ROWS, xc, zr, spread, out) < 0:
+        return fallback(x, z)
+    return out
+
+
+_KERB_SIDES = np.array([-1.0, 1.0])  # an x on each kerb's side of the crown (which inlets the stream runs to)
+_EMPTY_SPREAD = np.zeros((2, 0))
 
 
 def film_depth_mm(x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, world=None, wetness=0.0,

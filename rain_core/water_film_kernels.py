@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from rain_core import jit
+from rain_core.gutter import CROSS_SLOPE, GUTTER_MAX_MM
 from rain_core.water_film import (
     CRACK_DEPTH_SPAN,
     CRACK_MAX_MM,
@@ -67,6 +68,21 @@ def _lerp(t0, t1, t2, t3, tx, tz):
     return top * (1.0 - tz) + bot * tz
 
 
+@jit.kernel
+def _standing_mm(table, a, b, tx, tz, tx_b, tz_b, crack_at, puddle_at):
+    """(standing water mm, shelter) of one point from its texels' table rows ``a`` (heightmap grid) and ``b``
+    (puddle-map grid) and its weights: ``_road_depths``' formulas before the kerb streams, in its order."""
+    h = _lerp(table[a, 0], table[a, 1], table[a, 2], table[a, 3], tx, tz)
+    h_smooth = _lerp(table[a, 4], table[a, 5], table[a, 6], table[a, 7], tx, tz)
+    n = _lerp(table[b, 0], table[b, 1], table[b, 2], table[b, 3], tx_b, tz_b)
+    sh = _lerp(table[b, 4], table[b, 5], table[b, 6], table[b, 7], tx_b, tz_b)
+    crack = CRACK_MAX_MM * _clamp01((crack_at - h) / CRACK_DEPTH_SPAN)
+    ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
+    puddle = PUDDLE_MAX_MM * _clamp01((puddle_at - ground) / PUDDLE_DEPTH_SPAN)
+    wet = crack if (crack >= puddle or crack != crack) else puddle
+    return wet * (1.0 - sh), sh
+
+
 # Points whose two table rows _standing_points copies out before it uses any: the table (17 MB) is cold in a frame,
 # and a loop that loads and then computes point by point waits for each cache miss in turn (~4× the warm time).
 _GATHER_CHUNK = 64
@@ -108,16 +124,7 @@ def _standing_points(table, fc, fi, x, z, index, m, crack_at, puddle_at, standin
             q = j - start
             a, b = rows[q, 0], rows[q, 1]
             tx, tz, tx_b, tz_b = weights[q, 0], weights[q, 1], weights[q, 2], weights[q, 3]
-            h = _lerp(table[a, 0], table[a, 1], table[a, 2], table[a, 3], tx, tz)
-            h_smooth = _lerp(table[a, 4], table[a, 5], table[a, 6], table[a, 7], tx, tz)
-            n = _lerp(table[b, 0], table[b, 1], table[b, 2], table[b, 3], tx_b, tz_b)
-            sh = _lerp(table[b, 4], table[b, 5], table[b, 6], table[b, 7], tx_b, tz_b)
-            crack = CRACK_MAX_MM * _clamp01((crack_at - h) / CRACK_DEPTH_SPAN)
-            ground = (1.0 - PUDDLE_NOISE_WEIGHT) * h_smooth + PUDDLE_NOISE_WEIGHT * n
-            puddle = PUDDLE_MAX_MM * _clamp01((puddle_at - ground) / PUDDLE_DEPTH_SPAN)
-            wet = crack if (crack >= puddle or crack != crack) else puddle
-            standing[k] = wet * (1.0 - sh)
-            shelter[k] = sh
+            standing[k], shelter[k] = _standing_mm(table, a, b, tx, tz, tx_b, tz_b, crack_at, puddle_at)
 
 
 @jit.kernel
@@ -179,3 +186,75 @@ def film_points(table, fc, fi, x, z, crack_at, puddle_at, wet, kerb, standing, f
         k = on[j]
         film[k] = wet * (1.0 - shelter[k])
     return m, b
+
+
+@jit.kernel
+def _standing_grid_kernel(table, fc, fi, floors, crack_at, puddle_at, kerb, row_scale, col_scale, cols, cells,
+                          max_rows, xc, zr, spread, out):
+    """``_standing_where_wet_kernel`` and the kerb streams on a grid: x = xc[c] (m) along the columns, z = zr[r] (m)
+    along the rows, standing water (mm) into ``out`` (len(zr), len(xc)), zeros on entry. A grid's points share
+    their column's and their row's halves of the arithmetic (the coordinates' divisions, floors and wraps), done
+    once per column and per row, with the same operations, so the same bits. ``spread``: (2, len(zr)) the kerb
+    streams' spread T = k·L^(3/8) (m) of each row at the −x and the +x kerb (``gutter_depth_mm``'s, unused when
+    kerb ≥ ROAD_HALF_WIDTH_M). Returns 0, or −1 as that kernel (the caller then samples everything)."""
+    nr, nc = zr.size, xc.size
+    # Per column: [cell column (float), tx, tx_b, s = distance from the kerb face] and [on the road, column of
+    # each grid, at the kerb: 0 no, 1 the −x kerb, 2 the +x kerb].
+    cf = np.empty((4, nc))
+    ci = np.empty((4, nc), np.int64)
+    on_road = 0
+    for c in range(nc):
+        xk = xc[c]
+        ax = abs(xk)
+        ci[0, c] = 0
+        if not ax <= ROAD_HALF_WIDTH_M:
+            continue
+        ci[0, c] = 1
+        on_road += 1
+        cf[0, c] = min(math.floor((xk + ROAD_HALF_WIDTH_M) * col_scale), cols - 1.0)
+        for g in range(2):
+            fx = (xk + fc[g, 0]) / fc[g, 1] * fc[g, 3] - 0.5
+            i0 = np.floor(fx)
+            ci[1 + g, c] = np.int64(min(max(i0, -1.0), fc[g, 5]) + fc[g, 6])
+            cf[1 + g, c] = fx - i0
+        cf[3, c] = ROAD_HALF_WIDTH_M - ax
+        ci[3, c] = 0 if not ax > kerb else (2 if xk >= 0.0 else 1)
+    if on_road == 0:
+        return 0
+    # Per row: [tz, tz_b] and [the dry-cell table's cell of column 0, table row of each grid].
+    rf = np.empty((2, nr))
+    ri = np.empty((3, nr), np.int64)
+    for r in range(nr):
+        zk = zr[r]
+        rows = zk * row_scale
+        if not (-max_rows < rows and rows < max_rows):
+            return -1
+        # The cell (floor(rows)·cols + column) mod cells of the point kernel: the row's part wrapped here (a
+        # multiple of cols, as cells is), the column's (0 … cols − 1) added below (integers below 2^52: exact).
+        ri[0, r] = np.int64(_wrap(math.floor(rows) * cols, cells))
+        for g in range(2):
+            fz = zk / fc[g, 2] * fc[g, 4] - 0.5
+            j0 = np.floor(fz)
+            ri[1 + g, r] = np.int64(_wrap(j0, fc[g, 4])) * fi[g, 1]
+            rf[g, r] = fz - j0
+    for r in range(nr):
+        base, row_a, row_b, tz, tz_b = ri[0, r], ri[1, r], ri[2, r], rf[0, r], rf[1, r]
+        for c in range(nc):
+            if ci[0, c] == 0:
+                continue
+            side = ci[3, c]
+            if side == 0:
+                cell = base + np.int64(cf[0, c])
+                if not (floors[0, cell] < crack_at or floors[1, cell] < puddle_at):
+                    continue
+            depth, _ = _standing_mm(table, row_a + ci[1, c], row_b + ci[2, c], cf[1, c], tz, cf[2, c], tz_b,
+                                    crack_at, puddle_at)
+            if side != 0:
+                # gutter_depth_mm's S_x·(T − s) capped, and np.maximum with the standing water, NaN as NumPy's
+                d = spread[side - 1, r] - cf[3, c]
+                d = d if (d >= 0.0 or d != d) else 0.0
+                stream = CROSS_SLOPE * d * 1000.0
+                stream = stream if (stream <= GUTTER_MAX_MM or stream != stream) else GUTTER_MAX_MM
+                depth = depth if (depth >= stream or depth != depth) else stream
+            out[r, c] = depth
+    return 0

@@ -131,3 +131,30 @@ def test_wet_queries_of_any_size_give_the_references_bits(kernel_path):
     flat = _reference(x[-60:], z[-60:], 1.0, 1.0, 0.5, 0, world, 1.0, 0.1)
     for g, f in zip(grid, flat, strict=True):
         assert g.shape == (6, 10) and np.array_equal(g.reshape(-1), f)
+
+
+def test_grid_queries_give_the_points_bits(kernel_path):
+    """A grid given as views (a row of x down every column, a column of z along every row: the ripples' strips)
+    takes the compiled grid sampler: the depths of the same points asked one by one, kerb streams included, over
+    the asphalt's edges, the kerb bands, the periods' seams and far z (whose rows go to the fallback)."""
+    world = water_film.default_world()
+    rng = np.random.default_rng(8)
+    x = np.concatenate([np.linspace(-9.0, 9.0, 301), [-7.0, 7.0, np.nextafter(7.0, 0.0), -np.nextafter(7.0, 0.0),
+                                                      0.0, -0.0, 6.5, -6.5]])
+    seams = [0.0, 48.0, 25.0, 50.0, layout.PERIOD_M, -layout.PERIOD_M, np.nextafter(48.0, 0.0), -0.01]
+    z = np.concatenate([rng.uniform(-2.0 * layout.PERIOD_M, 2.0 * layout.PERIOD_M, 400), seams])
+    for levels in ((1.0, 1.0, 0.5, 0, 0.0, 0.1), (0.6, 0.3, 1.0, 2, 0.0, 0.0), (1.0, 0.0, 0.5, 1, 0.0, 0.3)):
+        sampler = water_film.film_depth_sampler(*levels[:4], world, levels[4], levels[5])
+        for zs in (z, z[:1], np.array([3e9, 1.0]), np.array([np.nan, 2.0])):
+            for xs in (x, x[:1], np.array([8.0, -9.0])):
+                shape = (zs.size, xs.size)
+                with np.errstate(invalid="ignore"):  # the NaN row
+                    want = sampler(np.ascontiguousarray(np.broadcast_to(xs, shape)),
+                                   np.ascontiguousarray(np.broadcast_to(zs[:, None], shape)))
+                    got = sampler(np.broadcast_to(xs, shape), np.broadcast_to(zs[:, None], shape))
+                assert got.shape == shape and got.tobytes() == want.tobytes()
+        if levels[4] == 0.0:
+            flat = _reference(np.broadcast_to(x, (z.size, x.size)), np.broadcast_to(z[:, None], (z.size, x.size)),
+                              *levels[:3], levels[3], world, levels[4], levels[5])[0]
+            assert np.array_equal(sampler(np.broadcast_to(x, flat.shape), np.broadcast_to(z[:, None], flat.shape)),
+                                  flat)

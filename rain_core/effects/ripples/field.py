@@ -202,30 +202,27 @@ class RippleField:
         self._fill_unknown_depths()
 
     def _ask_depths(self, rows, cols, extra_xz=None) -> tuple[np.ndarray, np.ndarray | None]:
-        """(depths of the cells rows × cols, depths at the extra world points (k, 2) m or None), in mm, from one
-        call of the film-depth function (each call has a fixed cost: the wheels' few points ride along with the
-        strip); only the cells' depths are checked (the wheels clamp theirs)."""
+        """(depths of the cells rows × cols, depths at the extra world points (k, 2) m or None), in mm: the cells
+        asked as a grid, the extra points (the wheels') by a call of their own; only the cells' depths are checked
+        (the wheels clamp theirs)."""
         # Positions from the world lattice index (anchor + cell): a lattice point gets the same coordinates,
         # hence the same depth, whichever window asks about it (so strips asked after scrolls agree exactly
         # with a full evaluation).
         ax, az = self._anchor
         shape = (len(rows), len(cols))
-        cells = shape[0] * shape[1]
-        # The rows × cols grid (meshgrid's values) written into one buffer with the extra points after it.
-        size = cells if extra_xz is None else cells + len(extra_xz)
-        xs, zs = np.empty(size), np.empty(size)
-        xs[:cells].reshape(shape)[...] = (ax + np.asarray(cols)) * self.cell_m
-        zs[:cells].reshape(shape)[...] = ((az + np.asarray(rows)) * self.cell_m)[:, None]
-        if extra_xz is None:
-            xs, zs = xs.reshape(shape), zs.reshape(shape)
-        else:
-            xs[cells:], zs[cells:] = extra_xz[:, 0], extra_xz[:, 1]
+        # meshgrid's values as read-only views of one row of x and one column of z: a film-depth function sees
+        # (rows, cols) arrays as before, and the road's sampler spots the grid and samples each row's and each
+        # column's part once (water_film._standing_on_grid: the same depths, a third of the cost).
+        xs = np.broadcast_to((ax + np.asarray(cols)) * self.cell_m, shape)
+        zs = np.broadcast_to(((az + np.asarray(rows)) * self.cell_m)[:, None], shape)
         depth = np.asarray(self._film_fn(xs, zs), dtype=np.float64)
-        if depth.shape != xs.shape:  # e.g. a constant depth
-            depth = np.broadcast_to(depth, xs.shape)
+        if depth.shape != shape:  # e.g. a constant depth
+            depth = np.broadcast_to(depth, shape)
         extra = None
         if extra_xz is not None:
-            depth, extra = depth[:cells].reshape(shape), depth[cells:]
+            extra = np.asarray(self._film_fn(extra_xz[:, 0], extra_xz[:, 1]), dtype=np.float64)
+            if extra.shape != (len(extra_xz),):
+                extra = np.broadcast_to(extra, (len(extra_xz),))
         # Two reductions: a NaN makes min() NaN (not >= 0), +inf is the max, -inf below 0.
         if not depth.min() >= 0.0 or depth.max() == math.inf:
             raise ValueError("film_depth_fn must return finite depths >= 0 mm")

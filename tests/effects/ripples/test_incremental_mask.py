@@ -150,9 +150,9 @@ class CountingFilm(Film):
         return super().__call__(x, z)
 
 
-def test_wheel_depths_ride_along_with_the_strips():
-    """The wheels' film depths are asked in the strips' call (one call of the road's function a frame while the
-    window scrolls), and give the wake the depths a call of their own gives."""
+def test_wheel_depths_are_asked_beside_the_strips():
+    """While the window scrolls, the strips are asked as a grid (one call per strip) and the wheels' film depths
+    in one call of their own, and they give the wake the depths given with the wheels."""
     from rain_core.effects.ripples.wheels import WheelBatch
 
     film = CountingFilm(0.2)
@@ -171,6 +171,6 @@ def test_wheel_depths_ride_along_with_the_strips():
         report = fields[0].update(1 / 30, center_xz=(x, z), rate_mm_h=10.0, wheels=asked, film_depth_fn=film)
         fields[1].update(1 / 30, center_xz=(x, z), rate_mm_h=10.0, wheels=given, film_depth_fn=Film(0.2))
         if frame and report["shift"] != (0, 0):
-            assert film.calls == 1 + (report["shift"][0] != 0 and report["shift"][1] != 0)
+            assert film.calls == 2 + (report["shift"][0] != 0 and report["shift"][1] != 0)
         assert report["wake_bumps"] > 0
         np.testing.assert_array_equal(fields[0].height, fields[1].height)
