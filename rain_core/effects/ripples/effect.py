@@ -9,7 +9,7 @@ from rain_core.effects.ripples.backend import make_field
 from rain_core.effects.ripples.field import RippleField
 from rain_core.effects.ripples.rain_tiles import RainRippleTexture
 from rain_core.effects.ripples.textures import RippleTextures
-from rain_core.effects.ripples.wheels import WheelBatch, WheelSweep
+from rain_core.effects.ripples.wheels import WheelBatch, WheelSweep, wheel_rows
 from rain_core.effects.ripples.window import window_centre_xz
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import RainRings
@@ -72,21 +72,17 @@ class RipplesEffect(Effect):
         film depths left to the road's function)."""
         ox, oz = field.origin_xz
         reach = field.extent_m
-        p0, p1, speeds, widths = [], [], [], []
+        rows = []
         for vehicle in frame.vehicles:
             # Cheap reject on the body position first: wheels lie within a few metres of it.
             x, z = float(vehicle.position[0]), float(vehicle.position[2])
-            if not (ox - 20.0 < x < ox + reach + 20.0 and oz - 20.0 < z < oz + reach + 20.0):
-                continue
-            now = vehicle.wheel_contacts()
-            before = getattr(vehicle, "previous_wheel_contacts", None)
-            p1.append(now[:, (0, 2)])
-            p0.append(now[:, (0, 2)] if before is None else before[:, (0, 2)])
-            speeds.append(np.abs(vehicle.wheel_speeds()))
-            widths.append(vehicle.wheel_widths())
-        if not p0:
+            if ox - 20.0 < x < ox + reach + 20.0 and oz - 20.0 < z < oz + reach + 20.0:
+                rows += wheel_rows(vehicle)
+        if not rows:
             return WheelBatch.of(())
-        return WheelBatch(np.concatenate(p0), np.concatenate(p1), np.concatenate(speeds), np.concatenate(widths))
+        # One array for all wheels (a few vehicles, 4 wheels each: Python floats cost less than NumPy per vehicle).
+        a = np.array(rows)
+        return WheelBatch(a[:, 0:2], a[:, 2:4], a[:, 4], a[:, 5])
 
     @staticmethod
     def window_centre(frame, field: RippleField) -> tuple[float, float] | None:

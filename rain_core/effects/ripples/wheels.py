@@ -134,3 +134,28 @@ def _bounds(w: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 _NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
+
+
+def wheel_rows(vehicle) -> list[tuple[float, float, float, float, float, float]]:
+    """A vehicle's wheels as rows (x0, z0, x1, z1 world m, |speed| m/s, tyre width m), order FL, FR, RL, RR: the
+    contact paths from ``previous_wheel_contacts`` (if any; else the current contacts) to ``wheel_contacts()``,
+    and ``wheel_speeds()``'s magnitudes, in Python floats with its operations in its order (the same bits, for a
+    fraction of the NumPy calls: ``RipplesEffect.wheel_batch`` asks every frame for every vehicle in the window)."""
+    now = vehicle.wheel_contacts().tolist()
+    before = getattr(vehicle, "previous_wheel_contacts", None)
+    before = now if before is None else before.tolist()
+    # Vehicle._point_velocity at each contact: v = forward·speed + ω ŷ × (p − rear axle), rear axle = position −
+    # forward·wheelbase/2, forward = (−sin yaw, 0, −cos yaw); |v|² summed left to right (np.add.reduce's order).
+    fx, fy, fz = -math.sin(vehicle.yaw), 0.0, -math.cos(vehicle.yaw)
+    half = vehicle.spec.wheelbase_m / 2.0
+    px, _, pz = vehicle.position.tolist()
+    rear_x, rear_z = px - fx * half, pz - fz * half
+    speed, w = vehicle.speed_m_s, vehicle.yaw_rate_rad_s
+    vx, vy, vz = fx * speed, fy * speed, fz * speed
+    width = float(vehicle.spec.tire_width_m)
+    rows = []
+    for (bx, _, bz), (cx, _, cz) in zip(before, now, strict=True):
+        ux = vx + w * (cz - rear_z)
+        uz = vz - w * (cx - rear_x)
+        rows.append((bx, bz, cx, cz, abs(math.sqrt(ux * ux + vy * vy + uz * uz)), width))
+    return rows

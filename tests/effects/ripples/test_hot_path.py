@@ -204,6 +204,43 @@ def test_wheel_batch_of_a_valid_batch_is_that_batch_and_bad_ones_still_name_the_
     assert as_lists.speed_m_s.dtype == np.float64 and as_lists.p0_xz.shape == (1, 2)
 
 
+def test_wheel_rows_give_the_vehicles_own_bits():
+    """``wheel_rows`` (Python floats) gives ``wheel_contacts``, ``previous_wheel_contacts``, |``wheel_speeds``| and
+    ``wheel_widths`` bit for bit, turning, reversing and at rest, with and without previous contacts; the effect's
+    batch of a frame is those rows for the vehicles near the window."""
+    from types import SimpleNamespace
+
+    from rain_core.effects.ripples import RipplesEffect
+    from rain_core.effects.ripples.wheels import wheel_rows
+    from rain_core.vehicles import CAR_SPEC, TRUCK_SPEC, Vehicle
+
+    rng = np.random.default_rng(4)
+    vehicles = []
+    for i in range(60):
+        v = Vehicle(TRUCK_SPEC if i % 3 == 0 else CAR_SPEC, position=np.array([rng.uniform(-8, 8), 0.0,
+                    rng.uniform(-3e3, 3e3)]), yaw=rng.uniform(-7.0, 7.0), speed_m_s=rng.uniform(-9.0, 40.0))
+        v.yaw_rate_rad_s = float(rng.uniform(-2.0, 2.0)) if i % 4 else 0.0
+        if i % 5 == 0:
+            v.speed_m_s = 0.0
+        if i % 2:
+            v.previous_wheel_contacts = v.wheel_contacts() + rng.uniform(-1.0, 1.0, (4, 3))
+        else:
+            v.previous_wheel_contacts = None
+        vehicles.append(v)
+    for v in vehicles:
+        before = v.wheel_contacts() if v.previous_wheel_contacts is None else v.previous_wheel_contacts
+        want = np.concatenate([before[:, (0, 2)], v.wheel_contacts()[:, (0, 2)], np.abs(v.wheel_speeds())[:, None],
+                               v.wheel_widths()[:, None]], axis=1)
+        assert np.array(wheel_rows(v)).tobytes() == want.tobytes()
+    field = SimpleNamespace(origin_xz=(-4.0, -100.0), extent_m=200.0)
+    batch = RipplesEffect(None).wheel_batch(SimpleNamespace(vehicles=vehicles), field)
+    near = [v for v in vehicles if -24.0 < v.position[0] < 216.0 and -120.0 < v.position[2] < 120.0]
+    rows = np.concatenate([batch.p0_xz, batch.p1_xz, batch.speed_m_s[:, None], batch.tire_width_m[:, None]], axis=1)
+    assert 0 < len(near) < len(vehicles) and rows.tobytes() == np.array(sum(map(wheel_rows, near), [])).tobytes()
+    assert batch.film_depth_mm is None
+    assert len(RipplesEffect(None).wheel_batch(SimpleNamespace(vehicles=[]), field)) == 0
+
+
 def _wakes_before(field, wheels):
     """The field's wakes as they were laid before the per-wheel values were gathered in one go (each array
     gathered alone, crests picked by a mask even when every wheel rolled): the bumps it would emit."""
@@ -283,3 +320,48 @@ def test_gpu_solver_mask_row_window_equals_shifted(gl_ctx, shaders):
         assert solver._mask_window is first_window and solver._mask is first_window.view
     finally:
         solver.release()
+
+
+@pytest.mark.parametrize("masked", [False, True])
+def test_float32_solver_row_windows_equal_the_in_place_scroll(masked, kernel_path):
+    """The float32 solver scrolls its mask and levels along z in row windows: through recentring both ways, the
+    steps' swaps of the levels, lateral scrolls, a reset, a new mask and sleep, it keeps the values the in-place
+    scroll (``WaveSolver.shift``) gives, bit for bit."""
+    from rain_core.effects.ripples.solver import WaveSolver
+    from rain_core.effects.ripples.solver_f32 import WaveSolverF32
+
+    n = 48
+    rng = np.random.default_rng(12)
+    solvers = [WaveSolverF32(n, 0.05, 0.3, 0.5) for _ in range(2)]
+    mask = rng.random((n, n)) > 0.3
+    for s in solvers:
+        if masked:
+            s.set_water_mask(mask)
+    moves = [(0, 9), (0, 11), (0, 13), (0, 9), (2, 3), (0, -25), (0, -20), (0, 7), (0, 60), (0, 6), (0, -4)] * 3
+    for i, (dx, dz) in enumerate(moves):
+        xs, zs = rng.uniform(0.2, 2.2, (2, 30))
+        for s in solvers:
+            s.add_impulses(xs, zs, 0.12, np.full(30, 1e-3))
+            s.step(1 / 30)
+        solvers[0].shift(dx, dz)
+        WaveSolver.shift(solvers[1], dx, dz)  # the plain in-place scroll
+        if i == 10:
+            for s in solvers:
+                s.reset()
+        if i == 20 and masked:
+            for s in solvers:
+                s.set_water_mask(np.roll(mask, 5, axis=0))
+        a, b = solvers
+        assert a.height.tobytes() == b.height.tobytes() and a._zp.tobytes() == b._zp.tobytes()
+        assert (a.water_mask is None) == (b.water_mask is None)
+        if a.water_mask is not None:
+            assert a.water_mask.tobytes() == b.water_mask.tobytes()
+    windows = solvers[0]._row_windows
+    assert windows[1] is not None and {id(solvers[0]._z), id(solvers[0]._zp)} == {id(windows[1].view),
+                                                                                 id(windows[2].view)}
+    # Asleep: the mask scrolls, the levels stay as they are (as the in-place scroll leaves them).
+    for s in solvers:
+        s._asleep = True
+    solvers[0].shift(0, 5)
+    WaveSolver.shift(solvers[1], 0, 5)
+    assert solvers[0].height.tobytes() == solvers[1].height.tobytes()
