@@ -65,6 +65,7 @@ class KernelScratch:
         self.hits = np.empty((2, cap), np.int64)
         self.drop = np.empty(cap, bool)  # shed_rows
         self.shed_m = np.empty(cap)
+        self.sensor_m = np.empty(cap)
         self.hist = np.empty(512, np.int64)  # sort_rows
         self.order = np.empty(4 * cap, np.int64)
         self.tmp = np.zeros((cap, _COLS))  # (the shapes of the drop array: sort_rows may swap them)
@@ -81,6 +82,10 @@ class DropArray:
     """The drops of ``WindshieldSim`` as rows of one array (see the module docstring)."""
 
     version = 0  # (the class's: a simulation pickled before it counted starts from 0)
+    # An upper bound on the drops' radii (m) from the last shed's compaction (sim._shed_outside), for the wipers'
+    # wedges (fast_wiping): valid until a drop is added or changed from outside (``changed``) or the step's sweeps
+    # end (the film step and the next sub-step grow drops); a larger bound only widens the wedges' pre-test.
+    _a_bound: float | None = None
 
     def _init_drops(self) -> None:
         self._n = 0
@@ -98,6 +103,7 @@ class DropArray:
         """Note that the drops, beads or wipers changed (a step, drops added or removed, a column assigned): the
         effect's drop rows made from them (``WindshieldEffect.update``) are no longer theirs."""
         self.version += 1
+        self._a_bound = None
 
     def _scratch(self) -> KernelScratch:
         """The compiled kernels' work arrays, for the drop array's capacity."""
@@ -256,17 +262,20 @@ class DropArray:
 
     def _sort_drops(self) -> None:
         """Keep the drops in merge-grid cell order (grid.grid_keys), as the reference does."""
-        if self._dirty:
+        n = self._n
+        compiled = jit.active() and n >= 2  # (the kernel places the dirty rows as it reads the keys)
+        if self._dirty and not compiled:
             self._flush_placed()
         if self._ks is not None:
             self._ks.rows32_of = -1  # (a later sub-step moves drops without a new version)
-        n = self._n
         if n < 2:
             return
-        if jit.active():
+        if compiled:
             ks = self._scratch()
+            place, self._dirty = self._dirty, False
             if kernels.sort_rows(self._buf, self._fresh_buf, n, ks.hist, ks.order, ks.tmp, ks.tmp_fresh,
-                                 ks.rows32) == 2:
+                                 ks.rows32, place, self._w0, self._dw, self._height, self._g_up,
+                                 self._g_sag) == 2:
                 # The sorted rows are in the scratch: it becomes the drop array, the old array the scratch.
                 self._buf, ks.tmp = ks.tmp, self._buf
                 self._fresh_buf, ks.tmp_fresh = ks.tmp_fresh, self._fresh_buf

@@ -109,7 +109,7 @@ class FastMotion:
         n = self._n
         if n == 0:
             return 0, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1
-        if self._dirty:
+        if self._dirty and not jit.active():  # (the kernel places the dirty rows on its way: _move_compiled)
             self._flush_placed()
         d = self._buf[:n]
         head, cross = float(air_local[2]), float(air_local[0])
@@ -243,8 +243,10 @@ class FastMotion:
         n = self._n
         ks = self._scratch()
         buf = self._buf
+        place, self._dirty = self._dirty, False
         n_go = kernels.move_drops(buf, n, h, head, cross, new_air or new_epoch, new_epoch, _REST_TEST, grow,
-                                  ks.go, ks.gcol, ks.loss)
+                                  ks.go, ks.gcol, ks.loss, place, self._w0, self._dw, self._height, self._g_up,
+                                  self._g_sag)
         self.evaporated += float(np.add.reduce(ks.loss[:n]))
         if n_go == 0:
             return n, _EMPTY_I, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1, _EMPTY1

@@ -162,7 +162,9 @@ class FastWiping:
         """``_sweep`` from the blades' angles on, by ``kernels.sweep_blades`` (the drops, film and off-glass bead
         of both blades), the drops it gathered removed once and the stroke's end as the twin does them."""
         n = self._n
-        a_max = float(self._buf[:n, _A].max()) if n else 0.0
+        a_max = self._a_bound  # (the shed's, right before the sweeps: the pass over the radii is spared)
+        if a_max is None:
+            a_max = float(self._buf[:n, _A].max()) if n else 0.0
         par = []
         for blade, (ta, tb) in zip(self.blades, moves, strict=True):
             planes = self._wedge_planes(blade, ta, tb, a_max) if n and ta != tb else None

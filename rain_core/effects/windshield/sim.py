@@ -102,6 +102,8 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
     """Water on the windshield: drops, film, wiper beads and the wipers (the fast path; see the module
     docstring). Same constructor, state and queries as ``WindshieldSimReference``."""
 
+    _shed_sensor: int | None = None  # the rain sensor's drops the last shed took (_shed_outside), or None
+
     def __init__(self, spec: VehicleSpec = CAR_SPEC, seed: int = 0):
         super().__init__(spec, seed)
         g = self.glass
@@ -193,13 +195,17 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         lo, hi = self._sensor_box
         if jit.active():
             m = self._scratch().shed_m  # (free outside _shed_outside)
-            k = kernels.sensor_masses(self._buf, self._n, lo[0], hi[0], lo[1], hi[1], m)
-            drops = float(np.add.reduce(m[:k])) / self._sensor_area
-        else:
-            d = self._buf[: self._n]
-            s, t = d[:, _S], d[:, _T]
-            inside = (s >= lo[0]) & (s <= hi[0]) & (t >= lo[1]) & (t <= hi[1])
-            drops = float(d[inside, _M].sum()) / self._sensor_area
+            return self._sensor_of(m[: kernels.sensor_masses(self._buf, self._n, lo[0], hi[0], lo[1], hi[1], m)])
+        d = self._buf[: self._n]
+        s, t = d[:, _S], d[:, _T]
+        inside = (s >= lo[0]) & (s <= hi[0]) & (t >= lo[1]) & (t <= hi[1])
+        drops = float(d[inside, _M].sum()) / self._sensor_area
+        film = float(self.film.ravel()[self._sensor_cells].sum()) / max(self._sensor_cell_area, 1e-12)
+        return drops + film
+
+    def _sensor_of(self, m: np.ndarray) -> float:
+        """The sensor's reading from the masses (kg) of the drops in its box, in row order (``sensor_reading``)."""
+        drops = float(np.add.reduce(m)) / self._sensor_area
         film = float(self.film.ravel()[self._sensor_cells].sum()) / max(self._sensor_cell_area, 1e-12)
         return drops + film
 
@@ -346,8 +352,12 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
             if rate > 0.0:
                 self._arrive_fast(h, rate, inputs)
             self._merge_moves(*self._move(h, air_local, inputs))
-            self._shed_outside()
-            self._sensor = self.sensor_reading() if auto else None
+            self._shed_outside(auto)
+            if auto:  # (the shed's compaction took the sensor's drops on its way: _shed_sensor)
+                k = self._shed_sensor
+                self._sensor = self.sensor_reading() if k is None else self._sensor_of(self._ks.sensor_m[:k])
+            else:
+                self._sensor = None
             segments = wipers._advance(
                 h,
                 inputs.wiper_mode,
@@ -359,6 +369,7 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
             )
             for seg in segments:
                 self._sweep(seg, inputs.blade_wear)
+            self._a_bound = None  # (the film step and the next sub-step grow drops: the next shed measures again)
             self._film_step(h, self._evap, inputs)
             self._sort_drops()
         self.time_s += dt_s
@@ -384,6 +395,8 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         if len(thick) == 0:
             return
         thick, m = self._beads(flat, thick, max(int(inputs.drop_budget) - self._n, 0))
+        if len(thick) == 0:  # a full glass: every thick cell joined drops (no draws below: the same stream)
+            return
         iv, iu = np.divmod(thick, FILM_CELLS)
         k = len(thick)
         r = self.rng.random(2 * k)  # the reference's rng.random(k) for u, then for v
@@ -426,21 +439,28 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
             row = end
         return out
 
-    def _shed_outside(self) -> None:
+    def _shed_outside(self, sensor: bool = False) -> None:
         """Drops that left the glass are shed; drops worn below half the object size become film. The drops
         the step's merge joined into others go too: one compaction for all three (the reference compacts after
-        each; the sums run over the same drops in the same order)."""
+        each; the sums run over the same drops in the same order). The kernel's compaction also takes, for the
+        rest of the sub-step, the largest radius (``_a_bound``: the sweeps' wedges) and with ``sensor`` the rain
+        sensor's drops (``_shed_sensor``: how many masses it wrote to the scratch's ``sensor_m``), else None."""
         n = self._n
         gone = self._merged_away
         self._merged_away = None
+        self._shed_sensor = None
         if n == 0:
             return
         if jit.active():
             ks = self._scratch()
-            self._n, n_shed = kernels.shed_rows(self._buf, self._fresh_buf, n, self._shed_all,
-                                                _NO_ROWS if gone is None else gone, self.film.ravel(), self._w0,
-                                                self._dw, self._height, ks.drop, ks.shed_m)
+            lo, hi = self._sensor_box
+            self._n, n_shed, n_sensor, self._a_bound = kernels.shed_rows(
+                self._buf, self._fresh_buf, n, self._shed_all, _NO_ROWS if gone is None else gone,
+                self.film.ravel(), self._w0, self._dw, self._height, ks.drop, ks.shed_m, sensor, lo[0], hi[0], lo[1],
+                hi[1], ks.sensor_m)
             self._shed_all = False
+            if sensor:
+                self._shed_sensor = n_sensor
             if n_shed:
                 self.shed += float(np.add.reduce(ks.shed_m[:n_shed]))
             return

@@ -49,57 +49,69 @@ from rain_core.effects.windshield.kernels.common import (
 
 
 @jit.kernel
+def place_row(buf, i, w0, dw, height, g_up, g_sag):
+    """``place_rows`` on row i alone (whatever its KEY): the kernels that pass over every row anyway (the motion,
+    the sort) place the dirty ones on their way instead of a pass of their own over the 128-byte rows."""
+    top0, top1 = _G0 - 1, _G1 - 1
+    s = buf[i, S]
+    t = buf[i, T]
+    w = dw * t + w0
+    sw = s / w
+    th = t / height
+    u = sw * FILM_CELLS + 0.5 * FILM_CELLS
+    if u > FILM_CELLS - 0.5:
+        u = FILM_CELLS - 0.5
+    v = t * (FILM_CELLS / height)
+    if v > FILM_CELLS - 0.5:
+        v = FILM_CELLS - 0.5
+    buf[i, CELL] = int(v) * FILM_CELLS + int(u)
+    frac = min(max(th, 0.0), 1.0)
+    buf[i, UP] = frac * (FLOW_AT_TOP - FLOW_AT_BOTTOM) + FLOW_AT_BOTTOM
+    buf[i, Q] = s * 2.0 / w
+    buf[i, BL] = (max(t, 0.0) + BL_RUN_UP_M) * NU_AIR
+    x = (sw + 0.5) * 2.0 - 1.0
+    y = th * 2.0 - 1.0
+    bv = 1.0 - y * y
+    dbu = x * -4.0
+    buf[i, GS] = dbu / w * bv * g_sag
+    g = -s * dw / (w * w) * dbu * bv
+    g += (1.0 - x * x) * (y * -4.0) / height
+    buf[i, GT] = g * g_sag + g_up
+    k0 = min(max(int((s - _O0) / GRID_CELL_M), 0), top0)
+    k1 = min(max(int((t - _O1) / GRID_CELL_M), 0), top1)
+    buf[i, KEY] = k0 * _G1 + k1
+
+
+@jit.kernel
 def place_rows(buf, n, w0, dw, height, g_up, g_sag):
     """Write the position's columns CELL … KEY (``WindshieldSim._placed``) of the drops among rows [:n] whose KEY
     is DIRTY; ``w0``, ``dw`` the glass's width (m) at its bottom and its growth per metre up, ``height`` (m),
     ``g_up``, ``g_sag`` gravity's folded constants (m/s²). Returns how many rows it wrote."""
     done = 0
-    top0, top1 = _G0 - 1, _G1 - 1
     for i in range(n):
         if buf[i, KEY] != _DIRTY:
             continue
         done += 1
-        s = buf[i, S]
-        t = buf[i, T]
-        w = dw * t + w0
-        sw = s / w
-        th = t / height
-        u = sw * FILM_CELLS + 0.5 * FILM_CELLS
-        if u > FILM_CELLS - 0.5:
-            u = FILM_CELLS - 0.5
-        v = t * (FILM_CELLS / height)
-        if v > FILM_CELLS - 0.5:
-            v = FILM_CELLS - 0.5
-        buf[i, CELL] = int(v) * FILM_CELLS + int(u)
-        frac = min(max(th, 0.0), 1.0)
-        buf[i, UP] = frac * (FLOW_AT_TOP - FLOW_AT_BOTTOM) + FLOW_AT_BOTTOM
-        buf[i, Q] = s * 2.0 / w
-        buf[i, BL] = (max(t, 0.0) + BL_RUN_UP_M) * NU_AIR
-        x = (sw + 0.5) * 2.0 - 1.0
-        y = th * 2.0 - 1.0
-        bv = 1.0 - y * y
-        dbu = x * -4.0
-        buf[i, GS] = dbu / w * bv * g_sag
-        g = -s * dw / (w * w) * dbu * bv
-        g += (1.0 - x * x) * (y * -4.0) / height
-        buf[i, GT] = g * g_sag + g_up
-        k0 = min(max(int((s - _O0) / GRID_CELL_M), 0), top0)
-        k1 = min(max(int((t - _O1) / GRID_CELL_M), 0), top1)
-        buf[i, KEY] = k0 * _G1 + k1
+        place_row(buf, i, w0, dw, height, g_up, g_sag)
     return done
 
 
 @jit.kernel
-def move_drops(buf, n, h, head, cross, whole, test_all, rest_test, grow, go, gcol, loss):
+def move_drops(buf, n, h, head, cross, whole, test_all, rest_test, grow, go, gcol, loss, place, w0, dw, height, g_up,
+               g_sag):
     """``FastMotion._move`` over rows [:n] for a sub-step of ``h`` s in the air (``head`` along, ``cross`` across
     the glass, m/s): the air's factor EV (every drop if ``whole``, else the tested ones), forces, pinning and the
     bound RB of the tested drops (``test_all``, or RB ≥ ``rest_test``; ``grow``: the epoch's allowance), the
     viscous slide of those that move or start, then every drop's evaporation (its loss, kg, into ``loss``) and
     Newton radius. The drops that slid go to ``go`` (row indices) and ``gcol`` (6, ·): start s, t, displacement
-    ds, dt (m), its length (m) and the radius at the start (m). Returns how many slid."""
+    ds, dt (m), its length (m) and the radius at the start (m). Returns how many slid. With ``place``, the rows
+    whose KEY is DIRTY are placed first (``place_row``; the glass's ``w0`` … ``g_sag`` as ``place_rows`` takes
+    them): ``_flush_placed``'s pass folded into this one."""
     n_go = 0
     up = side = air_speed = 0.0
     for i in range(n):
+        if place and buf[i, KEY] == _DIRTY:
+            place_row(buf, i, w0, dw, height, g_up, g_sag)
         tested = test_all or buf[i, RB] >= rest_test
         if whole or tested:
             # The air over the glass (airflow.air_velocity), from the position's factors.

@@ -10,6 +10,7 @@ from rain_core.effects.windshield.constants import (
 from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
 from rain_core.effects.windshield.drop_rows import KEY, A, M, S, T
 from rain_core.effects.windshield.kernels.common import film_cell, inside
+from rain_core.effects.windshield.kernels.motion import place_row
 
 
 @jit.kernel
@@ -28,28 +29,50 @@ def compact_rows(buf, fresh, n, drop):
 
 
 @jit.kernel
-def shed_rows(buf, fresh, n, test_all, gone, flat, w0, dw, height, drop, shed_m):
+def shed_rows(buf, fresh, n, test_all, gone, flat, w0, dw, height, drop, shed_m, sensor, s_lo, s_hi, t_lo, t_hi,
+              sensor_m):
     """``WindshieldSim._shed_outside``: of rows [:n], those off the glass (every one if ``test_all``, else those
     placed this sub-step: KEY DIRTY) are shed (their masses, kg, in row order into ``shed_m``), those below half
     the object size become film (``flat``, kg per cell) where they are, and the rows ``gone`` (joined into others
-    by the merge) go too: one compaction. ``drop``: bool scratch over the rows. Returns (new count, shed)."""
+    by the merge) go too: one compaction (``compact_rows``'). ``drop``: bool scratch over the rows. On its way over
+    the rows kept, the compaction takes what the next steps of the sub-step would read in passes of their own: with
+    ``sensor``, the masses of those inside the rain sensor's box (``sensor_masses``' test, bounds in m) in row order
+    into ``sensor_m``, and their largest radius (m; 0 when none is kept). Returns (new count, shed, masses in the
+    sensor, largest radius)."""
     for i in range(n):
         drop[i] = False
     for g in gone:
         drop[g] = True
+    # One pass: each row is shed, turned to film, or kept (the shed masses and the film's additions each in row
+    # order, as the twin's separate passes make them).
     n_shed = 0
+    k = 0
+    n_sensor = 0
+    a_max = 0.0
     for i in range(n):
         if drop[i]:
             continue
         if (test_all or buf[i, KEY] == _DIRTY) and not inside(buf[i, S], buf[i, T], w0, dw, height):
             shed_m[n_shed] = buf[i, M]
             n_shed += 1
-            drop[i] = True
-    for i in range(n):
-        if not drop[i] and buf[i, M] < 0.5 * M_OBJECT_MIN:
+            continue
+        if buf[i, M] < 0.5 * M_OBJECT_MIN:
             flat[film_cell(buf[i, S], buf[i, T], w0, dw, height)] += buf[i, M]
-            drop[i] = True
-    return compact_rows(buf, fresh, n, drop), n_shed
+            continue
+        if k != i:
+            buf[k] = buf[i]
+            fresh[k] = fresh[i]
+        a = buf[k, A]
+        if k == 0 or a > a_max:
+            a_max = a
+        if sensor:
+            s = buf[k, S]
+            t = buf[k, T]
+            if s >= s_lo and s <= s_hi and t >= t_lo and t <= t_hi:
+                sensor_m[n_sensor] = buf[k, M]
+                n_sensor += 1
+        k += 1
+    return k, n_shed, n_sensor, a_max
 
 
 @jit.kernel
@@ -63,7 +86,7 @@ def _counts_to_starts(hist):
 
 
 @jit.kernel
-def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh, rows32):
+def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh, rows32, place, w0, dw, height, g_up, g_sag):
     """``DropArray._sort_drops`` (after the position columns are written): rows [:n] in stable order of their
     merge-grid KEY (integers below 2^18: two 9-bit passes of a radix sort), only the span of rows that change
     places rewritten. ``hist``: int64 scratch of 512, ``order`` int64 scratch of 4n, ``tmp`` (rows) and
@@ -71,20 +94,22 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh, rows32):
     place) or 2 (most rows move: the sorted rows [:n] are in ``tmp`` and ``tmp_fresh``, for the caller to swap
     with ``buf`` and ``fresh``: one pass over the rows instead of two; that pass also writes the sorted drops'
     float32 rows s, t, vs, vt, radius into ``rows32``, (≥ n, 5): ``splats.DropRows`` reads them instead of the
-    array, whose rows are cold in the cache by the time the effect asks)."""
-    ordered = True
-    for i in range(1, n):
-        if buf[i, KEY] < buf[i - 1, KEY]:
-            ordered = False
-            break
-    if ordered:
-        return 0
+    array, whose rows are cold in the cache by the time the effect asks). With ``place``, the rows whose KEY is
+    DIRTY are placed first (``place_row``; the glass's ``w0`` … ``g_sag`` as ``place_rows`` takes them), in the
+    pass that reads the keys: ``_flush_placed``'s pass folded into this one."""
     keys = order[2 * n : 3 * n]
     keys2 = order[3 * n : 4 * n]
     src = order[:n]
     dst = order[n : 2 * n]
+    ordered = True
     for i in range(n):
+        if place and buf[i, KEY] == _DIRTY:
+            place_row(buf, i, w0, dw, height, g_up, g_sag)
         keys[i] = int(buf[i, KEY])
+        if i and keys[i] < keys[i - 1]:
+            ordered = False
+    if ordered:
+        return 0
     # Pass 1: by the low 9 bits, from row order (stable).
     hist[:] = 0
     for i in range(n):
@@ -132,3 +157,4 @@ def sort_rows(buf, fresh, n, hist, order, tmp, tmp_fresh, rows32):
             buf[j, c] = tmp[j, c]
         fresh[j] = tmp_fresh[j]
     return 1
+
