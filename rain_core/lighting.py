@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rain_core import jit
-from rain_core.lighting_kernels import gather_nearest
+from rain_core.lighting_kernels import gather_nearest, vehicle_lights
 
 MAX_LIGHTS = 32  # per frame, nearest to the camera; keep in sync with shaders/common/lighting.glsl
 
@@ -253,24 +253,28 @@ def light_candidates(lamps, vehicles, camera_z_m: float, lighting: Lighting, shi
         yaw = np.fromiter((v.yaw for v in vehicles), dtype=np.float64, count=n)
         centre = np.array([v.position for v in vehicles], dtype=np.float64).reshape(n, 3)
         cos, sin = np.cos(yaw), np.sin(yaw)
-        c, s_ = cos[:, None], sin[:, None]
-        # Vehicle.model_matrix: rotation about +Y by yaw, [[c, 0, s], [0, 1, 0], [−s, 0, c]], then the position.
-        # Written into one array, not np.stack'ed (its Python-level wrapper cost a third of this function).
-        lx, ly, lz = local[..., 0], local[..., 1], local[..., 2]
-        pos = np.empty((n, 4, 3))
-        pos[..., 0] = c * lx + s_ * lz + centre[:, None, 0]
-        pos[..., 1] = ly + centre[:, None, 1]
-        pos[..., 2] = -s_ * lx + c * lz + centre[:, None, 2]
-        pos = pos.reshape(4 * n, 3)
-        pos[:, 2] -= shift_z
-        fwd = np.empty((n, 3))  # Vehicle.forward(): (−sin, 0, −cos)
-        fwd[:, 0], fwd[:, 1], fwd[:, 2] = -sin, 0.0, -cos
         pitch_c, pitch_s = math.cos(HEADLIGHT_PITCH_RAD), math.sin(HEADLIGHT_PITCH_RAD)
-        head_dir = fwd * pitch_c + np.array([0.0, pitch_s, 0.0])
-        dirs = np.empty((n, 4, 3))
-        dirs[:, 0] = dirs[:, 1] = head_dir
-        dirs[:, 2] = dirs[:, 3] = -fwd
-        dirs = dirs.reshape(4 * n, 3)
+        if jit.active():  # one call (lighting_kernels.vehicle_lights) for the NumPy below, its twin
+            pos, dirs = np.empty((4 * n, 3)), np.empty((4 * n, 3))
+            vehicle_lights(cos, sin, centre, local, float(shift_z), pitch_c, pitch_s, pos, dirs)
+        else:
+            c, s_ = cos[:, None], sin[:, None]
+            # Vehicle.model_matrix: rotation about +Y by yaw, [[c, 0, s], [0, 1, 0], [−s, 0, c]], then the position.
+            # Written into one array, not np.stack'ed (its Python-level wrapper cost a third of this function).
+            lx, ly, lz = local[..., 0], local[..., 1], local[..., 2]
+            pos = np.empty((n, 4, 3))
+            pos[..., 0] = c * lx + s_ * lz + centre[:, None, 0]
+            pos[..., 1] = ly + centre[:, None, 1]
+            pos[..., 2] = -s_ * lx + c * lz + centre[:, None, 2]
+            pos = pos.reshape(4 * n, 3)
+            pos[:, 2] -= shift_z
+            fwd = np.empty((n, 3))  # Vehicle.forward(): (−sin, 0, −cos)
+            fwd[:, 0], fwd[:, 1], fwd[:, 2] = -sin, 0.0, -cos
+            head_dir = fwd * pitch_c + np.array([0.0, pitch_s, 0.0])
+            dirs = np.empty((n, 4, 3))
+            dirs[:, 0] = dirs[:, 1] = head_dir
+            dirs[:, 2] = dirs[:, 3] = -fwd
+            dirs = dirs.reshape(4 * n, 3)
         parts.append(LightSet(pos, dirs, cd, color, cos_outer, cos_inner, range_m, is_head))
     if not parts:
         return _kind(np.zeros((0, 3)), np.zeros((0, 3)), 0.0, (0.0, 0.0, 0.0), (-1.0, -1.0, 0.0), False)

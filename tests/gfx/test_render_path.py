@@ -109,15 +109,21 @@ def _vehicle_lights_stacked(vehicles, shift_z):
     return pos, np.stack([head_dir, head_dir, -fwd, -fwd], axis=1).reshape(4 * n, 3)
 
 
-def test_vehicle_lights_are_the_stacked_formulas_bit_for_bit(gl_ctx):
+def test_vehicle_lights_are_the_stacked_formulas_bit_for_bit(gl_ctx, kernel_path):
+    """Both paths (lighting_kernels.vehicle_lights and its NumPy twin) give the stacked formulas' bits."""
     scene = _scene(gl_ctx, hour=12.0, traffic=9)
     try:
         rng = np.random.default_rng(11)
-        for _ in range(4):
+        for step in range(5):
             scene.step(0.3)
             frame = scene.frame()
             for vehicle in frame.vehicles[1:]:
                 vehicle.yaw = float(rng.uniform(-np.pi, np.pi))  # every heading, not just along the street
+            if step == 4:  # signed zeros: yaw ±0.0 (sin ±0.0), a car at x = −0.0, one heading +z
+                frame.vehicles[1].yaw = -0.0
+                frame.vehicles[3].yaw = 0.0
+                frame.vehicles[2].yaw = np.pi
+                frame.vehicles[1].position = np.array([-0.0, 0.0, -0.0])
             shift = float(rng.choice([0.0, layout.PERIOD_M, -2.0 * layout.PERIOD_M]))
             cand = light_candidates([], frame.vehicles, 0.0, frame.lighting, shift, layout.PERIOD_M, True)
             pos, dirs = _vehicle_lights_stacked(frame.vehicles, shift)
