@@ -106,6 +106,10 @@ class RippleField:
         self._centred = False
         self._water_fraction = 1.0  # of the interior cells, sampled (sizes the raindrop candidates)
         self._water_fraction_stale = False  # the mask or the window moved since _water_fraction was counted
+        # Water cells of each mask row on the lattice's columns (1, 1 + RAIN_FRACTION_STRIDE, …), kept through
+        # scrolls along z and strips (so a frame's lattice count sums 127 numbers instead of reading the mask);
+        # None: count afresh (a new mask, a lateral scroll).
+        self._row_water: np.ndarray | None = None
         self._film_fn: FilmDepthFn | None = None
         self._film_key = None  # the film function's ``cache_key`` (None: unknown, keep re-asking)
         self._rows_to_renew = 0  # rows still to re-ask since the function last changed
@@ -160,6 +164,8 @@ class RippleField:
         if dx or dz:
             self.solver.shift(dx, dz)
             self._anchor = target
+            if self._row_water is not None:
+                self._scroll_row_water(dx, dz)
             if self._following:  # the mask scrolled with the solver: ask only about the cells that entered
                 shift_in_place(self._unknown_rows[:, None], 0, dz, True)
                 shift_in_place(self._unknown_cols[None, :], dx, 0, True)
@@ -181,6 +187,7 @@ class RippleField:
 
     def _set_mask(self, mask):
         self.solver.set_water_mask(mask)
+        self._row_water = None
         self._water_fraction_stale = True
         self.version += 1
 
@@ -261,6 +268,9 @@ class RippleField:
         self._unknown_cols[:] = False
         if blocks:
             self.solver.set_water_mask_blocks(blocks)
+            if self._row_water is not None:
+                for row0, _, block in blocks:
+                    self._count_row_water(row0, row0 + block.shape[0])
             self._water_fraction_stale = True
             self.version += 1
         return asked
@@ -303,12 +313,36 @@ class RippleField:
         cells = len(range(1, self.n - 1, stride)) ** 2
         if mask is None:
             return cells, cells
+        if stride == RAIN_FRACTION_STRIDE:  # the rain's lattice: from the rows' counts
+            if self._row_water is None:
+                self._row_water = np.zeros(self.n, np.int64)
+                self._count_row_water(0, self.n)
+            return int(self._row_water[inner].sum()), cells
         view = mask[inner, inner]
         if view.dtype == bool:
             return int(np.count_nonzero(view)), cells
         # The mask holds exactly 0 or 1: a float sum of at most 512² ones is exact (and on a strided float view
         # several times cheaper than count_nonzero).
         return int(view.sum()), cells
+
+    def _scroll_row_water(self, dx: int, dz: int) -> None:
+        """Scroll the rows' counts with the mask (``shifted``'s rows; the entering rows are water everywhere, as
+        the mask's); a lateral scroll moves the lattice's columns: count afresh."""
+        counts = self._row_water
+        if dx or abs(dz) >= self.n:
+            self._row_water = None
+        elif dz > 0:
+            counts[:-dz] = counts[dz:]
+            counts[-dz:] = len(range(1, self.n - 1, RAIN_FRACTION_STRIDE))
+        elif dz < 0:
+            counts[-dz:] = counts[:dz]
+            counts[:-dz] = len(range(1, self.n - 1, RAIN_FRACTION_STRIDE))
+
+    def _count_row_water(self, row0: int, row1: int) -> None:
+        """Count the water of mask rows row0 … row1 − 1 on the lattice's columns into ``_row_water``."""
+        lattice = slice(1, self.n - 1, RAIN_FRACTION_STRIDE)
+        # The mask holds exactly 0 or 1 (bool or float): its sums are the water cells (exact, cast to int64).
+        self._row_water[row0:row1] = self.solver.water_mask[row0:row1, lattice].sum(axis=1)
 
     def _rain_water_fraction(self) -> float:
         """The window's water fraction, counted on a lattice of every RAIN_FRACTION_STRIDE-th cell once per frame

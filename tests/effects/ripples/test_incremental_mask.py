@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rain_core.effects.ripples.field import RippleField, _runs
+from rain_core.effects.ripples.field import RAIN_FRACTION_STRIDE, RippleField, _runs
 
 N = 48
 EXTENT = 4.7  # m: cells of 0.1 m
@@ -41,6 +41,10 @@ def assert_same_as_full(field: RippleField, film):
     mask = field.solver.water_mask  # exactly 0 or 1: the field compares asked strips with it as it is
     assert np.all((mask == 0) | (mask == 1))
     assert field._count_water() == fresh._count_water()  # what sizes the raindrop candidates
+    # The rain's lattice count, from the rows' counts kept through scrolls and strips: the mask's own count.
+    lattice = slice(1, field.n - 1, RAIN_FRACTION_STRIDE)
+    assert field._count_water(RAIN_FRACTION_STRIDE) == (np.count_nonzero(mask[lattice, lattice]),
+                                                        len(range(1, field.n - 1, RAIN_FRACTION_STRIDE)) ** 2)
     field._rain_water_fraction()
     assert not field._water_fraction_stale
     held = field.solver.water_mask < 0.5
@@ -174,3 +178,20 @@ def test_wheel_depths_are_asked_beside_the_strips():
             assert film.calls == 2 + (report["shift"][0] != 0 and report["shift"][1] != 0)
         assert report["wake_bumps"] > 0
         np.testing.assert_array_equal(fields[0].height, fields[1].height)
+
+
+def test_rain_lattice_count_follows_scrolls_over_unbroken_water():
+    """Rows that scroll in over water everywhere write no block (the mask already says water): the rows' counts
+    of the rain's lattice take them as water, as the mask does; then a drier film's strips and bands recount."""
+    lattice = slice(1, N - 1, RAIN_FRACTION_STRIDE)
+    for film in (Film(-3.0), Film(0.4)):
+        field = RippleField(n=N, extent_m=EXTENT, backend="numpy32", recenter_margin_cells=1, seed=3)
+        x = z = 0.0
+        for dx, dz in MOVES * 2:
+            x, z = x + dx, z + dz
+            field.update(1 / 30, center_xz=(x, z), rate_mm_h=20.0, film_depth_fn=film)
+            assert field._count_water(RAIN_FRACTION_STRIDE)[0] == np.count_nonzero(
+                field.solver.water_mask[lattice, lattice])
+        field.update(1 / 30, center_xz=(x, z), film_depth_fn=Film(1.1))  # a drier film: bands and blocks
+        assert field._count_water(RAIN_FRACTION_STRIDE)[0] == np.count_nonzero(
+            field.solver.water_mask[lattice, lattice])
