@@ -73,10 +73,12 @@ class SprayEffect(Effect):
     # --- Effect -------------------------------------------------------------------------------------------
     @staticmethod
     def _section(frame):
+        settings = getattr(frame, "settings", None)
+        if settings is not None:  # (three asks a frame: the import below only for a frame without settings)
+            return settings.spray
         from rain_core.settings import SpraySection
 
-        settings = getattr(frame, "settings", None)
-        return settings.spray if settings is not None else SpraySection()
+        return SpraySection()
 
     @staticmethod
     def _switched_on(sec) -> bool:

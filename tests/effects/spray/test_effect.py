@@ -134,3 +134,14 @@ def test_the_forward_uniform_follows_the_camera(truck_scene):
             assert np.allclose(effect._program["u_cam_forward"].value, f, atol=1e-6)
     finally:
         scene.release()
+
+
+def test_the_section_is_the_frames_or_the_defaults():
+    """The effect reads frame.settings.spray (the panel's live object); a frame without settings gets defaults."""
+    from rain_core.effects.spray import SprayEffect
+    from rain_core.settings import Settings, SpraySection
+
+    settings = Settings()
+    assert SprayEffect._section(SimpleNamespace(settings=settings)) is settings.spray
+    assert SprayEffect._section(SimpleNamespace(settings=None)) == SpraySection()
+    assert SprayEffect._section(SimpleNamespace()) == SpraySection()
