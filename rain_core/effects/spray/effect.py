@@ -112,9 +112,10 @@ class SprayEffect(Effect):
 
     def _upload(self) -> None:
         dirty = self.emitter.take_dirty()
+        rings = self.emitter.rings
         for ring in range(2):
-            data = self.emitter.rings[ring].data
-            cap = self.emitter.rings[ring].capacity
+            data = rings[ring].data
+            cap = rings[ring].capacity
             if self._capacity[ring] != cap:
                 for obj in (self._vaos[ring], self._buffers[ring]):
                     if obj is not None:
@@ -125,9 +126,10 @@ class SprayEffect(Effect):
                 self._capacity[ring] = cap
                 continue
             buf = self._buffers[ring]
+            rows = rings[ring].floats  # (the records' bytes as plain float rows: a cheaper memoryview)
             # Only the slots written since the last frame (one range, two where the ring wrapped): the new parcels.
             for start, count in dirty[ring]:
-                buf.write(memoryview(data[start:start + count]).cast("B"), offset=start * PARTICLE_DTYPE.itemsize)
+                buf.write(memoryview(rows[start:start + count]).cast("B"), offset=start * PARTICLE_DTYPE.itemsize)
 
     def _prog(self, rc) -> moderngl.Program:
         if self._program is None:

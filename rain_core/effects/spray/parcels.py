@@ -65,6 +65,12 @@ class ParcelRing:
         self._last_death = -math.inf
         self._ranges = np.zeros((2, 2), dtype=np.int64)  # push_rows' slot ranges
 
+    @property
+    def floats(self) -> np.ndarray:
+        """The slots as a (capacity, PARTICLE_FLOATS) float32 view of ``data``: the same bytes, for uploads (a
+        memoryview of plain float rows is made ~4× faster than one of the structured records)."""
+        return self._floats
+
     def scratch(self, n: int) -> np.ndarray:
         """A reusable record array of length n (grown when needed, never shrunk): where a frame's new records
         are assembled before :meth:`push`, without allocating one per frame. Every field must be written."""

@@ -145,3 +145,20 @@ def test_the_section_is_the_frames_or_the_defaults():
     assert SprayEffect._section(SimpleNamespace(settings=settings)) is settings.spray
     assert SprayEffect._section(SimpleNamespace(settings=None)) == SpraySection()
     assert SprayEffect._section(SimpleNamespace()) == SpraySection()
+
+
+def test_the_gpu_rings_hold_the_emitters_records(truck_scene):
+    """After each frame's upload (only the slots written since the last) the two GL buffers hold the rings'
+    records byte for byte, through the ring wrapping and a budget change (new rings, new buffers)."""
+    scene, effect = truck_scene()
+    try:
+        for budget in (3000, 1200):
+            scene.settings.spray.budget = budget
+            for _ in range(25):
+                scene.step(1 / 30)
+                scene.render()
+                for ring, buf in zip(effect.emitter.rings, effect._buffers, strict=True):
+                    assert buf.read() == ring.data.tobytes()
+        assert effect.emitter.rings[0].head < effect.emitter.stats.parcels - 1200  # it wrapped
+    finally:
+        scene.release()
