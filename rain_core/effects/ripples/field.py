@@ -365,7 +365,9 @@ class RippleField:
     def _emit(self, xs: np.ndarray, zs: np.ndarray, radii, amounts: np.ndarray) -> None:
         """Window-metre centres, radii (scalar or per bump, ≤ the span) and peaks (m), already valid."""
         radii = np.asarray(radii, dtype=np.float64)
-        if radii.shape != xs.shape:  # one radius for all
+        if radii.ndim == 0:  # one radius for all (np.full: a fraction of np.broadcast_to's Python-level cost)
+            radii = np.full(xs.shape, radii)
+        elif radii.shape != xs.shape:
             radii = np.broadcast_to(radii, xs.shape)
         if self._batch is not None:
             self._batch.append((xs, zs, radii, amounts))
@@ -480,7 +482,9 @@ class RippleField:
                              f"{checks.quote(impacts)}") from None
         if len(impacts) == 0 or self.wake_gain == 0.0:
             return 0
-        impacts = impacts[np.isfinite(impacts).all(axis=1)]
+        finite = np.isfinite(impacts)
+        if not finite.all():  # the row reduction and the copy only when a row has a NaN or inf
+            impacts = impacts[finite.all(axis=1)]
         ox, oz = self.origin_xz
         dent = -self.wake_gain * RAIN_DENT_M_PER_KG_M_S * np.abs(impacts[:, 2])
         dent = np.minimum(np.maximum(dent, -MAX_IMPULSE_M), MAX_IMPULSE_M)  # np.clip's, without its wrapper

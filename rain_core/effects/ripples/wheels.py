@@ -111,17 +111,26 @@ class WheelBatch:
     def rows(self, film_depth_fn: FilmDepthFn | None, asked: np.ndarray | None = None) -> np.ndarray:
         """(W, 7): x0, z0, x1, z1, speed, film depth mm, tyre width; unknown depths asked in one call (or given:
         ``asked``, what film_depth_fn returned at ``depth_points()``)."""
-        depth = np.full(len(self), np.nan) if self.film_depth_mm is None else self.film_depth_mm.copy()
-        unknown = np.isnan(depth)
-        if unknown.any():
-            if asked is None:
-                mid = self.depth_points()
-                asked = np.broadcast_to(np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64),
-                                        mid[:, 0].shape)
-            # NaN → 0, the rest clamped to [0, 1e3] mm (np.clip(np.nan_to_num(…)) without their wrappers)
-            depth[unknown] = np.minimum(np.maximum(np.where(np.isnan(asked), 0.0, asked), 0.0), 1e3)
-        return np.concatenate([self.p0_xz, self.p1_xz, self.speed_m_s[:, None], depth[:, None],
-                               self.tire_width_m[:, None]], axis=1)
+        out = np.empty((len(self), 7))
+        out[:, 0:2] = self.p0_xz
+        out[:, 2:4] = self.p1_xz
+        out[:, 4] = self.speed_m_s
+        out[:, 6] = self.tire_width_m
+        depth = out[:, 5]
+        if self.film_depth_mm is None:  # every depth unknown (the effect's batch): no NaN scan
+            unknown = slice(None)
+        else:
+            depth[:] = self.film_depth_mm
+            unknown = np.isnan(depth)
+            if not unknown.any():
+                return out
+        if asked is None:
+            mid = self.depth_points()
+            asked = np.broadcast_to(np.asarray(film_depth_fn(mid[:, 0], mid[:, 1]), dtype=np.float64),
+                                    mid[:, 0].shape)
+        # NaN → 0, the rest clamped to [0, 1e3] mm (np.clip(np.nan_to_num(…)) without their wrappers)
+        depth[unknown] = np.minimum(np.maximum(np.where(np.isnan(asked), 0.0, asked), 0.0), 1e3)
+        return out
 
 
 @lru_cache(maxsize=8)

@@ -365,3 +365,23 @@ def test_float32_solver_row_windows_equal_the_in_place_scroll(masked, kernel_pat
     solvers[0].shift(0, 5)
     WaveSolver.shift(solvers[1], 0, 5)
     assert solvers[0].height.tobytes() == solvers[1].height.tobytes()
+
+
+def test_wheel_batch_rows_equal_the_columns_side_by_side():
+    """``WheelBatch.rows`` (one array written column by column) is the batch's columns side by side, with the
+    unknown depths asked (or given), NaN → 0 and clamped to [0, 1e3] mm, the known ones kept."""
+    from rain_core.effects.ripples.wheels import WheelBatch
+
+    rng = np.random.default_rng(9)
+    p0, p1 = rng.uniform(-5, 5, (2, 6, 2))
+    speed, width = rng.uniform(0, 30, 6), rng.uniform(0.1, 0.4, 6)
+    asked_all = np.array([1.0, np.nan, -2.0, 2e3, 0.5, 3.0])
+    film = lambda x, z: asked_all[:len(x)]  # noqa: E731
+    for depth in (None, np.array([np.nan, 1.0, np.nan, 2.0, np.nan, np.nan]), np.array([1.0, 2, 3, 4, 5, 6])):
+        batch = WheelBatch(p0, p1, speed, width, depth)
+        want_depth = np.full(6, np.nan) if depth is None else depth.copy()
+        unknown = np.isnan(want_depth)
+        want_depth[unknown] = np.clip(np.nan_to_num(asked_all[:unknown.sum()], nan=0.0), 0.0, 1e3)
+        want = np.concatenate([p0, p1, speed[:, None], want_depth[:, None], width[:, None]], axis=1)
+        assert batch.rows(film).tobytes() == want.tobytes()
+        assert batch.rows(None, asked_all[:unknown.sum()]).tobytes() == want.tobytes()
