@@ -5,8 +5,21 @@
 // and headlights towards the eye; for a drop of radius r lit with illuminance E the scattered intensity is
 // E·πr²·p(θ)/4π, i.e. luminance E·p(θ)/4π over its disc. p: two-term Henyey–Greenstein, the same as the
 // atmosphere effect's (forward lobe g = 0.7, back lobe g = −0.5 weighted so p(180°)/4π = 1/18.8 sr).
-#define FRAME_OWN_LIGHTS  // the effect sets only the lights that reach its boxes (effect.py _lights)
+// The effect passes only the lights that reach its boxes (effect.py _lights), as members of its per-frame block
+// (rain_frame.glsl: written with the rest, once a frame). FRAME_OWN_LIGHTS keeps the frame's list out of the frame
+// block; frame.glsl then declares a list of plain uniforms, renamed here out of the way (never read, so not active
+// in the program) so that the names lighting.glsl reads are RainFrame's.
+#define FRAME_OWN_LIGHTS
+#define u_light_count rain_unused_light_count
+#define u_light_pos rain_unused_light_pos
+#define u_light_dir rain_unused_light_dir
+#define u_light_color rain_unused_light_color
 #include "common/frame.glsl"
+#undef u_light_count
+#undef u_light_pos
+#undef u_light_dir
+#undef u_light_color
+#include "rainfall/rain_frame.glsl"
 #include "common/lighting.glsl"
 #include "common/atmosphere.glsl"
 
@@ -40,7 +53,7 @@ vec3 rain_environment(vec3 d) {
 }
 
 // Luminance (cd/m²) of a drop at p (wrapped frame) seen along to_eye (unit, from the drop to the camera). The
-// rainfall effect passes only the lights that can reach its container.
+// rainfall effect passes only the lights that can reach its container (RainFrame's).
 vec3 rain_drop_radiance(vec3 p, vec3 to_eye) {
     vec3 L = rain_environment(-to_eye);
     L += u_sun_illum * rain_phase(dot(-u_sun_dir, to_eye)) * RAIN_INV_4PI;

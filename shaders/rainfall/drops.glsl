@@ -3,31 +3,11 @@
 // spawn point, the keep decision and the turbulence step from hash(i, cycle). Positions wrap periodically into
 // the camera-following box of the instance's layer, so the boxes hold a stationary sample whatever the camera
 // does. The CPU sends only small numbers (time mod 2^14 s as whole seconds + fraction, offsets mod the boxes).
-#ifndef LAYERS
-#define LAYERS 4
-#endif
+// RainFrame, what changes every frame (it defines LAYERS and RAIN_MAX_VEHICLES):
+#include "rainfall/rain_frame.glsl"
 #define RAIN_TIME_PERIOD 16384u        // s (constants.TIME_PERIOD_S)
 #define RAIN_TABLE_SHIFT 20u           // 32 − constants.TABLE_BITS
-#define RAIN_MAX_VEHICLES 8            // constants.MAX_VEHICLES
 #define RAIN_TURB_STEPS 3              // constants.TURBULENCE_STEPS
-
-// What changes every frame, for the streak and splash programs alike, in one block (std140; packed by
-// rain_block.py, bound at RAIN_FRAME_BINDING): one buffer write a frame instead of a dozen uniform writes.
-layout(std140) uniform RainFrame {
-    vec3 u_box_lo[LAYERS];         // m, wrapped frame
-    vec3 u_box_off[LAYERS];        // m: (∫wind − lo) mod ext (x, z); (BOX_BOTTOM − lo_y) mod height (y)
-    vec3 u_box_turb[LAYERS];       // m: TURB_EPS·∫wind mod ext (x, z)
-    vec4 u_veh_pose[RAIN_MAX_VEHICLES];  // x, y, z (wrapped frame), yaw
-    vec3 u_wind;                   // m/s
-    int u_time_whole;              // s, floor(t mod RAIN_TIME_PERIOD)
-    float u_time_frac;             // s, the rest
-    uint u_epoch;                  // floor(t / RAIN_TIME_PERIOD) mod 2^32
-    vec3 u_splash_lo;              // m, wrapped frame (splash.vert)
-    uint u_splash_count;           // whole splash periods of t, mod 2^32
-    vec3 u_splash_off;             // m, (−lo) mod ext in the world frame (x, z)
-    float u_splash_tau;            // the fraction
-    vec3 u_cam_vel;                // m/s, world (streak.vert)
-};
 uniform uint u_seed_key;               // drops.seed_key(seed)
 uniform int u_layer_start[LAYERS];    // first instance of each layer
 uniform sampler2D u_drop_table;        // RGBA32F (TABLE_SIZE × LAYERS): D mm, passes per period, v m/s, v_true

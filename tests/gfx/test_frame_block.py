@@ -1,6 +1,6 @@
 """The frame block (shaders/common/frame.glsl): the Python std140 layout is the one GL uses, every program of a
-frame reads it, programs with their own lights still get plain uniforms, and renderers sharing a context or a
-shader library do not see each other's values."""
+frame reads it, programs with their own lights still get plain uniforms (the rain's hold theirs in its own block),
+and renderers sharing a context or a shader library do not see each other's values."""
 
 import dataclasses
 
@@ -8,11 +8,13 @@ import moderngl
 import numpy as np
 import pytest
 
+from rain_core.effects.rainfall.rain_block import RAIN_FRAME_BYTES
 from rain_core.effects.road import RoadEffect
 from rain_core.gfx import frame_block
 from rain_core.gfx.frame_block import BLOCK_BYTES, BLOCK_BYTES_OWN_LIGHTS, BLOCK_WORDS, FRAME_BLOCK_LAYOUT
 from rain_core.gfx.renderer import Renderer
 from rain_core.gfx.uniforms import OwnedUniforms, owned_uniforms
+from rain_core.paths import SHADERS_DIR
 from rain_core.scene import Scene
 from rain_core.settings import Settings, set_value
 
@@ -148,10 +150,21 @@ def test_python_layout_is_the_std140_layout_gl_reads(gl_ctx, shaders, tmp_path):
     assert unpacked["u_exposure"] == pytest.approx(values["u_exposure"], rel=1e-6)
 
 
+def _own_lights_program(ctx) -> moderngl.Program:
+    """A program that declares the frame's lights plainly (FRAME_OWN_LIGHTS) and reads them."""
+    frame_glsl = (SHADERS_DIR / "common" / "frame.glsl").read_text()
+    vertex = ("#version 330 core\n#define FRAME_OWN_LIGHTS\n" + frame_glsl
+              + "void main() { int i = u_light_count - 1;"  # indexed at run time: every array whole
+                " gl_Position = u_view_proj * u_light_pos[i] + u_light_dir[i] + u_light_color[i]; }\n")
+    return ctx.program(vertex_shader=vertex, fragment_shader="#version 330 core\nout vec4 c;\n"
+                                                             "void main() { c = vec4(1.0); }\n")
+
+
 def test_scene_programs_read_the_block_and_rainfall_keeps_its_own_lights(gl_ctx):
     settings = Settings()
     set_value(settings, "rain.rate_mm_h", 8.0)
     scene = Scene(gl_ctx, SIZE, settings=settings, seed=1)
+    own = _own_lights_program(gl_ctx)
     try:
         scene.step(1 / 30)
         frame = scene.render()
@@ -159,15 +172,23 @@ def test_scene_programs_read_the_block_and_rainfall_keeps_its_own_lights(gl_ctx)
         for prog in (renderer.scene.scene_prog, renderer.scene.sky_prog):
             assert prog["FrameBlock"].size == BLOCK_BYTES
             assert prog.get("u_view_proj", None) is None and prog.get("u_light_pos", None) is None
+        # The rain's programs keep their own light list (the lights that reach its boxes): not the frame block's,
+        # and not plain uniforms either, but members of the rain's own per-frame block (rain_frame.glsl).
         rainfall = next(e for e in scene.effects if e.name == "rainfall")
         streak = rainfall.streak_prog
-        assert streak["FrameBlock"].size == BLOCK_BYTES_OWN_LIGHTS  # FRAME_OWN_LIGHTS: lights are plain
-        assert streak.get("u_light_pos", None) is not None
-        # set_frame_uniforms writes the frame's lights into a program that declares them plainly
+        assert streak["FrameBlock"].size == BLOCK_BYTES_OWN_LIGHTS  # FRAME_OWN_LIGHTS: no lights in the block
+        assert streak.get("u_light_pos", None) is None and streak.get("u_light_count", None) is None
+        assert streak["RainFrame"].size == RAIN_FRAME_BYTES
         rc = renderer.render_context(frame)
-        rc.set_frame_uniforms(streak)
-        assert streak["u_light_count"].value == rc.lights[3]
-        assert streak["u_light_pos"].read() == rc.lights[0]
+        held = rainfall._frame_buffer.read()
+        rc.set_frame_uniforms(streak)  # binds the frame block; the rain's lights are not its to write
+        assert rainfall._frame_buffer.read() == held
+        # set_frame_uniforms writes the frame's lights into a program that declares them plainly
+        assert own["FrameBlock"].size == BLOCK_BYTES_OWN_LIGHTS
+        rc.set_frame_uniforms(own)
+        assert own["u_light_count"].value == rc.lights[3]
+        assert own["u_light_pos"].read() == rc.lights[0]
+        assert own["u_light_color"].read() == rc.lights[2]
         # and binds a buffer holding this context's block
         rc.set_frame_uniforms(renderer.scene.scene_prog)
         values = frame_block.unpack(renderer.frame_blocks.read_bound())
@@ -179,6 +200,7 @@ def test_scene_programs_read_the_block_and_rainfall_keeps_its_own_lights(gl_ctx)
         rc.set_frame_uniforms(renderer.scene.scene_prog)
         assert frame_block.unpack(renderer.frame_blocks.read_bound())["u_shadow_params"] == (1.0, 0.25, 0.5)
     finally:
+        own.release()
         scene.release()
 
 

@@ -90,9 +90,10 @@ forgets the history, so switching back on starts at the set rate. Per frame the 
 ramp, the thinning and ~60 uniforms; the GPU draws the environment map (64×32 texels), then one instanced quad
 per instance (culled in the vertex shader, before any lighting, when thinned out, outside the view, or
 occluded) and one billboard per splash slot. Nothing is uploaded per frame but uniforms (what changes every
-frame in one uniform block, ``rain_block.RainFrame``, shared by both programs). Texture units:
-``units.RAINFALL_DROPS`` (drop table), ``RAINFALL_ENV`` (environment), ``RAINFALL_OCCLUDER`` and
-``RAINFALL_OCCLUDER_COARSE`` (roof maps), ``RAINFALL_ROAD_HEIGHT`` (puddles, for the splash kinds).
+frame, the lights that reach the boxes included, in one uniform block, ``rain_block.RainFrame``, shared by
+both programs). Texture units: ``units.RAINFALL_DROPS`` (drop table), ``RAINFALL_ENV`` (environment),
+``RAINFALL_OCCLUDER`` and ``RAINFALL_OCCLUDER_COARSE`` (roof maps), ``RAINFALL_ROAD_HEIGHT`` (puddles, for the
+splash kinds).
 
 Modules
 -------

@@ -50,12 +50,6 @@ from rain_core.gfx.uniforms import owned_uniforms, set_uniforms
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
 PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
-# The light uniforms: drop.glsl declares them as plain uniforms (FRAME_OWN_LIGHTS); _use writes the lights that
-# reach the boxes, where they changed, and rc.set_frame_uniforms skips the frame's. Nothing else may write these
-# programs' lights (OwnedUniforms compares with what _use wrote last).
-_LIGHT_NAMES = ("u_light_pos", "u_light_dir", "u_light_color", "u_light_count")
-
-
 @functools.cache
 def _light_struct(count: int) -> struct.Struct:
     return struct.Struct(f"={4 * count}f")
@@ -131,7 +125,7 @@ class RainfallEffect(Effect):
         self._prev_cam: tuple[np.ndarray, float] | None = None
         self.camera_velocity_m_s = np.zeros(3)
         self.last_update: RainUpdate | None = None
-        self._prepared: tuple | None = None  # (rc, its lights, the update, _lights, _frame_values) made in update
+        self._prepared: tuple | None = None  # (rc, its lights, the update, _frame_values) made in update
         self._constants: tuple | None = None  # (its key, the uniforms that rarely change: _constant_pairs)
         area, width = drop_shape_factors(SHAPE_DIAMETERS_MM)
         self._shape_area = area.astype(np.float32)
@@ -267,7 +261,7 @@ class RainfallEffect(Effect):
         if upd.rate_mm_h > 0.0 and getattr(rc, "lights", None) is not None:
             # The transparent pass's lights and uniforms, made now: this context draws it, and here the CPU is
             # not shared with the rasteriser still drawing the passes before (llvmpipe: ~3x the time there).
-            self._prepared = (rc, rc.lights, upd, self._lights(rc, upd.boxes), self._frame_values(upd, rc, s))
+            self._prepared = (rc, rc.lights, upd, self._frame_values(upd, rc, s, self._lights(rc, upd.boxes)))
 
     def streak_camera(self, rc) -> StreakCamera:
         """The camera as the streak shader sees it this frame (for the NumPy twin)."""
@@ -404,10 +398,11 @@ class RainfallEffect(Effect):
         self._constants = (key, pairs)
         return pairs
 
-    def _frame_values(self, upd: RainUpdate, rc, s) -> tuple[list, bytes]:
+    def _frame_values(self, upd: RainUpdate, rc, s, lights: tuple) -> tuple[list, bytes]:
         """(pairs, block) for both programs: (name, value) of the plain uniforms that may change between frames
         (float32 bytes, numbers or tuples of floats; written where they changed), and the RainFrame block's bytes
-        (what changes every frame: drop_uniforms', splash_uniforms' and the streaks' camera velocity)."""
+        (what changes every frame: drop_uniforms', splash_uniforms', the streaks' camera velocity and ``lights``,
+        _lights' list)."""
         size = rc.size
         shift_z = rc.shift_z
         lo, ext, off, turb = box_floats(upd.boxes, upd.wind_integral_m, shift_z)
@@ -423,7 +418,7 @@ class RainfallEffect(Effect):
         count, tau = splash_clock(upd.time_s)
         block = pack_rain_frame(lo, off, turb, vehicle_pose_floats(upd.vehicles, shift_z, float(rc.camera_position[2])),
                                 upd.wind_m_s.tolist(), time_split(upd.time_s), splash_lo, count, splash_off, tau,
-                                self.camera_velocity_m_s.tolist())
+                                self.camera_velocity_m_s.tolist(), lights)
         return pairs, block
 
     def _use_frame_block(self, data: bytes) -> None:
@@ -436,13 +431,14 @@ class RainfallEffect(Effect):
     def _streak_pairs(self, rc, s) -> tuple:
         return (("u_exposure_s", float(s.camera.exposure_s)), ("u_near", float(rc.frame.camera.near_m)))
 
-    def _use(self, prog, rc, upd: RainUpdate, frame_pairs, lights, own_pairs, bind: bool = True) -> None:
-        """Bind the frame's uniforms to prog and write this effect's where they changed (OwnedUniforms)."""
-        rc.set_frame_uniforms(prog, bind=bind, skip=_LIGHT_NAMES)
+    def _use(self, prog, rc, upd: RainUpdate, frame_pairs, own_pairs, bind: bool = True) -> None:
+        """Bind the frame's uniforms to prog and write this effect's where they changed (OwnedUniforms). The
+        lights are RainFrame's (drop.glsl): the frame's list is in neither the program's frame block nor its
+        plain uniforms."""
+        rc.set_frame_uniforms(prog, bind=bind)
         cache = owned_uniforms(prog)
         cache.update_once(self._constant_pairs(upd))
         cache.update_pairs(frame_pairs)
-        cache.update_pairs(zip(_LIGHT_NAMES, lights, strict=True))
         cache.update_pairs(own_pairs)
 
     def render(self, stage: str, rc) -> None:
@@ -453,9 +449,9 @@ class RainfallEffect(Effect):
         ctx = rc.ctx
         ready, self._prepared = self._prepared, None  # used once: no context kept alive past its frame
         if ready is not None and ready[0] is rc and ready[1] is rc.lights and ready[2] is upd:
-            lights, (frame_pairs, block) = ready[3], ready[4]
+            frame_pairs, block = ready[3]
         else:  # another context than update's (a test, a probe)
-            lights, (frame_pairs, block) = self._lights(rc, upd.boxes), self._frame_values(upd, rc, s)
+            frame_pairs, block = self._frame_values(upd, rc, s, self._lights(rc, upd.boxes))
         self._draw_environment(rc)
         self._env_tex.use(units.RAINFALL_ENV)
         self._bind_static()
@@ -467,13 +463,13 @@ class RainfallEffect(Effect):
         bound = False  # whether the streaks' draw bound this context's frame block
         try:
             if self.sim.capacity and upd.drawn_expected > 0.0:
-                self._use(self.streak_prog, rc, upd, frame_pairs, lights, self._streak_pairs(rc, s))
+                self._use(self.streak_prog, rc, upd, frame_pairs, self._streak_pairs(rc, s))
                 self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
                 bound = True
             if s.rainfall.splashes and upd.splashes and upd.splash_accept > 0.0:
                 own = (("u_splash_accept", upd.splash_accept), ("u_splash_weight", upd.splash_weight),
                        ("u_splash_lam", upd.splash_lam), ("u_wetness", upd.wetness), ("u_puddles", upd.puddles))
-                self._use(self.splash_prog, rc, upd, frame_pairs, lights, own, bind=not bound)
+                self._use(self.splash_prog, rc, upd, frame_pairs, own, bind=not bound)
                 self._splash_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.splash_capacity)
         finally:
             rc.hdr.fbo.depth_mask = True
@@ -537,9 +533,9 @@ class RainfallEffect(Effect):
         if not self.sim.capacity or upd.drawn_expected <= 0.0:
             return
         s = self._settings(rc.frame)
-        frame_pairs, block = self._frame_values(upd, rc, s)
+        frame_pairs, block = self._frame_values(upd, rc, s, self._lights(rc, upd.boxes))
         self._use_frame_block(block)
-        self._use(self.streak_prog, rc, upd, frame_pairs, self._lights(rc, upd.boxes), self._streak_pairs(rc, s))
+        self._use(self.streak_prog, rc, upd, frame_pairs, self._streak_pairs(rc, s))
         self._env_tex.use(units.RAINFALL_ENV)  # colour only, but never another pass's texture on that unit
         self._bind_static()
         target.fbo.use()

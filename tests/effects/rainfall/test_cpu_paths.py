@@ -36,6 +36,7 @@ from rain_core.effects.rainfall.vehicle_fate import (
     vehicle_uniform_pairs,
     vehicle_uniforms,
 )
+from rain_core.lighting import MAX_LIGHTS
 from rain_core.vehicles import CAR_SPEC, TRUCK_SPEC, VAN_SPEC, Vehicle
 
 
@@ -232,9 +233,7 @@ def _check_programs(effect, rc):
     common = effect.drop_uniforms(upd, rc.shift_z, float(rc.camera_position[2]))
     common.update({"u_viewport": tuple(float(v) for v in rc.size),
                    "u_focal_px": float(rc.projection[1, 1]) * rc.size[1] / 2.0,
-                   "u_brightness": float(s.rainfall.streak_brightness),
-                   "u_light_pos": lights[0], "u_light_dir": lights[1], "u_light_color": lights[2],
-                   "u_light_count": lights[3]})
+                   "u_brightness": float(s.rainfall.streak_brightness)})
     streak = dict(common, u_cam_vel=tuple(effect.camera_velocity_m_s), u_exposure_s=float(s.camera.exposure_s),
                   u_near=float(rc.frame.camera.near_m), u_shape_area=effect._shape_area,
                   u_shape_width=effect._shape_width)
@@ -267,9 +266,15 @@ def _check_programs(effect, rc):
     block[92:95] = splash["u_splash_off"]
     block[95] = splash["u_splash_tau"]
     block[96:99] = streak["u_cam_vel"]
+    words[99] = lights[3]  # u_light_count, then the three vec4 arrays of the lights that reach the boxes
+    for k in range(3):
+        block[100 + 128 * k: 228 + 128 * k] = np.frombuffer(lights[k], np.float32)
     assert effect._frame_buffer.read() == block.tobytes()
     for prog in (effect.streak_prog, effect.splash_prog):
         assert prog["RainFrame"].binding == RAIN_FRAME_BINDING
+        assert prog["RainFrame"].size == RAIN_FRAME_BYTES
+        for name in ("u_light_pos", "u_light_dir", "u_light_color", "u_light_count"):
+            assert prog.get(name, None) is None  # RainFrame's member, not a plain uniform
     return lights[3] < rc.lights[3]
 
 
@@ -392,33 +397,49 @@ def test_time_split_in_floats_equals_the_numpy_form_bit_for_bit():
         assert struct.pack("=qdq", *got) == struct.pack("=qdq", *want), t
 
 
-def test_the_frames_light_list_is_not_written_into_the_rain_programs(gl_ctx, shaders, rain, monkeypatch):
-    """The rain programs get their lights from _use alone (the filtered list, where it changed): the frame's own
-    list, which set_frame_uniforms would write first, never reaches them; what they hold is this frame's
-    filtered list (_check_programs) at every frame, culled or not."""
-    import moderngl
-
+def test_the_rain_programs_hold_the_filtered_lights_in_their_block_alone(gl_ctx, shaders, rain):
+    """The rain programs read their lights from RainFrame alone (no plain light uniforms, no frame-block lights:
+    _check_programs): the block holds this frame's filtered list at every frame, culled or not, never the frame's
+    own list where some light does not reach the boxes."""
     s = rain.settings(rate=12.0, mode="driver", budget=3000, hour=22.0, container_m=20.0)
     scene, effect = rain.scene(gl_ctx, shaders, s, seed=4)
-    writes = []
-    write = moderngl.Uniform.write
-
-    def spy(uniform, data):
-        writes.append((uniform.name, bytes(data)))
-        return write(uniform, data)
-
     try:
         culled = 0
         for _ in range(6):
             scene.step(1.0 / 30.0)
-            writes.clear()
-            monkeypatch.setattr(moderngl.Uniform, "write", spy)
             frame = scene.render()
-            monkeypatch.setattr(moderngl.Uniform, "write", write)
             rc = scene.renderer.render_context(frame)
             if _check_programs(effect, rc):
                 culled += 1
-                assert ("u_light_pos", rc.lights[0]) not in writes
+                head = RAIN_FRAME_BYTES - 3 * 16 * MAX_LIGHTS
+                assert effect._frame_buffer.read()[head:head + 16 * MAX_LIGHTS] != rc.lights[0]
         assert culled
+    finally:
+        scene.release()
+
+
+def test_the_streaks_are_lit_by_the_blocks_lights(gl_ctx, shaders, rain, monkeypatch):
+    """At night in the headlights, the streaks drawn with the block's lights differ from those drawn with an empty
+    list, and drawing with the same list again gives the same pixels: the shaders read the lights from RainFrame."""
+    s = rain.settings(rate=12.0, mode="driver", budget=3000, hour=22.0, container_m=20.0)
+    scene, effect = rain.scene(gl_ctx, shaders, s, seed=4)
+    try:
+        scene.step(1.0 / 30.0)
+        frame = scene.render()
+        rc = scene.renderer.render_context(frame)
+        lights = effect._lights(rc, effect.last_update.boxes)
+        assert lights[3] > 0
+
+        def streaks(lights):
+            monkeypatch.setattr(effect, "_lights", lambda rc, boxes: lights)
+            rc.hdr.fbo.use()
+            rc.hdr.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+            effect.render("transparent", rc)
+            return scene.renderer.hdr_image()
+
+        lit = streaks(lights)
+        dark = streaks((bytes(16 * MAX_LIGHTS),) * 3 + (0,))
+        assert (lit.sum(axis=2) > dark.sum(axis=2)).sum() > 20
+        np.testing.assert_array_equal(streaks(lights), lit)
     finally:
         scene.release()
