@@ -44,9 +44,10 @@ class GpuMesh:
     count: int
     vbo: moderngl.Buffer
     mirror_vao: moderngl.VertexArray | None = None  # for SceneDrawer's mirror-view program
+    prepass_vaos: dict | None = None  # depth pre-pass program → its VAO (positions only)
 
     def release(self) -> None:
-        for obj in (self.vao, self.depth_vao, self.vbo, self.mirror_vao):
+        for obj in (self.vao, self.depth_vao, self.vbo, self.mirror_vao, *(self.prepass_vaos or {}).values()):
             if obj is not None:
                 obj.release()
 
@@ -63,6 +64,11 @@ class SceneDrawer:
         # and the mirror view rewriting them in turn.
         self.mirror_prog = shaders.program("core/scene.vert", "core/scene.frag", defines={"SCENE_MIRROR_VIEW": 1})
         self.sky_prog = shaders.program("common/fullscreen.vert", "core/sky.frag")
+        # Depth pre-pass: the scene's depths first, so the lit shader runs once per visible pixel instead of once
+        # per layer of the city, the cabin and the cars in front of each other (2–4 layers from the driver's seat).
+        self._prepass_progs = {False: shaders.program("core/scene.vert", "core/scene_depth.frag"),
+                               True: shaders.program("core/scene.vert", "core/scene_depth.frag",
+                                                     defines={"SCENE_MIRROR_VIEW": 1})}
         self._shadow_prog = shadow_program
         self._sky_vao = ctx.vertex_array(self.sky_prog, [])
         self._world = self._mesh(world.vertices)
@@ -84,6 +90,28 @@ class SceneDrawer:
         if mesh.mirror_vao is None:
             mesh.mirror_vao = self.ctx.vertex_array(self.mirror_prog, [(mesh.vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
         return mesh.mirror_vao
+
+    def _prepass_vao(self, mesh: GpuMesh, prog: moderngl.Program) -> moderngl.VertexArray:
+        if mesh.prepass_vaos is None:
+            mesh.prepass_vaos = {}
+        vao = mesh.prepass_vaos.get(prog.glo)
+        if vao is None:
+            vao = mesh.prepass_vaos[prog.glo] = self.ctx.vertex_array(prog, [(mesh.vbo, "3f 36x", "in_position")])
+        return vao
+
+    def _depth_prepass(self, rc: RenderContext, items, prog: moderngl.Program, plane) -> None:
+        """Depths of the large occluders, the world tiles and the cabin (from the driver's seat the hood and the
+        dashboard hide much of the road). The cars are left out: each hides little, and a draw of its own costs
+        more CPU than its hidden pixels cost the GPU; they are still lit only where in front."""
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        rc.set_frame_uniforms(prog)
+        owned_uniforms(prog).set("u_clip_plane", plane)
+        model_u = prog["u_model"]
+        cabin = self._cabin or ()
+        for mesh, model, _share in items:
+            if mesh is self._world or any(mesh is part for part, _ in cabin):
+                model_u.write(model)
+                self._prepass_vao(mesh, prog).render(moderngl.TRIANGLES, vertices=mesh.count)
 
     def _vehicle_mesh(self, vehicle) -> GpuMesh:
         key = id(vehicle)
@@ -203,28 +231,32 @@ class SceneDrawer:
         ``mirror_view``: the door mirrors' view of this frame (rain_core.gfx.mirrors), shown on their glass."""
         ctx = self.ctx
         ctx.disable(moderngl.BLEND)
-        if include_sky:
+        mirrored = clip_plane is not None
+        items = self.draw_items(rc, include_cabin=True)  # builds the cabin meshes, the mirror glass among them
+        plane = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
+        if clip_plane is not None:
+            ctx.enable_direct(GL_CLIP_DISTANCE0)
+        if include_sky:  # the sky then overwrites the pre-pass's colour everywhere
+            self._depth_prepass(rc, items, self._prepass_progs[mirrored], plane)
             ctx.disable(moderngl.DEPTH_TEST)
             rc.set_frame_uniforms(self.sky_prog)
             self.sky_prog["u_inv_view_proj"].write(mat4_bytes(rc.inv_view_proj))
             self._sky_vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable(moderngl.DEPTH_TEST)
-        mirrored = clip_plane is not None
+        if include_sky:
+            ctx.depth_func = "<="  # the pre-pass's own depths pass: each pixel is lit once, by what is in front
         prog = self.mirror_prog if mirrored else self.scene_prog
         rc.set_frame_uniforms(prog)
         # Clip plane (reflection passes): keep dot((x, y, z, 1), plane) >= 0, wrapped-frame world positions.
         # The scene drawer alone writes u_clip_plane and u_direct_scale in this program: owned_uniforms skips
         # unchanged values (the main and the mirror view alternate the plane; only the cabin changes the scale).
         owned = owned_uniforms(prog)
-        owned.set("u_clip_plane", (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane)))
-        if clip_plane is not None:
-            ctx.enable_direct(GL_CLIP_DISTANCE0)
+        owned.set("u_clip_plane", plane)
         for effect in effects:
             if effect in rc.active:
                 effect.bind_scene(prog, rc)
             else:
                 effect.unbind_scene(prog, rc)
-        items = self.draw_items(rc, include_cabin=True)  # builds the cabin meshes, the mirror glass among them
         live_glass = self._mirror_glass if mirror_view is not None else None
         if live_glass is not None:
             mirror_view.use(units.DOOR_MIRROR)
@@ -242,6 +274,8 @@ class SceneDrawer:
                 set_owned("u_mirror_live", live)
                 last_live = live
             (self._mirror_vao(mesh) if mirrored else mesh.vao).render(moderngl.TRIANGLES, vertices=mesh.count)
+        if include_sky:
+            ctx.depth_func = "<"
         if clip_plane is not None:
             ctx.disable_direct(GL_CLIP_DISTANCE0)
 

@@ -11,6 +11,8 @@ out vec3 v_normal;
 out vec3 v_albedo;
 out vec3 v_params;
 out float gl_ClipDistance[1];
+// The depth pre-pass (core/scene_depth.frag) runs this shader too: both must rasterise the same depths.
+invariant gl_Position;
 void main() {
     vec4 world = u_model * vec4(in_position, 1.0);
     v_world = world.xyz;
