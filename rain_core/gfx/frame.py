@@ -275,14 +275,13 @@ class RenderContext:
         self.__dict__["_state_cache"] = (base, items, merged, data, uniforms, uniforms.version if versioned else None)
         return merged, data
 
-    def set_frame_uniforms(self, program: moderngl.Program, *, bind: bool = True, skip: tuple[str, ...] = ()) -> None:
+    def set_frame_uniforms(self, program: moderngl.Program, *, bind: bool = True) -> None:
         """Camera, exposure, sun/sky, lights, atmosphere and shadow uniforms, where the program has them: the
         frame block (shaders/common/frame.glsl) is bound, and names the program declares as plain uniforms
-        (samplers, a program's own light list, names outside the block) are written.
+        (samplers, names outside the block) are written.
 
         ``bind=False``: this context's block is bound already (a draw just before bound it and nothing in between
-        bound another), so it is not bound again. ``skip``: plain uniforms the caller writes itself (a program's
-        own filtered light list: writing the frame's only to overwrite it costs GL calls)."""
+        bound another), so it is not bound again."""
         values, data = self._frame_state()
         blocks = self.frame_blocks
         if blocks is None:
@@ -291,8 +290,6 @@ class RenderContext:
         if info.has_block and bind:
             blocks.use(data)
         for target, value in info.plain_values(values):
-            if skip and target.name in skip:
-                continue
             if isinstance(value, bytes):
                 target.write(value)
             elif isinstance(value, np.ndarray):

@@ -2,8 +2,9 @@
 // the lights — in ONE uniform block (rain_core/gfx/frame_block.py packs it, std140, once per view; bound at
 // binding point 0). sky.glsl, lighting.glsl and atmosphere.glsl include this file: included once per program.
 // The member order is the Python layout's (FRAME_BLOCK_LAYOUT); the tests read the block back through a shader.
-// A program that sets its own light list (rainfall's drops: only the lights that reach its boxes) defines
-// FRAME_OWN_LIGHTS before including this file: the lights are then plain uniforms of that program.
+// A program with a light list of its own (rainfall's drops: only the lights that reach its boxes, in its RainFrame
+// block) defines FRAME_OWN_LIGHTS before including this file and declares u_light_count, u_light_pos,
+// u_light_dir and u_light_color itself, before common/lighting.glsl reads them.
 #define MAX_LIGHTS 32
 layout(std140) uniform FrameBlock {
     mat4 u_view_proj;
@@ -33,9 +34,3 @@ layout(std140) uniform FrameBlock {
     vec4 u_light_color[MAX_LIGHTS];  // rgb = colour × intensity (cd), w cos(inner cone)
 #endif
 };
-#ifdef FRAME_OWN_LIGHTS
-uniform int u_light_count;
-uniform vec4 u_light_pos[MAX_LIGHTS];
-uniform vec4 u_light_dir[MAX_LIGHTS];
-uniform vec4 u_light_color[MAX_LIGHTS];
-#endif

@@ -7,18 +7,9 @@
 // atmosphere effect's (forward lobe g = 0.7, back lobe g = −0.5 weighted so p(180°)/4π = 1/18.8 sr).
 // The effect passes only the lights that reach its boxes (effect.py _lights), as members of its per-frame block
 // (rain_frame.glsl: written with the rest, once a frame). FRAME_OWN_LIGHTS keeps the frame's list out of the frame
-// block; frame.glsl then declares a list of plain uniforms, renamed here out of the way (never read, so not active
-// in the program) so that the names lighting.glsl reads are RainFrame's.
+// block.
 #define FRAME_OWN_LIGHTS
-#define u_light_count rain_unused_light_count
-#define u_light_pos rain_unused_light_pos
-#define u_light_dir rain_unused_light_dir
-#define u_light_color rain_unused_light_color
 #include "common/frame.glsl"
-#undef u_light_count
-#undef u_light_pos
-#undef u_light_dir
-#undef u_light_color
 #include "rainfall/rain_frame.glsl"
 #include "common/lighting.glsl"
 #include "common/atmosphere.glsl"

@@ -151,9 +151,11 @@ def test_python_layout_is_the_std140_layout_gl_reads(gl_ctx, shaders, tmp_path):
 
 
 def _own_lights_program(ctx) -> moderngl.Program:
-    """A program that declares the frame's lights plainly (FRAME_OWN_LIGHTS) and reads them."""
+    """A program that declares the frame's lights plainly (FRAME_OWN_LIGHTS, its own declarations) and reads them."""
     frame_glsl = (SHADERS_DIR / "common" / "frame.glsl").read_text()
     vertex = ("#version 330 core\n#define FRAME_OWN_LIGHTS\n" + frame_glsl
+              + "uniform int u_light_count;\nuniform vec4 u_light_pos[MAX_LIGHTS];\n"
+                "uniform vec4 u_light_dir[MAX_LIGHTS];\nuniform vec4 u_light_color[MAX_LIGHTS];\n"
               + "void main() { int i = u_light_count - 1;"  # indexed at run time: every array whole
                 " gl_Position = u_view_proj * u_light_pos[i] + u_light_dir[i] + u_light_color[i]; }\n")
     return ctx.program(vertex_shader=vertex, fragment_shader="#version 330 core\nout vec4 c;\n"
