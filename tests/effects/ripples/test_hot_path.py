@@ -385,3 +385,25 @@ def test_wheel_batch_rows_equal_the_columns_side_by_side():
         want = np.concatenate([p0, p1, speed[:, None], want_depth[:, None], width[:, None]], axis=1)
         assert batch.rows(film).tobytes() == want.tobytes()
         assert batch.rows(None, asked_all[:unknown.sum()]).tobytes() == want.tobytes()
+
+
+def test_window_centre_uses_the_cameras_own_forward_axis():
+    """The effect's window centre takes the camera's normalised forward alone: the same centre as with
+    ``basis()[2]``, for unnormalised, tilted, backward and degenerate forward vectors."""
+    from types import SimpleNamespace
+
+    from rain_core.camera import Camera
+    from rain_core.effects.ripples import RipplesEffect, window_centre_xz
+    from rain_core.vehicles import Vehicle
+
+    rng = np.random.default_rng(3)
+    field = SimpleNamespace(extent_m=25.0, recenter_margin_cells=4, cell_m=25.0 / 511)
+    for i in range(200):
+        ego = Vehicle(position=np.array([rng.uniform(-5, 5), 0.0, rng.uniform(-1e3, 1e3)]), yaw=rng.uniform(-4, 4))
+        forward = rng.normal(size=3) * rng.uniform(0.1, 30.0) if i % 7 else np.zeros(3)
+        camera = Camera(position=ego.position + rng.normal(size=3) * 5.0, forward=forward, up=rng.normal(size=3))
+        heading = ego.forward()
+        want = window_centre_xz((ego.position[0], ego.position[2]), (heading[0], heading[2]), field.extent_m,
+                                camera.position, camera.basis()[2], car_half_length_m=0.5 * float(ego.spec.length_m),
+                                margin_m=field.recenter_margin_cells * field.cell_m)
+        assert RipplesEffect.window_centre(SimpleNamespace(ego=ego, camera=camera), field) == want
