@@ -289,7 +289,7 @@ def parse_override(text: str) -> tuple[str, object]:
 
     path, sep, raw = text.partition("=")
     if not sep or not path.strip():
-        raise argparse.ArgumentTypeError(f"--set takes PATH=VALUE (e.g. quality.render_scale=0.5), got {text!r}")
+        raise argparse.ArgumentTypeError(f"--set takes PATH=VALUE (e.g. atmosphere.scatter_lights=2), got {text!r}")
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
@@ -557,7 +557,7 @@ def parse_args(argv=None) -> argparse.Namespace:
                         "twins, for before/after on one tree)")
     p.add_argument("--set", dest="overrides", type=parse_override, action="append", default=[],
                    metavar="PATH=VALUE", help="a setting on top of the heavy-rain ones, by its settings path, e.g. "
-                                              "quality.render_scale=0.5 (repeatable)")
+                                              "atmosphere.scatter_lights=2 (repeatable)")
     p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
                    help="leave the renderer's timer queries off (no GPU columns)")
     args = p.parse_args(argv)
@@ -577,6 +577,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     if args.overrides:  # validated here, before any frame is drawn
         from rain_core.settings import Settings, SettingsError
 
+        if any(path == "quality.render_scale" for path, _ in args.overrides):
+            p.error("--set quality.render_scale: it scales a window's frame; the bench draws --size (pass a "
+                    "smaller --size instead)")
         try:
             with_overrides(Settings(), args.overrides)
         except SettingsError as exc:

@@ -44,14 +44,16 @@ def test_quick_options():
 
 
 def test_set_overrides_settings_by_path_and_rejects_bad_values(capsys):
-    args = parse_args(["--set", "quality.render_scale=0.5", "--set", "camera.mode=chase",
+    args = parse_args(["--set", "road.reflection_scale=0.25", "--set", "camera.mode=chase",
                        "--set", "atmosphere.scatter_lights = 2"])
-    assert args.overrides == [("quality.render_scale", 0.5), ("camera.mode", "chase"),
+    assert args.overrides == [("road.reflection_scale", 0.25), ("camera.mode", "chase"),
                               ("atmosphere.scatter_lights", 2)]
     settings = with_overrides(heavy_rain_settings(10_000), args.overrides)
-    assert settings.quality.render_scale == 0.5 and settings.camera.mode == "chase"
+    assert settings.road.reflection_scale == 0.25 and settings.camera.mode == "chase"
     assert settings.atmosphere.scatter_lights == 2 and settings.quality.particle_budget == 10_000
-    for bad in ("quality.render_scale=9", "quality.nope=1", "render_scale"):
+    # out of range, unknown, no value, and the window's render scale (the bench draws --size)
+    for bad in ("road.reflection_scale=9", "quality.nope=1", "reflection_scale", "quality.render_scale=0.5"):
         with pytest.raises(SystemExit):
             parse_args(["--set", bad])
-    assert "render_scale" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "reflection_scale" in err and "--size" in err
