@@ -33,9 +33,13 @@ class Camera:
     inside_car: bool = False  # the windshield effect draws only when the camera looks through the glass
     focus_m: float = math.inf  # distance the eye/lens is focused at (m): the glass is defocused unless near it
 
+    def forward_axis(self) -> np.ndarray:
+        """The unit forward vector (world frame), ``basis()[2]`` without the other two axes."""
+        return _normalize(self.forward)
+
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(right, up, forward) orthonormal, world frame."""
-        f = _normalize(self.forward)
+        f = self.forward_axis()
         r = _normalize(_cross(f, np.asarray(self.up, dtype=np.float64)))
         if not r.any():
             r = np.array([1.0, 0.0, 0.0])

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rain_core.camera import _normalize
 from rain_core.effects.ripples.backend import make_field
 from rain_core.effects.ripples.field import RippleField
 from rain_core.effects.ripples.rain_tiles import RainRippleTexture
@@ -98,9 +97,8 @@ class RipplesEffect(Effect):
         camera = frame.camera
         return window_centre_xz((ego.position[0], ego.position[2]), (heading[0], heading[2]), field.extent_m,
                                 None if camera is None else camera.position,
-                                # basis()[2] alone (the forward axis normalised), without the right and up
-                                # axes' cross products and normalisations
-                                None if camera is None else _normalize(camera.forward),
+                                # basis()[2] alone, without the right and up axes' cross products
+                                None if camera is None else camera.forward_axis(),
                                 car_half_length_m=0.5 * float(ego.spec.length_m),
                                 margin_m=field.recenter_margin_cells * field.cell_m)
 
