@@ -231,20 +231,21 @@ class SceneDrawer:
         ``mirror_view``: the door mirrors' view of this frame (rain_core.gfx.mirrors), shown on their glass."""
         ctx = self.ctx
         ctx.disable(moderngl.BLEND)
-        mirrored = clip_plane is not None
-        items = self.draw_items(rc, include_cabin=True)  # builds the cabin meshes, the mirror glass among them
-        plane = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
-        if clip_plane is not None:
-            ctx.enable_direct(GL_CLIP_DISTANCE0)
-        if include_sky:  # the sky then overwrites the pre-pass's colour everywhere
-            self._depth_prepass(rc, items, self._prepass_progs[mirrored], plane)
+        if include_sky:
             ctx.disable(moderngl.DEPTH_TEST)
             rc.set_frame_uniforms(self.sky_prog)
             self.sky_prog["u_inv_view_proj"].write(mat4_bytes(rc.inv_view_proj))
             self._sky_vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable(moderngl.DEPTH_TEST)
-        if include_sky:
-            ctx.depth_func = "<="  # the pre-pass's own depths pass: each pixel is lit once, by what is in front
+        mirrored = clip_plane is not None
+        items = self.draw_items(rc, include_cabin=True)  # builds the cabin meshes, the mirror glass among them
+        plane = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
+        if clip_plane is not None:  # after the sky, whose vertex shader writes no clip distance
+            ctx.enable_direct(GL_CLIP_DISTANCE0)
+        # The pre-pass leaves an undefined colour where its meshes are; the lit pass overwrites every such pixel
+        # (the same meshes at the same depths pass "<=").
+        self._depth_prepass(rc, items, self._prepass_progs[mirrored], plane)
+        ctx.depth_func = "<="  # the pre-pass's own depths pass: each pixel is lit once, by what is in front
         prog = self.mirror_prog if mirrored else self.scene_prog
         rc.set_frame_uniforms(prog)
         # Clip plane (reflection passes): keep dot((x, y, z, 1), plane) >= 0, wrapped-frame world positions.
@@ -274,8 +275,7 @@ class SceneDrawer:
                 set_owned("u_mirror_live", live)
                 last_live = live
             (self._mirror_vao(mesh) if mirrored else mesh.vao).render(moderngl.TRIANGLES, vertices=mesh.count)
-        if include_sky:
-            ctx.depth_func = "<"
+        ctx.depth_func = "<"
         if clip_plane is not None:
             ctx.disable_direct(GL_CLIP_DISTANCE0)
 
