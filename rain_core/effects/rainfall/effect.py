@@ -50,6 +50,8 @@ from rain_core.gfx.uniforms import owned_uniforms, set_uniforms
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
 PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
+
+
 @functools.cache
 def _light_struct(count: int) -> struct.Struct:
     return struct.Struct(f"={4 * count}f")

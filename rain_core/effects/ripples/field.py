@@ -329,14 +329,15 @@ class RippleField:
         """Scroll the rows' counts with the mask (``shifted``'s rows; the entering rows are water everywhere, as
         the mask's); a lateral scroll moves the lattice's columns: count afresh."""
         counts = self._row_water
+        full = len(range(1, self.n - 1, RAIN_FRACTION_STRIDE))  # a row of water on the lattice's columns
         if dx or abs(dz) >= self.n:
             self._row_water = None
         elif dz > 0:
             counts[:-dz] = counts[dz:]
-            counts[-dz:] = len(range(1, self.n - 1, RAIN_FRACTION_STRIDE))
+            counts[-dz:] = full
         elif dz < 0:
             counts[-dz:] = counts[:dz]
-            counts[:-dz] = len(range(1, self.n - 1, RAIN_FRACTION_STRIDE))
+            counts[:-dz] = full
 
     def _count_row_water(self, row0: int, row1: int) -> None:
         """Count the water of mask rows row0 … row1 − 1 on the lattice's columns into ``_row_water``."""
