@@ -30,6 +30,11 @@ from rain_core.water_film import (
 _UNBOUND = {"u_road_wet": 0.0, "u_road_mirror": 0.0, "u_road_debug": 0.0, "u_road_reflect": 0.0}
 
 
+def _any_positive(levels: tuple[float, float, float]) -> bool:
+    """any(v > 0.0 for v in levels) without a generator (NaN counts as not positive, as there)."""
+    return levels[0] > 0.0 or levels[1] > 0.0 or levels[2] > 0.0
+
+
 class RoadEffect(Effect):
     """The wet road effect. ``RoadEffect(ctx, settings=None, *, seed=0, shaders=None)``: settings are used when
     a frame carries none; shaders (a ShaderLibrary) only for ``film_depth_gpu`` (made on demand if None); the
@@ -109,17 +114,19 @@ class RoadEffect(Effect):
         weather = frame.weather
         if weather is None:
             return 0.0, 0.0, 0.0
-        return tuple(min(max(float(getattr(weather, k)), 0.0), 1.0) for k in ("wetness", "cracks", "puddles"))
+        # Spelled out, no generator: asked three times a frame (active, update, needs_reflection)
+        return (min(max(float(weather.wetness), 0.0), 1.0), min(max(float(weather.cracks), 0.0), 1.0),
+                min(max(float(weather.puddles), 0.0), 1.0))
 
     def active(self, frame: Frame) -> bool:
         road = self._road_settings(frame)
-        return bool(road.enabled) and (any(v > 0.0 for v in self.levels(frame)) or bool(road.debug_regions))
+        return bool(road.enabled) and (_any_positive(self.levels(frame)) or bool(road.debug_regions))
 
     def needs_reflection(self, frame: Frame) -> bool:
         """Whether this frame draws the reflection pass: reflections on, water on the road, not the debug view."""
         road = self._road_settings(frame)
         return (bool(road.enabled and road.reflections) and not road.debug_regions
-                and any(v > 0.0 for v in self.levels(frame)))
+                and _any_positive(self.levels(frame)))
 
     # --- textures ---
     def _maps(self, seed: int) -> moderngl.Texture:
