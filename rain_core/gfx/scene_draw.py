@@ -35,6 +35,20 @@ _TILE_MODELS = tuple(_tile_model(k) for k in (-1, 0, 1))  # the world tile one p
 _TILE_BYTES = {k: mat4_bytes(m) for k, m in zip((-1, 0, 1), _TILE_MODELS, strict=True)}
 
 
+def box_outside_frustum(view_proj: np.ndarray, lo, hi) -> bool:
+    """Whether the axis-aligned box [lo, hi] (world m) lies wholly outside one of the six clip planes of
+    ``view_proj`` (Gribb–Hartmann: clip-space −w ≤ x, y, z ≤ w). Conservative: a box that touches or straddles a
+    plane is kept, so a skipped draw is one that had no fragments."""
+    m = np.asarray(view_proj, dtype=np.float64)
+    planes = np.concatenate([m[3] + m[:3], m[3] - m[:3]])  # (6, 4): a·x + b·y + c·z + d ≥ 0 inside
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    # the box's corner farthest along each plane's normal: if even it is outside, the whole box is
+    far = np.where(planes[:, :3] >= 0.0, hi, lo)
+    reach = np.einsum("ij,ij->i", planes[:, :3], far) + planes[:, 3]
+    margin = 1e-6 * np.abs(planes).sum(axis=1)  # rounding: never cull a box that may touch a plane
+    return bool((reach < -margin).any())
+
+
 @dataclass
 class GpuMesh:
     """A VERTEX_DTYPE mesh on the GPU: one VAO for the lit scene shader, one for the shadow depth pass."""
@@ -72,6 +86,9 @@ class SceneDrawer:
         self._shadow_prog = shadow_program
         self._sky_vao = ctx.vertex_array(self.sky_prog, [])
         self._world = self._mesh(world.vertices)
+        positions = world.vertices["position"]
+        # the tile's box in its own frame (tile k is this box moved k periods along z), for culling
+        self._world_box = (positions.min(axis=0).astype(np.float64), positions.max(axis=0).astype(np.float64))
         # id(vehicle) → (vehicle, mesh): holding the vehicle keeps its id from being reused by a new one.
         self._vehicles: dict[int, tuple[object, GpuMesh]] = {}
         self._cabin: list[tuple[GpuMesh, float]] | None = None
@@ -195,14 +212,20 @@ class SceneDrawer:
             models[id(vehicle)] = (vehicle, shift_z, data)
         return data
 
-    def draw_items(self, rc: RenderContext, include_cabin: bool) -> list:
+    def _tile_in_view(self, view_proj: np.ndarray, k: int) -> bool:
+        lo, hi = self._world_box
+        shift = np.array([0.0, 0.0, k * layout.PERIOD_M])
+        return not box_outside_frustum(view_proj, lo + shift, hi + shift)
+
+    def draw_items(self, rc: RenderContext, include_cabin: bool, cull: bool = False) -> list:
         """``draw_list`` with each model matrix as the bytes ``u_model`` takes; between ``begin_frame`` and
-        ``end_frame`` computed once per (vehicles, camera tile, cabin or not)."""
+        ``end_frame`` computed once per (vehicles, camera tile, cabin or not). ``cull``: leave out the world tiles
+        wholly outside ``rc``'s view (its own draws; not the shadow's, whose casters may lie outside the view)."""
         frame = rc.frame
         cabin = bool(include_cabin and frame.camera.inside_car)
         cam_z = float(rc.camera_position[2])
         tiles = tuple(abs(cam_z - (k * layout.PERIOD_M + layout.PERIOD_M / 2)) <= layout.PERIOD_M * 1.5
-                      for k in (-1, 0, 1))
+                      and (not cull or self._tile_in_view(rc.view_proj, k)) for k in (-1, 0, 1))
         key = (cabin, rc.shift_z, tiles)
         cache = self._items
         if cache is not None:
@@ -238,7 +261,8 @@ class SceneDrawer:
             self._sky_vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable(moderngl.DEPTH_TEST)
         mirrored = clip_plane is not None
-        items = self.draw_items(rc, include_cabin=True)  # builds the cabin meshes, the mirror glass among them
+        # builds the cabin meshes, the mirror glass among them; a world tile out of this view has no fragments
+        items = self.draw_items(rc, include_cabin=True, cull=True)
         plane = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else tuple(map(float, clip_plane))
         if clip_plane is not None:  # after the sky, whose vertex shader writes no clip distance
             ctx.enable_direct(GL_CLIP_DISTANCE0)

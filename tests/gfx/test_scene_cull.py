@@ -1,0 +1,80 @@
+"""Frustum culling of the world tiles (rain_core/gfx/scene_draw.py): a tile wholly outside a view is not drawn
+there (from the driver's seat the tile behind the car), a tile that may touch the view is, the shadow pass keeps
+its casters, and the picture is the one drawn without culling."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rain_core.bench.frame import heavy_rain_settings
+from rain_core.camera import Camera
+from rain_core.gfx.scene_draw import SceneDrawer, box_outside_frustum
+from rain_core.scene import Scene
+
+SIZE = (96, 54)
+
+
+def _view_proj(forward=(0.0, 0.0, 1.0)) -> np.ndarray:
+    camera = Camera(position=np.array([0.0, 1.5, 0.0]), forward=np.array(forward), fov_y_deg=60.0)
+    return camera.projection_matrix(16 / 9) @ camera.view_matrix()
+
+
+@pytest.mark.parametrize(("lo", "hi", "outside"), [
+    ((-5, 0, 10), (5, 3, 20), False),  # ahead
+    ((-5, 0, -20), (5, 3, -10), True),  # behind
+    ((-5, 0, -10), (5, 3, 0.2), False),  # straddles the near plane
+    ((-5, 0, -10), (5, 3, 0.01), True),  # ends just short of the near plane (0.05 m)
+    ((30, 0, 10), (40, 3, 20), True),  # right of the 60°×16:9 view
+    ((-5, 0, 2500), (5, 3, 2600), True),  # beyond the far plane (2000 m)
+    ((-5, 0, 1990), (5, 3, 2600), False),  # crosses the far plane
+])
+def test_box_against_the_frustum(lo, hi, outside):
+    assert box_outside_frustum(_view_proj(), lo, hi) is outside
+
+
+def test_box_exactly_on_a_side_plane_is_kept():
+    # a box whose right face lies on the left clip plane at z = 10 m (x = −z·tan(hfov/2)) still touches the view
+    vp = _view_proj()
+    half_w = np.tan(np.radians(30.0)) * 16 / 9 * 10.0
+    assert not box_outside_frustum(vp, (-half_w - 1.0, 1.0, 10.0), (-half_w, 2.0, 10.0))
+    assert box_outside_frustum(vp, (-half_w - 1.0, 1.0, 10.0), (-half_w - 0.01, 2.0, 10.0))
+
+
+def _frame(gl_ctx, monkeypatch, cull: bool, camera: str = "driver"):
+    """World-tile draws per draw_items call (cull flag, count) over one frame at 20 m/s, and the frame's image."""
+    scene = Scene(gl_ctx, SIZE, settings=heavy_rain_settings(2000, camera=camera), seed=1, gpu_timing=False)
+    try:
+        scene.ego.speed_m_s = scene.autopilot.target_speed_m_s = 20.0
+        for _ in range(2):
+            scene.step(1 / 30, None)
+            scene.render()
+        calls = []
+        original = SceneDrawer.draw_items
+
+        def draw_items(self, rc, include_cabin, cull=False):
+            items = original(self, rc, include_cabin, cull and cull_on)
+            calls.append((cull, sum(1 for mesh, _, _ in items if mesh is self._world)))
+            return items
+
+        cull_on = cull
+        monkeypatch.setattr(SceneDrawer, "draw_items", draw_items)
+        scene.step(1 / 30, None)
+        scene.render()
+        monkeypatch.undo()
+        return calls, scene.image()
+    finally:
+        scene.release()
+
+
+@pytest.mark.parametrize("camera", ["driver", "chase"])
+def test_tile_behind_is_culled_and_the_picture_is_the_same(gl_ctx, monkeypatch, camera):
+    calls, image = _frame(gl_ctx, monkeypatch, cull=True, camera=camera)
+    uncut, reference = _frame(gl_ctx, monkeypatch, cull=False, camera=camera)
+    assert all(count == 3 for _, count in uncut)  # without culling every view draws three tiles
+    # the shadow's casters are all kept; the main view and the reflection leave the tile behind the car out
+    assert [count for cull, count in calls if not cull] == [3]
+    culled = [count for cull, count in calls if cull]
+    assert len(culled) >= 2 and all(count == 2 for count in culled)
+    assert np.array_equal(image, reference)
+
