@@ -35,18 +35,36 @@ _TILE_MODELS = tuple(_tile_model(k) for k in (-1, 0, 1))  # the world tile one p
 _TILE_BYTES = {k: mat4_bytes(m) for k, m in zip((-1, 0, 1), _TILE_MODELS, strict=True)}
 
 
-def box_outside_frustum(view_proj: np.ndarray, lo, hi) -> bool:
-    """Whether the axis-aligned box [lo, hi] (world m) lies wholly outside one of the six clip planes of
-    ``view_proj`` (Gribb–Hartmann: clip-space −w ≤ x, y, z ≤ w). Conservative: a box that touches or straddles a
-    plane is kept, so a skipped draw is one that had no fragments."""
-    m = np.asarray(view_proj, dtype=np.float64)
-    planes = np.concatenate([m[3] + m[:3], m[3] - m[:3]])  # (6, 4): a·x + b·y + c·z + d ≥ 0 inside
-    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
-    # the box's corner farthest along each plane's normal: if even it is outside, the whole box is
-    far = np.where(planes[:, :3] >= 0.0, hi, lo)
-    reach = np.einsum("ij,ij->i", planes[:, :3], far) + planes[:, 3]
-    margin = 1e-6 * np.abs(planes).sum(axis=1)  # rounding: never cull a box that may touch a plane
-    return bool((reach < -margin).any())
+def frustum_planes(view_proj) -> list[tuple[float, float, float, float, float]]:
+    """The six clip planes of ``view_proj`` (Gribb–Hartmann: clip-space −w ≤ x, y, z ≤ w) as (a, b, c, d, margin):
+    a·x + b·y + c·z + d ≥ 0 inside, world m; margin is the rounding allowance the box test keeps. In floats: a
+    handful per view, cheaper than NumPy's call overhead."""
+    rows = view_proj.tolist()
+    w = rows[3]
+    planes = []
+    for row in rows[:3]:
+        for sign in (1.0, -1.0):
+            plane = [w[j] + sign * row[j] for j in range(4)]
+            planes.append((*plane, 1e-6 * (abs(plane[0]) + abs(plane[1]) + abs(plane[2]) + abs(plane[3]))))
+    return planes
+
+
+def box_outside(planes, lo, hi) -> bool:
+    """Whether the axis-aligned box [lo, hi] (world m) lies wholly outside one of ``planes`` (``frustum_planes``).
+    Conservative: a box that touches or straddles a plane is kept, so a skipped draw is one that had no
+    fragments."""
+    for a, b, c, d, margin in planes:
+        # the box's corner farthest along the plane's normal: if even it is outside, the whole box is
+        reach = ((a * (hi[0] if a >= 0.0 else lo[0])) + (b * (hi[1] if b >= 0.0 else lo[1]))
+                 + (c * (hi[2] if c >= 0.0 else lo[2])) + d)
+        if reach < -margin:
+            return True
+    return False
+
+
+def box_outside_frustum(view_proj, lo, hi) -> bool:
+    """``box_outside`` against the clip planes of ``view_proj`` (a 4×4 matrix, world → clip)."""
+    return box_outside(frustum_planes(view_proj), lo, hi)
 
 
 @dataclass
@@ -88,7 +106,7 @@ class SceneDrawer:
         self._world = self._mesh(world.vertices)
         positions = world.vertices["position"]
         # the tile's box in its own frame (tile k is this box moved k periods along z), for culling
-        self._world_box = (positions.min(axis=0).astype(np.float64), positions.max(axis=0).astype(np.float64))
+        self._world_box = (positions.min(axis=0).tolist(), positions.max(axis=0).tolist())
         # id(vehicle) → (vehicle, mesh): holding the vehicle keeps its id from being reused by a new one.
         self._vehicles: dict[int, tuple[object, GpuMesh]] = {}
         self._cabin: list[tuple[GpuMesh, float]] | None = None
@@ -212,10 +230,12 @@ class SceneDrawer:
             models[id(vehicle)] = (vehicle, shift_z, data)
         return data
 
-    def _tile_in_view(self, view_proj: np.ndarray, k: int) -> bool:
-        lo, hi = self._world_box
-        shift = np.array([0.0, 0.0, k * layout.PERIOD_M])
-        return not box_outside_frustum(view_proj, lo + shift, hi + shift)
+    def _tiles_in_view(self, view_proj) -> tuple[bool, bool, bool]:
+        """Whether each world tile (one period behind, here, ahead) may touch the view of ``view_proj``."""
+        planes = frustum_planes(view_proj)
+        (lx, ly, lz), (hx, hy, hz) = self._world_box
+        return tuple(not box_outside(planes, (lx, ly, lz + k * layout.PERIOD_M), (hx, hy, hz + k * layout.PERIOD_M))
+                     for k in (-1, 0, 1))
 
     def draw_items(self, rc: RenderContext, include_cabin: bool, cull: bool = False) -> list:
         """``draw_list`` with each model matrix as the bytes ``u_model`` takes; between ``begin_frame`` and
@@ -225,7 +245,9 @@ class SceneDrawer:
         cabin = bool(include_cabin and frame.camera.inside_car)
         cam_z = float(rc.camera_position[2])
         tiles = tuple(abs(cam_z - (k * layout.PERIOD_M + layout.PERIOD_M / 2)) <= layout.PERIOD_M * 1.5
-                      and (not cull or self._tile_in_view(rc.view_proj, k)) for k in (-1, 0, 1))
+                      for k in (-1, 0, 1))
+        if cull:
+            tiles = tuple(near and seen for near, seen in zip(tiles, self._tiles_in_view(rc.view_proj), strict=True))
         key = (cabin, rc.shift_z, tiles)
         cache = self._items
         if cache is not None:
