@@ -260,7 +260,8 @@ class Renderer:
             # Its note is written when the table is asked for (pass_table): a headless frame never reads it.
             self._to_describe.append((self.stats[-1], effect))
         if sun_is_up(frame.lighting):
-            self._timed("shadow", lambda: rc.uniforms.update(self.shadow.render(rc, self.scene.draw_items(rc, False))))
+            self._timed("shadow", lambda: rc.uniforms.update(self.shadow.render(
+                rc, self.scene.draw_items(rc, False, cull=self.shadow.light_view_proj(rc)))))
         else:  # the sun is down: nothing casts a sun shadow
             self.stats.append(PassStat("shadow", False))
         for effect in active:

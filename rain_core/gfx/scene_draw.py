@@ -237,17 +237,19 @@ class SceneDrawer:
         return tuple(not box_outside(planes, (lx, ly, lz + k * layout.PERIOD_M), (hx, hy, hz + k * layout.PERIOD_M))
                      for k in (-1, 0, 1))
 
-    def draw_items(self, rc: RenderContext, include_cabin: bool, cull: bool = False) -> list:
+    def draw_items(self, rc: RenderContext, include_cabin: bool, cull=False) -> list:
         """``draw_list`` with each model matrix as the bytes ``u_model`` takes; between ``begin_frame`` and
         ``end_frame`` computed once per (vehicles, camera tile, cabin or not). ``cull``: leave out the world tiles
-        wholly outside ``rc``'s view (its own draws; not the shadow's, whose casters may lie outside the view)."""
+        wholly outside a view: True for ``rc``'s own, or a view-projection (4×4, wrapped frame) such as the sun's
+        (the shadow's casters may lie outside the camera's view, not outside the light's)."""
         frame = rc.frame
         cabin = bool(include_cabin and frame.camera.inside_car)
         cam_z = float(rc.camera_position[2])
         tiles = tuple(abs(cam_z - (k * layout.PERIOD_M + layout.PERIOD_M / 2)) <= layout.PERIOD_M * 1.5
                       for k in (-1, 0, 1))
-        if cull:
-            tiles = tuple(near and seen for near, seen in zip(tiles, self._tiles_in_view(rc.view_proj), strict=True))
+        if cull is not False:
+            view_proj = rc.view_proj if cull is True else cull
+            tiles = tuple(near and seen for near, seen in zip(tiles, self._tiles_in_view(view_proj), strict=True))
         key = (cabin, rc.shift_z, tiles)
         cache = self._items
         if cache is not None:

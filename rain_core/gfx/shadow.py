@@ -48,6 +48,7 @@ class ShadowMap:
         self.fbo = ctx.framebuffer(depth_attachment=self.depth)
         self._axes_key = None
         self._axes_value = None
+        self._light_of = None  # (render context, its camera, the light's view-projection)
 
     def bind(self) -> None:
         self.depth.use(units.SHADOW_MAP)
@@ -62,8 +63,12 @@ class ShadowMap:
             self._axes_key, self._axes_value = key, (lx, np.cross(sun, lx))
         return self._axes_value
 
-    def render(self, rc: RenderContext, draw_list) -> dict:
-        ctx = self.ctx
+    def light_view_proj(self, rc: RenderContext) -> np.ndarray:
+        """The sun's view-projection (world in the wrapped frame → the map's clip space) for ``rc``'s camera, made
+        once per context: the renderer culls the casters against it before ``render`` draws them."""
+        cached = self._light_of
+        if cached is not None and cached[0] is rc and cached[1] is rc.frame.camera:
+            return cached[2]
         sun = np.asarray(rc.frame.lighting.sun_direction, dtype=np.float64)
         forward = np.asarray(rc.frame.camera.forward, dtype=np.float64)  # as Camera.basis normalises it
         # math.sqrt of the dot product: np.linalg.norm's own formula for a vector, without its wrapper
@@ -82,6 +87,13 @@ class ShadowMap:
         view[0, :3], view[1, :3], view[2, :3] = lx, ly, sun
         view[:3, 3] = -view[:3, :3] @ eye
         light_view_proj = _LIGHT_PROJ @ view
+        light_view_proj.flags.writeable = False
+        self._light_of = (rc, rc.frame.camera, light_view_proj)
+        return light_view_proj
+
+    def render(self, rc: RenderContext, draw_list) -> dict:
+        ctx = self.ctx
+        light_view_proj = self.light_view_proj(rc)
         # Both products and their bytes before any GL call: the draws below evict the caches, and the second
         # product made after them cost ~40 µs more (BLAS's code cold) than made here, right after the first.
         shadow_matrix = mat4_bytes(_TO_TEXTURE @ light_view_proj)

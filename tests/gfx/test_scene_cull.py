@@ -1,6 +1,7 @@
 """Frustum culling of the world tiles (rain_core/gfx/scene_draw.py): a tile wholly outside a view is not drawn
 there (from the driver's seat the tile behind the car), a tile that may touch the view is, the shadow pass keeps
-its casters, and the picture is the one drawn without culling."""
+the casters inside the sun's view (not only the camera's), and the picture and the shadow map are the ones drawn
+without culling."""
 
 from __future__ import annotations
 
@@ -42,7 +43,8 @@ def test_box_exactly_on_a_side_plane_is_kept():
 
 
 def _frame(gl_ctx, monkeypatch, cull: bool, camera: str = "driver"):
-    """World-tile draws per draw_items call (cull flag, count) over one frame at 20 m/s, and the frame's image."""
+    """World-tile draws per draw_items call (what was culled against: "view", "light" or None; count) over one
+    frame at 20 m/s, the frame's image and its shadow map's depths."""
     scene = Scene(gl_ctx, SIZE, settings=heavy_rain_settings(2000, camera=camera), seed=1, gpu_timing=False)
     try:
         scene.ego.speed_m_s = scene.autopilot.target_speed_m_s = 20.0
@@ -53,8 +55,9 @@ def _frame(gl_ctx, monkeypatch, cull: bool, camera: str = "driver"):
         original = SceneDrawer.draw_items
 
         def draw_items(self, rc, include_cabin, cull=False):
-            items = original(self, rc, include_cabin, cull and cull_on)
-            calls.append((cull, sum(1 for mesh, _, _ in items if mesh is self._world)))
+            items = original(self, rc, include_cabin, cull if cull_on else False)
+            against = "view" if cull is True else None if cull is False else "light"
+            calls.append((against, sum(1 for mesh, _, _ in items if mesh is self._world)))
             return items
 
         cull_on = cull
@@ -62,19 +65,22 @@ def _frame(gl_ctx, monkeypatch, cull: bool, camera: str = "driver"):
         scene.step(1 / 30, None)
         scene.render()
         monkeypatch.undo()
-        return calls, scene.image()
+        shadow = scene.renderer.shadow.depth.read()
+        return calls, scene.image(), shadow
     finally:
         scene.release()
 
 
 @pytest.mark.parametrize("camera", ["driver", "chase"])
 def test_tile_behind_is_culled_and_the_picture_is_the_same(gl_ctx, monkeypatch, camera):
-    calls, image = _frame(gl_ctx, monkeypatch, cull=True, camera=camera)
-    uncut, reference = _frame(gl_ctx, monkeypatch, cull=False, camera=camera)
+    calls, image, shadow = _frame(gl_ctx, monkeypatch, cull=True, camera=camera)
+    uncut, reference, shadow_reference = _frame(gl_ctx, monkeypatch, cull=False, camera=camera)
     assert all(count == 3 for _, count in uncut)  # without culling every view draws three tiles
-    # the shadow's casters are all kept; the main view and the reflection leave the tile behind the car out
-    assert [count for cull, count in calls if not cull] == [3]
-    culled = [count for cull, count in calls if cull]
+    # the main view and the reflection leave the tile behind the car out; the sun's view (160 m across, the
+    # tiles 1,200 m long) keeps the one tile the car is on
+    assert [count for against, count in calls if against == "light"] == [1]
+    culled = [count for against, count in calls if against == "view"]
     assert len(culled) >= 2 and all(count == 2 for count in culled)
     assert np.array_equal(image, reference)
+    assert shadow == shadow_reference
 
