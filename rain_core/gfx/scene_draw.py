@@ -113,6 +113,7 @@ class SceneDrawer:
         self._mirror_glass: GpuMesh | None = None  # the cabin's door mirror glass (one of self._cabin's meshes)
         self._items: dict | None = None  # the frame's draw items while the renderer draws a frame
         self._models: dict | None = None  # and its vehicles' model bytes
+        self._asked: dict | None = None  # and the items each (context, cabin, cull) was given
 
     # --- geometry -------------------------------------------------------------------------------------------
     def _mesh(self, vertices: np.ndarray) -> GpuMesh:
@@ -206,10 +207,12 @@ class SceneDrawer:
         mirror view draw the same vehicles, so each model matrix is built and packed once per frame."""
         self._items = {}
         self._models = {}
+        self._asked = {}
 
     def end_frame(self) -> None:
         self._items = None
         self._models = None
+        self._asked = None
 
     @property
     def in_frame(self) -> bool:
@@ -242,6 +245,12 @@ class SceneDrawer:
         ``end_frame`` computed once per (vehicles, camera tile, cabin or not). ``cull``: leave out the world tiles
         wholly outside a view: True for ``rc``'s own, or a view-projection (4×4, wrapped frame) such as the sun's
         (the shadow's casters may lie outside the camera's view, not outside the light's)."""
+        asked = self._asked
+        ask = (id(rc), include_cabin, cull if type(cull) is bool else id(cull))
+        if asked is not None:  # the same view asked again in this frame (planned before the passes, drawn in them)
+            hit = asked.get(ask)
+            if hit is not None and hit[0] is rc and (type(cull) is bool or hit[1] is cull):
+                return hit[2]
         frame = rc.frame
         cabin = bool(include_cabin and frame.camera.inside_car)
         cam_z = float(rc.camera_position[2])
@@ -256,6 +265,8 @@ class SceneDrawer:
             hit = cache.get(key)
             # the cached entry holds the vehicle list and ego it was built from: compared by identity
             if hit is not None and hit[0] is frame.vehicles and hit[1] is frame.ego:
+                if asked is not None:
+                    asked[ask] = (rc, cull, hit[2])  # holding rc and the matrix keeps their ids from being reused
                 return hit[2]
         items = [(self._world, _TILE_BYTES[k], 1.0) for k, on in zip((-1, 0, 1), tiles, strict=True) if on]
         for vehicle in frame.vehicles:
@@ -267,6 +278,7 @@ class SceneDrawer:
             items += [(mesh, model, share) for mesh, share in self._cabin_meshes(frame.ego)]
         if cache is not None:
             cache[key] = (frame.vehicles, frame.ego, items)
+            asked[ask] = (rc, cull, items)
         return items
 
     # --- drawing --------------------------------------------------------------------------------------------
