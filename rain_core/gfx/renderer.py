@@ -85,6 +85,7 @@ class Renderer:
         self._timers: dict[str, PassTimer] = {}
         self.frame_blocks = FrameBlocks(ctx)
         self._lights_cache = None  # (key, light candidates) of the frame being rendered
+        self._mirror_plans: list = []  # ((rc, target, camera, mirror), its mirror context) of the frame being rendered
         self._effect_lights = None  # LightSet the active effects add this frame (Effect.frame_lights), or None
         self._proj_cache = None  # (lens and size, projection matrix)
         self._clear_air = None  # (lighting, its clear-air and no-shadow uniforms)
@@ -188,14 +189,28 @@ class Renderer:
         self.shadow.bind()  # re-bound per draw: a GPU simulation may have used the unit
         self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane, mirror_view=mirror_view)
 
+    def mirror_context(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray) -> RenderContext:
+        """The context ``draw_mirror_view`` draws ``rc``'s view reflected by ``mirror`` with (same arguments), made
+        once per frame with its draw list. An effect may ask for it in its update, before the frame's draws: on
+        llvmpipe the draws leave Python's caches cold, and this work cost ~3 times as much between them."""
+        key = (rc, target, camera, mirror)
+        for planned, mrc in self._mirror_plans:
+            if all(a is b for a, b in zip(planned, key, strict=True)):
+                return mrc
+        mrc = self.render_context(dataclasses.replace(rc.frame, camera=camera), target, view=rc.view @ mirror,
+                                  projection=rc.projection, shared=rc.shared, uniforms=rc.uniforms, active=rc.active)
+        if self.scene.in_frame:  # kept for this frame alone (holding the key's objects keeps them from being reused)
+            self._mirror_plans.append((key, mrc))
+            self.scene.draw_items(mrc, True, cull=True)
+        return mrc
+
     def draw_mirror_view(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray,
                          clip_plane: tuple[float, float, float, float]) -> None:
         """Draw the scene reflected by ``mirror`` (a 4×4 reflection in the wrapped frame) into ``target``, as seen
         through the main view's projection: a texel of ``target`` lies where the main camera sees the surface
         point that reflects it. ``camera``: the mirrored camera (its position lights the speculars);
         ``clip_plane`` (a, b, c, d) keeps what is on its positive side. Same effects, same shared value."""
-        mrc = self.render_context(dataclasses.replace(rc.frame, camera=camera), target, view=rc.view @ mirror,
-                                  projection=rc.projection, shared=rc.shared, uniforms=rc.uniforms, active=rc.active)
+        mrc = self.mirror_context(rc, target, camera, mirror)
         target.fbo.use()
         target.fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
         self.ctx.disable(moderngl.CULL_FACE)
@@ -227,6 +242,7 @@ class Renderer:
         finally:
             self.scene.end_frame()
             self._lights_cache = None
+            self._mirror_plans = []
             self._effect_lights = None
 
     def _render(self, frame: Frame) -> None:

@@ -69,6 +69,7 @@ class RoadEffect(Effect):
         self._black = ctx.texture((1, 1), 4, np.zeros(4, np.float32).tobytes(), dtype="f4")
         self._reflection = None  # RenderTarget, created at the first reflection pass
         self._reflection_valid = False
+        self._planned_view = None  # (render context, (target, mirrored camera)) of the frame's reflection pass
         self._sampler = None  # (key, world, film_depth_sampler) of the last frame
         self._mirror_pass = False  # True while the reflection pass draws: no reflection, ripples, rings, cabin
         self._ripple_explicit = False
@@ -196,6 +197,10 @@ class RoadEffect(Effect):
         standing.cache_key = key
         rc.shared.film_depth_fn = standing
         self._reflection_valid = False
+        if rc is not None and self.needs_reflection(frame):
+            # The reflection's camera and context planned now, before the frame's draws (see mirror_context)
+            target, camera = self._reflection_view(rc)
+            rc.renderer.mirror_context(rc, target, camera, MIRROR_Y)
 
     def render(self, stage: str, rc: RenderContext) -> None:
         if stage == "prepare" and self.needs_reflection(rc.frame):
@@ -209,14 +214,23 @@ class RoadEffect(Effect):
             self._reflection.color.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         return self._reflection
 
-    def _render_reflection(self, rc: RenderContext) -> None:
+    def _reflection_view(self, rc: RenderContext):
+        """(target, the camera mirrored about the road) of ``rc``'s reflection pass, made once per context."""
+        planned = self._planned_view
+        if planned is not None and planned[0] is rc:
+            return planned[1]
         scale = float(self._road_settings(rc.frame).reflection_scale)
         size = (max(1, round(rc.size[0] * scale)), max(1, round(rc.size[1] * scale)))
-        target = self._reflection_target(size)
+        view = (self._reflection_target(size), mirror_about_road(rc.frame.camera))
+        self._planned_view = (rc, view)
+        return view
+
+    def _render_reflection(self, rc: RenderContext) -> None:
+        target, camera = self._reflection_view(rc)
         self._mirror_pass = True
         self._cabin_ahead = bool(rc.frame.camera.inside_car and rc.frame.ego is not None)
         try:
-            rc.renderer.draw_mirror_view(rc, target, mirror_about_road(rc.frame.camera), MIRROR_Y, MIRROR_CLIP_PLANE)
+            rc.renderer.draw_mirror_view(rc, target, camera, MIRROR_Y, MIRROR_CLIP_PLANE)
         finally:
             self._mirror_pass = False
         target.color.build_mipmaps()

@@ -123,8 +123,6 @@ def test_the_frames_film_function_is_film_depth_mm_bit_for_bit(gl_ctx):
     """rc.shared.film_depth_fn (what the ripples ask every frame) samples through a film_depth_sampler kept while
     the levels stay: the same values, bit for bit, as film_depth_mm with the frame's arguments, for arrays of any
     shape, broadcast scalars and off-road points; a change of level makes a new one."""
-    from types import SimpleNamespace
-
     from rain_core.bench.frame import heavy_rain_settings
     from rain_core.gfx.frame import SharedResources
     from rain_core.gutter import frame_spread_coefficient
@@ -139,7 +137,7 @@ def test_the_frames_film_function_is_film_depth_mm_bit_for_bit(gl_ctx):
         for puddles in (1.0, 0.4):
             scene.weather.puddles = puddles
             frame = scene.frame()
-            rc = SimpleNamespace(shared=SharedResources())
+            rc = scene.renderer.render_context(frame, shared=SharedResources())
             effect.update(frame, rc)
             fn = rc.shared.film_depth_fn
             _, cracks, level = effect.levels(frame)
