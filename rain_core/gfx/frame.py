@@ -275,6 +275,10 @@ class RenderContext:
         self.__dict__["_state_cache"] = (base, items, merged, data, uniforms, uniforms.version if versioned else None)
         return merged, data
 
+    def frame_block_bytes(self) -> bytes:
+        """The frame block's std140 bytes for this context (packed once while its values stay)."""
+        return self._frame_state()[1]
+
     def set_frame_uniforms(self, program: moderngl.Program, *, bind: bool = True) -> None:
         """Camera, exposure, sun/sky, lights, atmosphere and shadow uniforms, where the program has them: the
         frame block (shaders/common/frame.glsl) is bound, and names the program declares as plain uniforms

@@ -202,6 +202,7 @@ class Renderer:
         if self.scene.in_frame:  # kept for this frame alone (holding the key's objects keeps them from being reused)
             self._mirror_plans.append((key, mrc))
             self.scene.draw_items(mrc, True, cull=True)
+            mrc.frame_block_bytes()
         return mrc
 
     def draw_mirror_view(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray,
@@ -280,13 +281,16 @@ class Renderer:
         self.scene.draw_items(rc, True, cull=True)
         for effect in active:  # e.g. the rain medium, which every program of the frame sees
             rc.uniforms.update(effect.frame_uniforms(frame))
+        if sun_up:
+            rc.uniforms.update(self.shadow.frame_uniforms(rc))
+        rc.frame_block_bytes()  # every frame uniform is known now: packed here, once, for all the passes
         for effect in active:
             self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
             # Its note is written when the table is asked for (pass_table): a headless frame never reads it.
             self._to_describe.append((self.stats[-1], effect))
         if sun_up:
-            self._timed("shadow", lambda: rc.uniforms.update(self.shadow.render(
-                rc, self.scene.draw_items(rc, False, cull=self.shadow.light_view_proj(rc)))))
+            self._timed("shadow", lambda: self.shadow.render(
+                rc, self.scene.draw_items(rc, False, cull=self.shadow.light_view_proj(rc))))
         else:  # the sun is down: nothing casts a sun shadow
             self.stats.append(PassStat("shadow", False))
         for effect in active:

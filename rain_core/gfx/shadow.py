@@ -48,7 +48,7 @@ class ShadowMap:
         self.fbo = ctx.framebuffer(depth_attachment=self.depth)
         self._axes_key = None
         self._axes_value = None
-        self._light_of = None  # (render context, its camera, the light's view-projection)
+        self._light_of = None  # (render context, its camera, the light's view-projection, its bytes, uniforms)
 
     def bind(self) -> None:
         self.depth.use(units.SHADOW_MAP)
@@ -88,16 +88,24 @@ class ShadowMap:
         view[:3, 3] = -view[:3, :3] @ eye
         light_view_proj = _LIGHT_PROJ @ view
         light_view_proj.flags.writeable = False
-        self._light_of = (rc, rc.frame.camera, light_view_proj)
+        # Both products and their bytes at once, before any GL call: made after the draws, the second product cost
+        # ~40 µs more (BLAS's code cold) than made right after the first.
+        uniforms = {"u_shadow_matrix": mat4_bytes(_TO_TEXTURE @ light_view_proj), "u_shadow_map": units.SHADOW_MAP,
+                    "u_shadow_params": (1.0, 1.0 / SHADOW_SIZE, 0.06 / SHADOW_DEPTH_M)}
+        self._light_of = (rc, rc.frame.camera, light_view_proj, mat4_bytes(light_view_proj), uniforms)
         return light_view_proj
 
+    def frame_uniforms(self, rc: RenderContext) -> dict:
+        """The scene shader's shadow inputs for ``rc`` (the map ``render`` draws for it): known before it is drawn,
+        so the renderer packs the frame block ahead of the draws."""
+        self.light_view_proj(rc)
+        return self._light_of[4]
+
     def render(self, rc: RenderContext, draw_list) -> dict:
+        """Draw the depths of ``draw_list`` for ``rc``; returns ``frame_uniforms(rc)``."""
         ctx = self.ctx
-        light_view_proj = self.light_view_proj(rc)
-        # Both products and their bytes before any GL call: the draws below evict the caches, and the second
-        # product made after them cost ~40 µs more (BLAS's code cold) than made here, right after the first.
-        shadow_matrix = mat4_bytes(_TO_TEXTURE @ light_view_proj)
-        light_bytes = mat4_bytes(light_view_proj)
+        self.light_view_proj(rc)
+        light_bytes, uniforms = self._light_of[3:]
         self.fbo.use()
         self.fbo.clear(depth=1.0)
         ctx.enable(moderngl.DEPTH_TEST)
@@ -107,8 +115,7 @@ class ShadowMap:
         for mesh, model, _share in draw_list:
             model_u.write(model if isinstance(model, bytes) else mat4_bytes(model))
             mesh.depth_vao.render(moderngl.TRIANGLES, vertices=mesh.count)
-        return {"u_shadow_matrix": shadow_matrix, "u_shadow_map": units.SHADOW_MAP,
-                "u_shadow_params": (1.0, 1.0 / SHADOW_SIZE, 0.06 / SHADOW_DEPTH_M)}
+        return uniforms
 
     def release(self) -> None:
         self.fbo.release()
