@@ -203,6 +203,7 @@ class Renderer:
             self._mirror_plans.append((key, mrc))
             self.scene.draw_items(mrc, True, cull=True)
             mrc.frame_block_bytes()
+            mrc.inv_view_proj  # noqa: B018 - made and kept by the context
         return mrc
 
     def draw_mirror_view(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray,
@@ -284,6 +285,7 @@ class Renderer:
         if sun_up:
             rc.uniforms.update(self.shadow.frame_uniforms(rc))
         rc.frame_block_bytes()  # every frame uniform is known now: packed here, once, for all the passes
+        rc.inv_view_proj  # noqa: B018 - for the sky and the post passes (a mirror view's is then this one's mirror)
         for effect in active:
             self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
             # Its note is written when the table is asked for (pass_table): a headless frame never reads it.
