@@ -33,18 +33,22 @@ from rain_core.gfx.uniforms import owned_uniforms
 from rain_core.settings import DripsSection
 
 SLOTS = 12  # drops drawn per site: the hanging one and the last 11 released
-_SITES: dict[int, tuple[object, DripSites]] = {}  # id(world) → (world, its sites): found once per world
+# (id(world), seed) → (world, its sites): found once per world and seed. The seed is part of the key: scenes
+# share their world, and a scene's sites must not depend on which seed an earlier scene of the process used.
+_SITES: dict[tuple[int, int], tuple[object, DripSites]] = {}
 MIN_OUTFLOW_M3_S = 1e-9  # total: below this every roof has drained
 
 
 def drip_sites_of(world, seed: int = 0) -> DripSites:
-    """The world's drip sites, found once per world object (about a second on its occluder map)."""
-    entry = _SITES.get(id(world))
+    """The world's drip sites for ``seed``, found once per world object and seed (about a second on its occluder
+    map)."""
+    key = (id(world), int(seed))
+    entry = _SITES.get(key)
     if entry is None or entry[0] is not world:
         m = world.occluder_map
         if len(_SITES) > 4:
             _SITES.clear()
-        entry = _SITES[id(world)] = (world, find_drip_sites(m.grid, m.x0_m, m.cell_m, seed))
+        entry = _SITES[key] = (world, find_drip_sites(m.grid, m.x0_m, m.cell_m, seed))
     return entry[1]
 
 

@@ -110,3 +110,20 @@ def test_range_uniforms_are_the_last_draws(gl_ctx):
     finally:
         scene.release()
         gl_ctx.detect_framebuffer(0).use()
+
+
+def test_sites_depend_on_the_seed_not_on_what_ran_before():
+    """Scenes share their world (rain_core.world.shared): the drip sites found for it are kept per seed, so a
+    scene's sites (and pixels) are the same whichever seed an earlier scene of the process asked for first."""
+    from rain_core.effects.drips.edges import find_drip_sites
+    from rain_core.effects.drips.effect import _SITES, drip_sites_of
+    from rain_core.world.shared import shared_world
+
+    world = shared_world(1)
+    m = world.occluder_map
+    fresh = {seed: find_drip_sites(m.grid, m.x0_m, m.cell_m, seed) for seed in (0, 1)}
+    assert not np.array_equal(fresh[0].phase, fresh[1].phase)  # the seed matters: the test can tell them apart
+    _SITES.clear()
+    for seed in (1, 0, 1):
+        sites = drip_sites_of(world, seed)
+        assert np.array_equal(sites.phase, fresh[seed].phase) and np.array_equal(sites.x, fresh[seed].x)
