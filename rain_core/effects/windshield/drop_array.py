@@ -205,6 +205,22 @@ class DropArray:
             rows[:, _T] = t
             rows[:, _VS : _VT + 1] = 0.0
 
+    def _append_picked(self, cols: np.ndarray, picks: np.ndarray, mass: np.ndarray, radius: np.ndarray) -> None:
+        """``_append_at_rest(cols[0, picks], cols[1, picks], mass, radius)``: the points ``picks`` of the columns
+        ``cols`` (s, t in m at rows 0 and 1), by ``kernels.append_at_rest`` where the kernels run."""
+        k = len(picks)
+        if k == 0:
+            return
+        if not jit.active():
+            self._append_at_rest(cols[0].take(picks), cols[1].take(picks), mass, radius)
+            return
+        n = self._n
+        self._reserve(n + k)
+        kernels.append_at_rest(self._buf, self._fresh_buf, n, cols, picks, mass, radius)
+        self._dirty = True
+        self._n = n + k
+        self.changed()
+
     def _new_rows(self, mass: np.ndarray, radius: np.ndarray | None) -> np.ndarray | None:
         """Rows for len(mass) new drops (mass, radius, a fresh trail, unplaced), their position and velocity
         left to the caller; None when there are none."""

@@ -194,3 +194,31 @@ def test_arrival_law_and_table_are_the_twins(speed_kmh, rate_mm_h, wind):
     kernels.sample_arrivals(u, 5000, k_table.cdf, k_table._coef, k_table.total, sim._w0, sim._dw, sim._height, imp,
                             cells, obj)
     assert np.array_equal(imp[2], table.sample(u[:5000])[0])
+
+
+def test_append_at_rest_is_the_twins():
+    # Arrivals picked out of their columns as rows at rest (the kernel, and its plain-Python version), against
+    # the twin's gathers and column writes, after rows already there and over a grown array.
+    import copy
+
+    rng = np.random.default_rng(6)
+    twin = WindshieldSim(seed=6)
+    twin._append(twin.glass.from_uv(rng.uniform(0.0, 1.0, (30, 2))), rng.normal(size=(30, 2)), np.full(30, 1e-6))
+    cols = rng.uniform(-0.5, 0.5, (7, 5000))
+    picks = np.sort(rng.choice(5000, 4000, replace=False))
+    mass = rng.uniform(1e-7, 1e-5, len(picks))
+    radius = rng.uniform(1e-4, 1e-3, len(picks))
+    sim, plain = copy.deepcopy(twin), copy.deepcopy(twin)
+    with jit.forced(False):
+        twin._append_picked(cols, picks, mass, radius)
+    with jit.forced(True):
+        sim._append_picked(cols, picks, mass, radius)
+    n = plain.count
+    plain._reserve(n + len(picks))
+    kernels.append_at_rest.py_func(plain._buf, plain._fresh_buf, n, cols, picks, mass, radius)
+    plain._n = n + len(picks)
+    for s in (sim, plain):
+        assert s.count == twin.count == 30 + len(picks)
+        assert np.array_equal(s._buf[: s.count], twin._buf[: twin.count])
+        assert np.array_equal(s.fresh, twin.fresh)
+    assert sim._dirty and sim.version > plain.version

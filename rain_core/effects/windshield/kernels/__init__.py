@@ -6,9 +6,10 @@ Their NumPy twins stay the fallback and the oracle: ``DropArray._flush_placed`` 
 (:func:`place_rows`), ``FastMotion._move`` (:func:`move_drops`) and ``_run`` (:func:`run_drops`),
 ``FastMerging._merge_moves`` with ``grid.PairFinder`` (:func:`merge_drops`), ``FastWiping._sweep``'s drops, film
 and off-glass bead (:func:`sweep_blades`), ``WindshieldSim._arrive_fast`` (:func:`sample_arrivals`,
-:func:`land_arrivals`) and ``_give_to_drops`` (:func:`drops_in_cells`, :func:`give_to_drops`). The same operations
-in the same order on the same values, so the results are the twins' bit for bit (cube roots and the sums that NumPy
-adds pairwise stay in NumPy, done by the caller on the kernels' outputs), but for the blade's angle to a drop:
+:func:`land_arrivals`), ``_give_to_drops`` (:func:`drops_in_cells`, :func:`give_to_drops`) and
+``DropArray._append_at_rest`` (:func:`append_at_rest`). The same operations in the same order on the same values,
+so the results are the twins' bit for bit (cube roots and the sums that NumPy adds pairwise stay in NumPy, done by
+the caller on the kernels' outputs), but for the blade's angle to a drop:
 libm's atan2 may differ from NumPy's by an ulp, which flips a drop's sweep only within an ulp of the blade's edge.
 Random numbers are drawn by the caller, in the twins' order. Units: m, s, kg, m/s, rad.
 
@@ -27,5 +28,5 @@ from rain_core.effects.windshield.kernels.common import NEAR_CELLS, film_cell, i
 from rain_core.effects.windshield.kernels.film import evaporate_film, film_drying, sensor_masses  # noqa: F401
 from rain_core.effects.windshield.kernels.merging import merge_drops  # noqa: F401
 from rain_core.effects.windshield.kernels.motion import move_drops, place_rows, run_drops  # noqa: F401
-from rain_core.effects.windshield.kernels.rows import compact_rows, shed_rows, sort_rows  # noqa: F401
+from rain_core.effects.windshield.kernels.rows import append_at_rest, compact_rows, shed_rows, sort_rows  # noqa: F401
 from rain_core.effects.windshield.kernels.wiping import sweep_blades  # noqa: F401

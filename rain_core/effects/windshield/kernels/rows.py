@@ -1,5 +1,5 @@
-"""Kernels of the drop array's bookkeeping: removing, shedding and sorting rows (``drop_array``'s twins).
-Units: m, kg."""
+"""Kernels of the drop array's bookkeeping: appending, removing, shedding and sorting rows (``drop_array``'s
+twins). Units: m, kg."""
 
 from __future__ import annotations
 
@@ -8,9 +8,30 @@ from rain_core.effects.windshield.constants import (
     M_OBJECT_MIN,
 )
 from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
-from rain_core.effects.windshield.drop_rows import KEY, A, M, S, T
-from rain_core.effects.windshield.kernels.common import film_cell, inside
+from rain_core.effects.windshield.drop_rows import KEY, RB, TRAIL, VS, VT, A, M, S, T
+from rain_core.effects.windshield.kernels.common import _INF, film_cell, inside
 from rain_core.effects.windshield.kernels.motion import place_row
+
+
+@jit.kernel
+def append_at_rest(buf, fresh, n, cols, picks, mass, radius):
+    """``DropArray._append_at_rest`` of the points ``picks`` of ``cols`` (rows s, t in m at 0 and 1: the
+    arrivals' columns), of masses ``mass`` (kg) and radii ``radius`` (m), as rows [n, n + len(picks)) of
+    ``buf`` (its capacity reserved by the caller): at rest, a fresh trail, unplaced (KEY DIRTY), to be tested,
+    fresh. One pass instead of a gather per column and a strided write per column."""
+    for j in range(len(picks)):
+        q = picks[j]
+        i = n + j
+        buf[i, S] = cols[0, q]
+        buf[i, T] = cols[1, q]
+        buf[i, VS] = 0.0
+        buf[i, VT] = 0.0
+        buf[i, M] = mass[j]
+        buf[i, TRAIL] = 0.0
+        buf[i, A] = radius[j]
+        buf[i, KEY] = _DIRTY
+        buf[i, RB] = _INF
+        fresh[i] = True
 
 
 @jit.kernel
