@@ -136,24 +136,22 @@ class FastArrivals:
 
     def _give_to_drops(self, cells: np.ndarray, mass: np.ndarray) -> np.ndarray:
         """Add each mass (kg) to a random drop of its film cell; returns which ones found a drop."""
-        placed = np.zeros(len(cells), bool)
         n = self._n
         if n == 0 or len(cells) == 0:
-            return placed
+            return np.zeros(len(cells), bool)
         if jit.active():
             ks = self._scratch()
             k = len(cells)
-            c, first = np.empty(k, np.int64), np.empty(k, np.int64)
-            kernels.drops_in_cells(self._buf, n, self._dirty, self._w0, self._dw, self._height,
-                                   cells.astype(np.int64, copy=False), ks.cell_mark, ks.cell_count, ks.cell_start,
-                                   ks.hits, ks.members, c, first)
-            placed = c > 0
-            if np.count_nonzero(placed):
-                picks = np.empty(k, np.int64)
+            c, first, c_hit, picks = np.empty((4, k), np.int64)
+            pick_m, placed = np.empty(k), np.empty(k, bool)
+            n_hit = kernels.drops_in_cells(self._buf, n, self._dirty, self._w0, self._dw, self._height,
+                                           cells.astype(np.int64, copy=False), ks.cell_mark, ks.cell_count,
+                                           ks.cell_start, ks.hits, ks.members, c, first, placed, c_hit)
+            if n_hit:
+                # (the same draws as the twin's: the counts of the cells with drops, in order)
                 n_p = kernels.give_to_drops(self._buf, self._fresh_buf, ks.members, first, c,
-                                            self.rng.integers(0, c[placed]), mass, picks)
-                picks = picks[:n_p]
-                self._buf[picks, _A] = drop_radius(self._buf[picks, _M])
+                                            self.rng.integers(0, c_hit[:n_hit]), mass, picks, pick_m)
+                self._buf[picks[:n_p], _A] = drop_radius(pick_m[:n_p])
             return placed
         d = self._buf[:n]
         # The drops in those cells (a table marks the cells), grouped by cell in index order.

@@ -92,12 +92,14 @@ def land_arrivals(flat, acc, cells, imp, n, obj, n_obj, room, placed):
 
 
 @jit.kernel
-def drops_in_cells(buf, n, any_dirty, w0, dw, height, cells, mark, per_cell, start, hits, members, c_out, first_out):
+def drops_in_cells(buf, n, any_dirty, w0, dw, height, cells, mark, per_cell, start, hits, members, c_out, first_out,
+                   placed, c_hit):
     """For ``WindshieldSim._give_to_drops``: the drops among rows [:n] in each of the film ``cells`` (flat
     indices), grouped by cell in row order into ``members``; per query its cell's count ``c_out`` and where its
-    group starts ``first_out``. The film cell of a row is its CELL column, or for a row placed this sub-step (KEY
-    DIRTY; only looked at if ``any_dirty``) computed. ``mark``, ``per_cell``, ``start``: zeroed scratch per cell,
-    left zeroed; ``hits`` (2, ·) int64 scratch over the rows."""
+    group starts ``first_out``, whether it has any (``placed``, bool) and the counts of those that have, in order,
+    into ``c_hit``; returns how many have. The film cell of a row is its CELL column, or for a row placed this
+    sub-step (KEY DIRTY; only looked at if ``any_dirty``) computed. ``mark``, ``per_cell``, ``start``: zeroed
+    scratch per cell, left zeroed; ``hits`` (2, ·) int64 scratch over the rows."""
     k = len(cells)
     for q in range(k):
         mark[cells[q]] = 1
@@ -113,6 +115,7 @@ def drops_in_cells(buf, n, any_dirty, w0, dw, height, cells, mark, per_cell, sta
             hits[1, m] = c
             m += 1
     at = 0
+    n_hit = 0
     for q in range(k):
         c = cells[q]
         if mark[c] == 1:
@@ -121,6 +124,10 @@ def drops_in_cells(buf, n, any_dirty, w0, dw, height, cells, mark, per_cell, sta
             at += per_cell[c]
         c_out[q] = per_cell[c]
         first_out[q] = start[c]
+        placed[q] = per_cell[c] > 0
+        if placed[q]:
+            c_hit[n_hit] = per_cell[c]
+            n_hit += 1
     for h in range(m):
         c = hits[1, h]
         members[start[c]] = hits[0, h]
@@ -130,13 +137,15 @@ def drops_in_cells(buf, n, any_dirty, w0, dw, height, cells, mark, per_cell, sta
         mark[c] = 0
         per_cell[c] = 0
         start[c] = 0
+    return n_hit
 
 
 @jit.kernel
-def give_to_drops(buf, fresh, members, first, c, draw, mass, picks):
+def give_to_drops(buf, fresh, members, first, c, draw, mass, picks, pick_m):
     """Add each ``mass`` (kg) whose cell has drops (``c`` > 0) to the drop ``draw`` (its random index among them:
     ``drops_in_cells``' ``members`` from ``first``), in order; the drop is tested again (RB) and fresh. Writes the
-    rows to ``picks``; returns how many. The caller sets their radius from their mass."""
+    rows to ``picks`` and their masses once all are added to ``pick_m``; returns how many. The caller sets their
+    radius from their mass."""
     n_p = 0
     for q in range(len(c)):
         if c[q] > 0:
@@ -146,6 +155,8 @@ def give_to_drops(buf, fresh, members, first, c, draw, mass, picks):
             fresh[i] = True
             picks[n_p] = i
             n_p += 1
+    for j in range(n_p):
+        pick_m[j] = buf[picks[j], M]
     return n_p
 
 
