@@ -29,6 +29,8 @@ from rain_core.effects.windshield.drop_rows import M as _M
 from rain_core.effects.windshield.drop_rows import S as _S
 from rain_core.effects.windshield.drop_rows import T as _T
 
+_ALL = np.zeros(0, np.int64)  # DropArray._append_picked: no picks, every point
+
 
 class KernelScratch:
     """Work arrays of the compiled kernels (``kernels``) for a drop array of capacity ``cap``: made once, kept
@@ -199,24 +201,30 @@ class DropArray:
 
     def _append_at_rest(self, s: np.ndarray, t: np.ndarray, mass: np.ndarray, radius: np.ndarray | None = None) -> None:
         """``_append`` of drops at rest at (s, t) m, given as columns."""
+        if jit.active() and len(mass):
+            self._append_picked(s, t, _ALL, mass, drop_radius(mass) if radius is None else radius)
+            return
         rows = self._new_rows(mass, radius)
         if rows is not None:
             rows[:, _S] = s
             rows[:, _T] = t
             rows[:, _VS : _VT + 1] = 0.0
 
-    def _append_picked(self, cols: np.ndarray, picks: np.ndarray, mass: np.ndarray, radius: np.ndarray) -> None:
-        """``_append_at_rest(cols[0, picks], cols[1, picks], mass, radius)``: the points ``picks`` of the columns
-        ``cols`` (s, t in m at rows 0 and 1), by ``kernels.append_at_rest`` where the kernels run."""
-        k = len(picks)
+    def _append_picked(self, s: np.ndarray, t: np.ndarray, picks: np.ndarray, mass: np.ndarray,
+                       radius: np.ndarray) -> None:
+        """``_append_at_rest`` of the points ``picks`` of the columns ``s``, ``t`` (m), or with ``picks`` empty
+        (``_ALL``) of all of them, by ``kernels.append_at_rest`` where the kernels run."""
+        k = len(mass)
         if k == 0:
             return
         if not jit.active():
-            self._append_at_rest(cols[0].take(picks), cols[1].take(picks), mass, radius)
+            if len(picks):
+                s, t = s.take(picks), t.take(picks)
+            self._append_at_rest(s, t, mass, radius)
             return
         n = self._n
         self._reserve(n + k)
-        kernels.append_at_rest(self._buf, self._fresh_buf, n, cols, picks, mass, radius)
+        kernels.append_at_rest(self._buf, self._fresh_buf, n, s, t, picks, mass, radius)
         self._dirty = True
         self._n = n + k
         self.changed()

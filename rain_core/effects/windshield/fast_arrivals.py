@@ -131,7 +131,7 @@ class FastArrivals:
         keep = imp[5].take(obj)
         a_obj = drop_radius(keep)
         self._impacts.append((imp[0], imp[1], imp[2], imp[3], obj, a_obj, imp[6]))
-        self._append_picked(imp, obj, keep, a_obj)
+        self._append_picked(imp[0], imp[1], obj, keep, a_obj)
         return imp[4]
 
     def _give_to_drops(self, cells: np.ndarray, mass: np.ndarray) -> np.ndarray:

@@ -197,9 +197,13 @@ def test_arrival_law_and_table_are_the_twins(speed_kmh, rate_mm_h, wind):
 
 
 def test_append_at_rest_is_the_twins():
-    # Arrivals picked out of their columns as rows at rest (the kernel, and its plain-Python version), against
-    # the twin's gathers and column writes, after rows already there and over a grown array.
+    # Drops appended at rest by the kernel (and its plain-Python version), from points picked out of columns (the
+    # arrivals') and from whole columns (beads, trail droplets), against the twin's gathers and column writes,
+    # after rows already there and over a grown array.
     import copy
+
+    from rain_core.effects.windshield.constants import drop_radius
+    from rain_core.effects.windshield.drop_array import _ALL
 
     rng = np.random.default_rng(6)
     twin = WindshieldSim(seed=6)
@@ -208,17 +212,23 @@ def test_append_at_rest_is_the_twins():
     picks = np.sort(rng.choice(5000, 4000, replace=False))
     mass = rng.uniform(1e-7, 1e-5, len(picks))
     radius = rng.uniform(1e-4, 1e-3, len(picks))
+    beads = rng.uniform(1e-7, 1e-5, 300)
     sim, plain = copy.deepcopy(twin), copy.deepcopy(twin)
-    with jit.forced(False):
-        twin._append_picked(cols, picks, mass, radius)
-    with jit.forced(True):
-        sim._append_picked(cols, picks, mass, radius)
+    for on, s in ((False, twin), (True, sim)):
+        with jit.forced(on):
+            s._append_picked(cols[0], cols[1], picks, mass, radius)
+            s._append_at_rest(cols[2, :300], cols[3, :300], beads)
+            s._append_at_rest(cols[2, :0], cols[3, :0], beads[:0])
+    append = kernels.append_at_rest.py_func
     n = plain.count
-    plain._reserve(n + len(picks))
-    kernels.append_at_rest.py_func(plain._buf, plain._fresh_buf, n, cols, picks, mass, radius)
-    plain._n = n + len(picks)
-    for s in (sim, plain):
-        assert s.count == twin.count == 30 + len(picks)
-        assert np.array_equal(s._buf[: s.count], twin._buf[: twin.count])
-        assert np.array_equal(s.fresh, twin.fresh)
+    plain._reserve(n + len(picks) + 300)
+    append(plain._buf, plain._fresh_buf, n, cols[0], cols[1], picks, mass, radius)
+    append(plain._buf, plain._fresh_buf, n + len(picks), cols[2, :300], cols[3, :300], _ALL, beads,
+           drop_radius(beads))
+    plain._n = n + len(picks) + 300
+    assert sim.count == twin.count == 30 + len(picks) + 300
+    assert np.array_equal(sim._buf[: sim.count], twin._buf[: twin.count])
+    assert np.array_equal(sim.fresh, twin.fresh)
     assert sim._dirty and sim.version > plain.version
+    assert np.array_equal(plain._buf[: plain.count], twin._buf[: twin.count])
+    assert np.array_equal(plain.fresh, twin.fresh)

@@ -14,16 +14,16 @@ from rain_core.effects.windshield.kernels.motion import place_row
 
 
 @jit.kernel
-def append_at_rest(buf, fresh, n, cols, picks, mass, radius):
-    """``DropArray._append_at_rest`` of the points ``picks`` of ``cols`` (rows s, t in m at 0 and 1: the
-    arrivals' columns), of masses ``mass`` (kg) and radii ``radius`` (m), as rows [n, n + len(picks)) of
-    ``buf`` (its capacity reserved by the caller): at rest, a fresh trail, unplaced (KEY DIRTY), to be tested,
-    fresh. One pass instead of a gather per column and a strided write per column."""
-    for j in range(len(picks)):
-        q = picks[j]
+def append_at_rest(buf, fresh, n, s, t, picks, mass, radius):
+    """``DropArray._append_at_rest``: drops at rest at (s, t) m, of masses ``mass`` (kg) and radii ``radius`` (m),
+    as rows [n, n + len(mass)) of ``buf`` (its capacity reserved by the caller): a fresh trail, unplaced (KEY
+    DIRTY), to be tested, fresh. Drop j is at point ``picks[j]`` of the columns ``s``, ``t`` (the arrivals'), or
+    with ``picks`` empty at point j. One pass instead of a gather and a strided write per column."""
+    for j in range(len(mass)):
+        q = picks[j] if len(picks) else j
         i = n + j
-        buf[i, S] = cols[0, q]
-        buf[i, T] = cols[1, q]
+        buf[i, S] = s[q]
+        buf[i, T] = t[q]
         buf[i, VS] = 0.0
         buf[i, VT] = 0.0
         buf[i, M] = mass[j]
