@@ -397,9 +397,14 @@ class WindshieldSim(FastArrivals, FastMotion, FastMerging, FastWiping, DropArray
         thick, m = self._beads(flat, thick, max(int(inputs.drop_budget) - self._n, 0))
         if len(thick) == 0:  # a full glass: every thick cell joined drops (no draws below: the same stream)
             return
-        iv, iu = np.divmod(thick, FILM_CELLS)
         k = len(thick)
         r = self.rng.random(2 * k)  # the reference's rng.random(k) for u, then for v
+        if jit.active():  # where in their cells, on the glass: one loop
+            st = np.empty((2, k))
+            kernels.bead_points(thick, r, self._w0, self._dw, self._height, st)
+            self._append_at_rest(st[0], st[1], m)
+            return
+        iv, iu = np.divmod(thick, FILM_CELLS)
         u = (iu + r[:k]) / FILM_CELLS
         v = (iv + r[k:]) / FILM_CELLS
         self._bead_drops(u, v, m)

@@ -232,3 +232,22 @@ def test_append_at_rest_is_the_twins():
     assert sim._dirty and sim.version > plain.version
     assert np.array_equal(plain._buf[: plain.count], twin._buf[: twin.count])
     assert np.array_equal(plain.fresh, twin.fresh)
+
+
+def test_bead_points_are_the_twins():
+    # Beads placed in their film cells (the kernel and its plain-Python version) against the twin's NumPy steps.
+    from rain_core.effects.windshield.constants import FILM_CELLS
+
+    sim = WindshieldSim(seed=8)
+    rng = np.random.default_rng(8)
+    cells = rng.choice(FILM_CELLS * FILM_CELLS, 500, replace=False)
+    r = rng.random(1000)
+    iv, iu = np.divmod(cells, FILM_CELLS)
+    u = (iu + r[:500]) / FILM_CELLS
+    v = (iv + r[500:]) / FILM_CELLS
+    t = v * sim._height
+    twin = np.stack([(u - 0.5) * (sim._w0 + sim._dw * t), t])
+    for kernel in (kernels.bead_points, kernels.bead_points.py_func):
+        st = np.empty((2, 500))
+        kernel(cells, r, sim._w0, sim._dw, sim._height, st)
+        assert np.array_equal(st, twin)

@@ -25,7 +25,12 @@ from rain_core.effects.windshield.kernels.arrivals import (  # noqa: F401
     sample_arrivals,
 )
 from rain_core.effects.windshield.kernels.common import NEAR_CELLS, film_cell, inside  # noqa: F401
-from rain_core.effects.windshield.kernels.film import evaporate_film, film_drying, sensor_masses  # noqa: F401
+from rain_core.effects.windshield.kernels.film import (  # noqa: F401
+    bead_points,
+    evaporate_film,
+    film_drying,
+    sensor_masses,
+)
 from rain_core.effects.windshield.kernels.merging import merge_drops  # noqa: F401
 from rain_core.effects.windshield.kernels.motion import move_drops, place_rows, run_drops  # noqa: F401
 from rain_core.effects.windshield.kernels.rows import append_at_rest, compact_rows, shed_rows, sort_rows  # noqa: F401

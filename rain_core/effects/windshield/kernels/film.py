@@ -1,5 +1,5 @@
-"""Kernels of the film: evaporation, the drying rate per cell and the rain sensor's masses (``sim``'s twins).
-Units: m, s, kg."""
+"""Kernels of the film: evaporation, where beads form, the drying rate per cell and the rain sensor's masses
+(``sim``'s twins). Units: m, s, kg."""
 
 from __future__ import annotations
 
@@ -9,11 +9,28 @@ from rain_core import jit
 from rain_core.effects.windshield.constants import (
     CROSSWIND_GAIN,
     EVAP_AIR_M_S,
+    FILM_CELLS,
     FILM_EVAP_KG_M2_S,
     FLOW_AT_BOTTOM,
     FLOW_SPREAD,
 )
 from rain_core.effects.windshield.drop_rows import M, S, T
+
+
+@jit.kernel
+def bead_points(cells, r, w0, dw, height, st):
+    """``WindshieldSim._film_step``'s beads placed: for the film ``cells`` (flat indices) and the uniform numbers
+    ``r`` (2k: across, then up the cell), the points (s, t) m on the glass into ``st`` (2, k) (the cell's UV
+    plus the draw, then ``DropArray._bead_drops``' GlassGeometry.from_uv; the same operations)."""
+    k = cells.shape[0]
+    for j in range(k):
+        iv = cells[j] // FILM_CELLS
+        iu = cells[j] - iv * FILM_CELLS
+        u = (iu + r[j]) / FILM_CELLS
+        v = (iv + r[k + j]) / FILM_CELLS
+        t = v * height
+        st[0, j] = (u - 0.5) * (w0 + dw * t)
+        st[1, j] = t
 
 
 @jit.kernel
