@@ -254,7 +254,8 @@ DRY_TEST_MAX_ROWS = 1e9
 # Queries smaller than this skip the dry-cell test (its dozen NumPy calls cost more than they save); the compiled
 # test (one loop) is worth it at any size, so with the kernels on every query takes it.
 DRY_TEST_MIN_POINTS = 512
-# Queries smaller than this compute the kerb streams everywhere rather than in their band alone.
+# Queries smaller than this compute the kerb streams everywhere rather than in their band alone (the NumPy path;
+# the compiled one always takes the band, which its loop finds).
 KERB_BAND_MIN_POINTS = 256
 
 
@@ -297,9 +298,11 @@ def _dry_floors(maps) -> np.ndarray | None:
     return np.stack([heightmap_floor(h), ground]).reshape(2, -1) - DRY_FLOOR_MARGIN
 
 
+@lru_cache(maxsize=16)
 def _kerb_band_start(gutter_k: float) -> float:
     """|x| (m) beyond which the kerb streams may hold water for spread coefficient gutter_k (> 0): the spread
-    k·L^(3/8) is largest at the full inlet spacing L = 50 m (with a margin for the rounding of the power)."""
+    k·L^(3/8) is largest at the full inlet spacing L = 50 m (with a margin for the rounding of the power). Cached:
+    every film query asks it, and gutter_k changes only with the weather."""
     from rain_core.gutter import INLET_SPACING_M
 
     widest = gutter_k * INLET_SPACING_M ** 0.375 * (1.0 + 1e-9) + 1e-12
@@ -360,19 +363,19 @@ def _depths(grids, x, z, crack_at: float, puddle_at: float, wet: float, gutter_k
 
 def _depths_compiled(grids, x, z, crack_at: float, puddle_at: float, wet: float, gutter_k: float):
     """``_depths`` with the kernels on: the on-road test, the samples, the film and the kerb band in one loop
-    (``film_points``); the kerb streams (a power law) stay NumPy's, at the points ``_road_depths`` gives them."""
+    (``film_points``); the kerb streams (a power law) stay NumPy's, in the kerb band alone (the loop gives its
+    points for free; short of it the stream is +0 and max(standing, +0) is standing, so a query of any size gives
+    ``_road_depths``' values, and one without a point in the band makes no NumPy call for them)."""
     flat_x, flat_z = np.ascontiguousarray(x).reshape(-1), np.ascontiguousarray(z).reshape(-1)
     standing, film = np.empty(x.shape), np.empty(x.shape)
     shelter, index = grids.kernel_scratch(flat_x.size)
     kerb = _kerb_band_start(gutter_k) if gutter_k > 0.0 else math.inf
     flat = standing.reshape(-1)
-    m, near = _kernels.film_points(grids.table, grids.kernel_constants, grids.kernel_ints, flat_x, flat_z, crack_at,
+    _, near = _kernels.film_points(grids.table, grids.kernel_constants, grids.kernel_ints, flat_x, flat_z, crack_at,
                                    puddle_at, wet, kerb, flat, film.reshape(-1), shelter, index)
-    if gutter_k > 0.0 and m:
-        # _road_depths' choice: every on-road point of a small query, the kerb band's alone of a larger one.
-        at = index[0, :m] if m < KERB_BAND_MIN_POINTS else index[1, :near]
-        if at.size:
-            flat[at] = np.maximum(flat.take(at), gutter_depth_mm(flat_x.take(at), flat_z.take(at), gutter_k))
+    if gutter_k > 0.0 and near:
+        at = index[1, :near]
+        flat[at] = np.maximum(flat.take(at), gutter_depth_mm(flat_x.take(at), flat_z.take(at), gutter_k))
     return standing, film
 
 
