@@ -124,6 +124,31 @@ class _GustSignal:
         return float(np.dot(self.amp, np.sin(self.omega * np.fmod(t, self.period) + self.phase)))
 
 
+class _GustPair:
+    """Two gust signals evaluated at one time in one pass: a single fmod, product, sum and sine over both signals'
+    sinusoids (each element sees the same operations as in the signal's own call, so the same bits), then each
+    signal's dot product. The wind asks both every frame, and each NumPy call costs far more than its arithmetic."""
+
+    def __init__(self, first: _GustSignal, second: _GustSignal):
+        self.period = np.concatenate([first.period, second.period])
+        self.omega = np.concatenate([first.omega, second.omega])
+        self.phase = np.concatenate([first.phase, second.phase])
+        self._amps = (first.amp, second.amp)
+        self._buf = np.empty(len(self.period))  # the sines, written in place (sliced per call: copies keep no views)
+        self._n = len(first.period)
+
+    def __call__(self, t: float) -> tuple[float, float]:
+        """(first, second) signal at time t (s, finite)."""
+        x = self._buf
+        np.fmod(t, self.period, out=x)
+        np.multiply(self.omega, x, out=x)
+        np.add(x, self.phase, out=x)
+        np.sin(x, out=x)
+        a0, a1 = self._amps
+        n = self._n
+        return float(np.dot(a0, x[:n])), float(np.dot(a1, x[n:]))
+
+
 class Weather:
     """Wetting, drying and wind over time. Starts dry at time 0; advance it with ``step(dt_s, rate_mm_h)``.
 
@@ -141,12 +166,15 @@ class Weather:
         rng = np.random.default_rng(self.seed)
         self._gust_speed = _GustSignal(rng)
         self._gust_direction = _GustSignal(rng)
+        self._gusts = _GustPair(self._gust_speed, self._gust_direction)
+        self._applied: tuple | None = None  # the settings' values apply_settings last set (None: changed since)
         self.time_scale = time_scale
         self.drying_delay_s = drying_delay_s
         self.drying_stage_gap_s = drying_stage_gap_s
         self.paused = False  # True: the levels hold still (settings' auto_weather off); wind keeps blowing
         self._levels = dict.fromkeys(LEVELS, 0.0)
         self._pinned: set[str] = set()
+        self._pinned_names: tuple[str, ...] = ()  # the pinned levels in LEVELS' order (what the state reports)
         self._time_s = 0.0
         self._rate = 0.0
         self._of_rate: tuple | None = None  # (rate, fill rates, category, extinction): they depend on it alone
@@ -163,6 +191,7 @@ class Weather:
     @time_scale.setter
     def time_scale(self, value: float) -> None:
         self._time_scale = _check_nonneg("time_scale", value, "×", 1e4)
+        self._applied = None
 
     @property
     def drying_delay_s(self) -> float:
@@ -172,6 +201,7 @@ class Weather:
     @drying_delay_s.setter
     def drying_delay_s(self, value: float) -> None:
         self._drying_delay_s = _check_nonneg("drying_delay_s", value, "s")
+        self._applied = None
 
     @property
     def drying_stage_gap_s(self) -> float:
@@ -181,6 +211,7 @@ class Weather:
     @drying_stage_gap_s.setter
     def drying_stage_gap_s(self, value: float) -> None:
         self._drying_stage_gap_s = _check_nonneg("drying_stage_gap_s", value, "s")
+        self._applied = None
 
     def drying_onsets_s(self) -> dict[str, float]:
         """Weather time since rain (s) at which each level starts drying."""
@@ -193,6 +224,7 @@ class Weather:
         direction = checks.number("wind_direction_rad", direction_rad, unit="rad")
         gust = _check_nonneg("gustiness", gustiness, "", 1.0)
         self._wind_speed, self._wind_direction, self._gustiness = speed, direction, gust
+        self._applied = None
 
     # --- pinning ---
 
@@ -206,11 +238,17 @@ class Weather:
         self._check_level(level)
         self._levels[level] = _check_nonneg(level, value, "", 1.0)
         self._pinned.add(level)
+        self._pinned_changed()
 
     def unpin(self, level: str) -> None:
         """Let ``level`` evolve again, starting from the value it was pinned at."""
         self._check_level(level)
         self._pinned.discard(level)
+        self._pinned_changed()
+
+    def _pinned_changed(self) -> None:
+        self._pinned_names = tuple(name for name in LEVELS if name in self._pinned)
+        self._applied = None
 
     @property
     def pinned(self) -> dict[str, float]:
@@ -240,18 +278,18 @@ class Weather:
         if self.paused:
             return self.state
         dw = dt * self._time_scale  # weather time
-        free = [name for name in LEVELS if name not in self._pinned]
+        pinned = self._pinned
         if rate >= R_WET_MIN_MM_H:
             fill = self._rate_terms(rate)[1]
             for i, name in enumerate(LEVELS):
-                if name in free:
+                if name not in pinned:
                     self._levels[name] = min(1.0, self._levels[name] + float(fill[i]) * dw)
             self._since_rain = 0.0
         else:
             t0 = self._since_rain
             t1 = t0 + dw
             for name, onset in self.drying_onsets_s().items():
-                if name not in free:
+                if name in pinned:
                     continue
                 # The part of [t0, t1] after this level's onset (all of dw when the clock is already at inf).
                 drying = dw if t0 >= onset else max(0.0, t1 - onset)
@@ -275,8 +313,9 @@ class Weather:
         elif not math.isfinite(time_s):
             raise ValueError(f"time_s must be a finite time in s, got {time_s!r}")
         g = self._gustiness
-        speed = self._wind_speed * (1.0 + g * self._gust_speed(time_s))
-        heading = self._wind_direction + g * GUST_DIRECTION_SWING_RAD * self._gust_direction(time_s)
+        gust_speed, gust_direction = self._gusts(time_s)
+        speed = self._wind_speed * (1.0 + g * gust_speed)
+        heading = self._wind_direction + g * GUST_DIRECTION_SWING_RAD * gust_direction
         velocity = (speed * math.sin(heading), 0.0, -speed * math.cos(heading))
         return WindState(self._wind_speed, self._wind_direction, g, velocity, speed)
 
@@ -288,17 +327,18 @@ class Weather:
     @property
     def state(self) -> WeatherState:
         """The current WeatherState."""
+        _, _, category, extinction = self._rate_terms(self._rate)
         return WeatherState(
             time_s=self._time_s,
             rate_mm_h=self._rate,
-            category=self._rate_terms(self._rate)[2],
+            category=category,
             wetness=self._levels["wetness"],
             cracks=self._levels["cracks"],
             puddles=self._levels["puddles"],
             time_since_rain_s=self._since_rain,
-            extinction_per_km=self._rate_terms(self._rate)[3],
+            extinction_per_km=extinction,
             wind=self.wind_at(self._time_s),
-            pinned=tuple(name for name in LEVELS if name in self._pinned),
+            pinned=self._pinned_names,
         )
 
     # --- settings ---
@@ -316,6 +356,13 @@ class Weather:
         The rain rate itself is passed to ``step`` each frame (settings.rain.rate_mm_h).
         """
         rain, wind = settings.rain, settings.wind
+        # Asked every frame, and the settings rarely change: nothing to set while they hold what was last applied
+        # and nothing else has changed these parameters since (every setter, pin and unpin clears _applied).
+        applied = (rain.time_scale, rain.drying_delay_s, rain.drying_stage_gap_s, rain.wetness, rain.cracks,
+                   rain.puddles, wind.speed_m_s, wind.direction_deg, wind.gustiness)
+        if applied == self._applied:
+            self.paused = not rain.auto_weather
+            return
         self.time_scale = rain.time_scale
         self.drying_delay_s = rain.drying_delay_s
         self.drying_stage_gap_s = rain.drying_stage_gap_s
@@ -327,3 +374,4 @@ class Weather:
             else:
                 self.pin(name, value)
         self.set_wind(wind.speed_m_s, math.radians(wind.direction_deg), wind.gustiness)
+        self._applied = applied

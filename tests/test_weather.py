@@ -219,3 +219,30 @@ def test_configured_from_settings():
     set_value(s, "rain.auto_weather", False)
     w.apply_settings(s)
     assert w.pinned == {} and w.paused
+
+
+def test_settings_applied_again_after_a_direct_change():
+    """apply_settings skips unchanged settings, but not what a direct call changed since (pins, wind, delays)."""
+    s = Settings()
+    set_value(s, "rain.cracks", 0.25)
+    w = Weather.from_settings(s)
+    w.pin("cracks", 0.75)
+    w.unpin("puddles")
+    w.pin("puddles", 0.5)
+    w.set_wind(9.0, 1.0, 1.0)
+    w.time_scale = 3.0
+    w.apply_settings(s)
+    assert w.pinned == {"cracks": 0.25} and w.time_scale == s.rain.time_scale
+    assert w.state.wind.speed_m_s == s.wind.speed_m_s
+    w.paused = True
+    w.apply_settings(s)  # nothing changed: the pause still follows rain.auto_weather
+    assert not w.paused
+
+
+@pytest.mark.parametrize("seed", [0, 1, 7, 123])
+def test_gust_pair_is_each_signals_own_value(seed):
+    """Both gusts in one pass give each signal's own bits (the wind evaluates them together)."""
+    w = Weather(seed=seed)
+    times = np.concatenate([np.linspace(0.0, 600.0, 701), [-3.5, 1e9 + 0.25, 1e300]])
+    for t in times.tolist():
+        assert w._gusts(t) == (w._gust_speed(t), w._gust_direction(t))
