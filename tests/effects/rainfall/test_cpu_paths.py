@@ -313,6 +313,21 @@ def test_programs_hold_this_frames_uniforms_through_live_changes(gl_ctx, shaders
         scene.release()
 
 
+def test_a_frame_uniform_changing_alone_reaches_the_programs(gl_ctx, shaders, rain):
+    """The constants and the frame's plain uniforms are skipped as one tuple while both stay (_plain_pairs): a
+    narrower lens alone (u_focal_px) still reaches both programs."""
+    s = rain.settings(rate=12.0, mode="chase", budget=3000, container_m=20.0)
+    scene, effect = rain.scene(gl_ctx, shaders, s, seed=4)
+    try:
+        for fov in (60.0, 60.0, 40.0, 40.0):
+            s.camera.fov_deg = fov
+            scene.step(1.0 / 30.0)
+            frame = scene.render()
+            _check_programs(effect, scene.renderer.render_context(frame))
+    finally:
+        scene.release()
+
+
 def test_environment_map_is_redrawn_when_the_lighting_or_the_medium_changes(gl_ctx, shaders, rain):
     """The drop's environment map is drawn only when what it reads changed; after an hour change (a new
     lighting) and a rain rate change (another medium) it equals a map drawn afresh."""
