@@ -71,6 +71,7 @@ class DripsEffect(Effect):
         self._world = None
         self._diam: np.ndarray | None = None
         self._drop_m3 = self._t_fall = self._momentum = self._ground = None  # per site, made with the sites
+        self._flux_key: tuple | None = None  # (storage, drain, kernel args, texture) the flux was made for
         self._kernel_args = None  # the kernels' contiguous per-site and per-roof arrays and outputs, made with them
         self._tex: dict[str, moderngl.Texture] = {}
         self._prog: moderngl.Program | None = None
@@ -109,7 +110,7 @@ class DripsEffect(Effect):
 
     def active(self, frame) -> bool:
         return (self._section(frame).enabled and self.roofs is not None and len(self.sites) > 0
-                and float(self.roofs.outflow_m3_s.sum()) > MIN_OUTFLOW_M3_S)
+                and self.roofs.total_outflow_m3_s() > MIN_OUTFLOW_M3_S)
 
     def describe(self) -> str:
         if self.roofs is None:
@@ -178,8 +179,13 @@ class DripsEffect(Effect):
                 np.empty((3 * len(s), 3)))  # the landings: each site at most once a tile, three tiles
         ground, roof, (drop_m3, phase, t_fall, x, z, momentum), edges, flux, flux32, out = args
         roofs = self.roofs
-        kernels.roof_flux(roofs.storage_m3, roofs.drain_s, edges, flux, flux32)
-        self._upload(flux32)
+        # The flux (and its texture) change only with the roofs' storage: the same arrays, the same flux.
+        key = self._flux_key
+        if (key is None or key[0] is not roofs.storage_m3 or key[1] is not roofs.drain_s or key[2] is not args
+                or key[3] is not self._tex.get("flux")):
+            kernels.roof_flux(roofs.storage_m3, roofs.drain_s, edges, flux, flux32)
+            self._upload(flux32)
+            self._flux_key = (roofs.storage_m3, roofs.drain_s, args, self._tex.get("flux"))
         ranges = np.array(self._ranges, np.float64).reshape(-1, 3)
         t0, t1 = float(frame.time_s - frame.dt_s), float(frame.time_s)  # (as Python floats: one signature)
         k = kernels.landing_impacts(ranges, t0, t1, float(MAX_PERIOD_S), ground, drop_m3, flux, roof, phase, t_fall, x,

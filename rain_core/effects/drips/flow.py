@@ -35,6 +35,11 @@ def drop_diameters_mm(phase: np.ndarray) -> np.ndarray:
 class RoofReservoirs:
     """Water held on each roof (m³); ``step(dt, rate)`` integrates exactly; ``outflow_m3_s`` what leaves."""
 
+    # Asked every frame and mostly unchanged between frames (steady rain): kept while the arrays they are made of
+    # stay the same objects (step and settle replace storage_m3, never write into it).
+    _settled: tuple | None = None  # (rate, storage, area, drain) where storage is settle's S∞ at that rate
+    _outflow: tuple | None = None  # (storage, drain, outflow m³/s read-only, its sum)
+
     def __init__(self, area_m2, drain_s):
         self.area_m2 = np.asarray(area_m2, dtype=np.float64)
         self.drain_s = np.maximum(np.asarray(drain_s, dtype=np.float64), 1e-3)
@@ -43,15 +48,38 @@ class RoofReservoirs:
     def settle(self, rate_mm_h: float) -> None:
         """Jump to the steady state at rate_mm_h (mm/h): a scene that starts in rain starts dripping."""
         self.storage_m3 = rate_mm_h / 3.6e6 * self.area_m2 * self.drain_s
+        self._settled = (rate_mm_h, self.storage_m3, self.area_m2, self.drain_s)
+
+    def _is_settled_at(self, rate_mm_h: float) -> bool:
+        """Whether storage_m3 is still settle's S∞ for this very rate (its sign of zero included)."""
+        settled = self._settled
+        return (settled is not None and settled[1] is self.storage_m3 and settled[2] is self.area_m2
+                and settled[3] is self.drain_s and settled[0] == rate_mm_h
+                and math.copysign(1.0, settled[0]) == math.copysign(1.0, rate_mm_h))
 
     def step(self, dt_s: float, rate_mm_h: float) -> None:
         """Advance dt_s (s, ≥ 0) at a constant rain rate (mm/h): S ← S∞ + (S − S∞)·e^(−dt/τ), S∞ = R·A·τ."""
+        if not math.isnan(dt_s) and self._is_settled_at(rate_mm_h):
+            return  # S = S∞ already: S∞ + 0·e^(−dt/τ) is S∞ to the bit
         steady = rate_mm_h / 3.6e6 * self.area_m2 * self.drain_s
         self.storage_m3 = steady + (self.storage_m3 - steady) * np.exp(-max(dt_s, 0.0) / self.drain_s)
 
     @property
     def outflow_m3_s(self) -> np.ndarray:
-        return self.storage_m3 / self.drain_s
+        """Outflow of each roof (m³/s), S/τ; read-only (kept while the storage stays)."""
+        return self._outflow_terms()[2]
+
+    def total_outflow_m3_s(self) -> float:
+        """The roofs' outflows summed (m³/s)."""
+        return self._outflow_terms()[3]
+
+    def _outflow_terms(self) -> tuple:
+        cached = self._outflow
+        if cached is None or cached[0] is not self.storage_m3 or cached[1] is not self.drain_s:
+            outflow = self.storage_m3 / self.drain_s
+            outflow.flags.writeable = False
+            cached = self._outflow = (self.storage_m3, self.drain_s, outflow, float(outflow.sum()))
+        return cached
 
 
 def site_periods_s(outflow_m3_s: np.ndarray, edges: np.ndarray, roof: np.ndarray, diam_mm: np.ndarray) -> np.ndarray:

@@ -93,3 +93,20 @@ def test_periods_and_landings_follow_the_outflow():
     assert abs(n[0] - 200) <= 1 and momentum[0] > 0.0
     dry = flow.site_periods_s(np.array([0.0]), np.array([4]), np.array([0]), diam)
     assert dry[0] == flow.MAX_PERIOD_S
+
+
+def test_settled_roofs_keep_their_bits_and_the_outflow_follows_the_storage():
+    """A step at the settled rate is skipped (S∞ + 0·e^(−dt/τ) is S∞): the same bits as the formula; another rate
+    steps, and the kept outflow follows the new storage."""
+    roofs = flow.RoofReservoirs([100.0, 30.0], [60.0, 10.0])
+    roofs.settle(8.0)
+    steady = 8.0 / 3.6e6 * roofs.area_m2 * roofs.drain_s
+    want = steady + (roofs.storage_m3 - steady) * np.exp(-max(0.5, 0.0) / roofs.drain_s)
+    roofs.step(0.5, 8.0)
+    assert roofs.storage_m3.tobytes() == want.tobytes()
+    assert roofs.total_outflow_m3_s() == float((roofs.storage_m3 / roofs.drain_s).sum())
+    before = roofs.outflow_m3_s.copy()
+    roofs.step(0.5, 2.0)
+    assert not roofs._is_settled_at(2.0) and (roofs.storage_m3 < want).all()
+    assert roofs.outflow_m3_s.tobytes() == (roofs.storage_m3 / roofs.drain_s).tobytes()
+    assert (roofs.outflow_m3_s < before).all() and not roofs.outflow_m3_s.flags.writeable
