@@ -64,7 +64,7 @@ def _lane_direction(lane_index: int) -> np.ndarray:
 
 def _in_lane(vehicle: Vehicle, lane_index: int) -> bool:
     """Whether a vehicle overlaps the lane by more than 0.3 m sideways."""
-    dx = abs(float(vehicle.position[0]) - layout.LANE_CENTRES_X[lane_index])
+    dx = abs(vehicle.position.item(0) - layout.LANE_CENTRES_X[lane_index])
     return dx < 0.5 * (layout.LANE_WIDTH_M + vehicle.spec.width_m) - 0.3
 
 
@@ -263,9 +263,9 @@ class Traffic:
         return float(wrap_z(zs[k] + gaps[k] / 2.0, centre_z))
 
     def _wrap(self) -> None:
-        around = float(self.ego.position[2]) if self.ego is not None else 0.0
+        around = self.ego.position.item(2) if self.ego is not None else 0.0
         for v in self.vehicles:
-            z = float(v.position[2])
+            z = v.position.item(2)
             # wrap_z for one float: Python's round, like np.round, rounds halves to even.
             dz = (z - PERIOD_M * round((z - around) / PERIOD_M)) - z
             if dz != 0.0:

@@ -222,7 +222,7 @@ class Vehicle:
         if cached is not None and cached[0] == key:
             return cached[1]
         c, s = math.cos(self.yaw), math.sin(self.yaw)
-        x, y, z = (float(v) for v in self.position)
+        x, y, z = self.position.tolist()  # Python floats, as float() of each
         model = np.array([[c, 0.0, s, x], [0.0, 1.0, 0.0, y], [-s, 0.0, c, z], [0.0, 0.0, 0.0, 1.0]])
         model.flags.writeable = False
         self._model_cache = (key, model)
@@ -262,7 +262,7 @@ class Vehicle:
         # same bits, without the (1, 3) temporaries.
         fx, fz = -math.sin(self.yaw), -math.cos(self.yaw)
         half = self.spec.wheelbase_m / 2.0
-        px, pz = float(self.position[0]), float(self.position[2])
+        px, _, pz = self.position.tolist()
         rel_x, rel_z = px - (px - fx * half), pz - (pz - fz * half)
         w = self.yaw_rate_rad_s
         return np.array([fx * self.speed_m_s + w * rel_z, 0.0 * self.speed_m_s, fz * self.speed_m_s - w * rel_x])
@@ -380,7 +380,7 @@ class EgoCar(Vehicle):
     def _contacts_near_kerb(self, reach: float) -> np.ndarray:
         """wheel_contacts(), or _INSIDE (every wheel is inside the kerb lines, as they are) when the centre is
         further than ``reach`` inside them."""
-        if abs(float(self.position[0])) + reach < layout.ROAD_HALF_WIDTH_M:
+        if abs(self.position.item(0)) + reach < layout.ROAD_HALF_WIDTH_M:
             return _INSIDE
         return self.wheel_contacts()
 
@@ -412,7 +412,7 @@ class EgoCar(Vehicle):
         # operations on x and z in scalars (the same bits), without five 3-vectors per sub-step (y is 0).
         half = spec.wheelbase_m / 2.0
         yaw = self.yaw
-        px, pz = float(self.position[0]), float(self.position[2])
+        px, _, pz = self.position.tolist()
         rx = px - -math.sin(yaw) * half + -math.sin(yaw + dpsi / 2.0) * chord
         rz = pz - -math.cos(yaw) * half + -math.cos(yaw + dpsi / 2.0) * chord
         self.yaw = yaw = math.remainder(yaw + dpsi, math.tau)

@@ -69,8 +69,8 @@ def layer_boxes(camera_position, camera_forward, container_m: float) -> Boxes:
     # Every frame, four layers: in Python floats, the same float64 operations in the same order as the array
     # form (tests/effects/rainfall/test_cpu_paths.py keeps that form as the oracle); fade and ν depend on
     # container_m alone and are shared, read-only, between frames.
-    cx, cy, cz = (float(v) for v in camera_position)
-    f0, _, f2 = (float(v) for v in camera_forward)
+    cx, cy, cz = np.asarray(camera_position, dtype=np.float64).tolist()  # float() of each, in one call
+    f0, _, f2 = np.asarray(camera_forward, dtype=np.float64).tolist()
     n = _horizontal_length(f0, f2)
     fx, fz = (f0 / n, f2 / n) if n > 1e-9 else (0.0, 0.0)
     reach = min(n, 1.0)
