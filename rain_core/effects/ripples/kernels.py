@@ -363,3 +363,46 @@ def shift_rows(a, dz):
             dst = a[i]
             for j in range(n_x):
                 dst[j] = src[j]
+
+
+@jit.kernel
+def gpu_bump_rows(xs, zs, radii, amounts, min_radius_m, length_m, inv_h, out):
+    """Twin: ``WaveSolver._bumps`` and ``WaveSolverGPU``'s instance rows. K bumps (x, z m, radius m, peak m):
+    those that touch the grid, widened to ``min_radius_m`` with their volume kept, written in order into ``out``
+    ((≥ K, 4) float32: x, z, radius in cells (× ``inv_h``), peak m, each rounded from float64 as NumPy casts).
+    Returns the rows written."""
+    k = 0
+    for i in range(xs.shape[0]):
+        r = radii[i]
+        r_eff = max(r, min_radius_m)
+        q = r / r_eff
+        a = amounts[i] * (q * q)  # the twin's (radii / r_eff) ** 2: NumPy squares by one multiplication
+        x = xs[i]
+        z = zs[i]
+        if x > -r_eff and x < length_m + r_eff and z > -r_eff and z < length_m + r_eff and a != 0.0:
+            out[k, 0] = np.float32(x * inv_h)
+            out[k, 1] = np.float32(z * inv_h)
+            out[k, 2] = np.float32(r_eff * inv_h)
+            out[k, 3] = np.float32(a)
+            k += 1
+    return k
+
+
+@jit.kernel
+def droplet_dents(impacts, ox, oz, dent_per_momentum, max_dent_m, radius_m, out):
+    """Twin: ``RippleField.add_droplet_impacts``'s arithmetic. N droplets (x m, z m world, momentum kg·m/s):
+    the rows without NaN or inf, in order, written into ``out`` ((4, ≥ N): x, z m from cell (0, 0) at world
+    (ox, oz), ``radius_m``, dent = clamp(dent_per_momentum × |momentum|, ±max_dent_m) m). Returns the rows."""
+    k = 0
+    for i in range(impacts.shape[0]):
+        x = impacts[i, 0]
+        z = impacts[i, 1]
+        p = impacts[i, 2]
+        if not (math.isfinite(x) and math.isfinite(z) and math.isfinite(p)):
+            continue
+        out[0, k] = x - ox
+        out[1, k] = z - oz
+        out[2, k] = radius_m
+        out[3, k] = min(max(dent_per_momentum * abs(p), -max_dent_m), max_dent_m)
+        k += 1
+    return k
