@@ -51,13 +51,25 @@ RAIN_FRACTION_STRIDE = 4
 
 
 def _runs(index: np.ndarray):
-    """(start, stop) of each run of consecutive values in a sorted index array."""
+    """(start, stop) of each run of consecutive values in a sorted index array without repeats."""
     if index.size == 0:
         return []
+    first, last = int(index[0]), int(index[-1])
+    if last - first + 1 == index.size:  # one run (the strip that scrolled in, every column): no scan
+        return [(first, last + 1)]
     breaks = (index[1:] - index[:-1] != 1).nonzero()[0] + 1  # array methods: NumPy's wrappers cost more here
     starts = np.concatenate([[0], breaks])
     stops = np.concatenate([breaks, [index.size]])
     return [(int(index[a]), int(index[b - 1]) + 1) for a, b in zip(starts, stops, strict=True)]
+
+
+def _grid_view(line: np.ndarray, shape: tuple[int, int], axis: int) -> np.ndarray:
+    """A read-only (rows, cols) view of ``line`` (fresh, contiguous float64) repeated along the other axis:
+    ``np.broadcast_to``'s array (stride 0 across the repeats) without its Python-level checks."""
+    strides = (0, line.itemsize) if axis == 1 else (line.itemsize, 0)
+    view = np.ndarray(shape, np.float64, line, 0, strides)
+    view.flags.writeable = False
+    return view
 
 
 class RippleField:
@@ -121,6 +133,7 @@ class RippleField:
         self._unknown_rows = np.zeros(self.n, bool)
         self._unknown_cols = np.zeros(self.n, bool)
         self._all_cols = np.arange(self.n)
+        self._all_cols_x: tuple[int | None, np.ndarray | None] = (None, None)  # (anchor x, their world x in m)
         self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
         self._batch: list | None = None  # the frame's bumps while ``update`` gathers them
         self._law: DropLaw | None = None  # the arriving drops' law at the last rain rate (see _drop_law)
@@ -167,8 +180,10 @@ class RippleField:
             if self._row_water is not None:
                 self._scroll_row_water(dx, dz)
             if self._following:  # the mask scrolled with the solver: ask only about the cells that entered
-                shift_in_place(self._unknown_rows[:, None], 0, dz, True)
-                shift_in_place(self._unknown_cols[None, :], dx, 0, True)
+                if dz:
+                    shift_in_place(self._unknown_rows[:, None], 0, dz, True)
+                if dx:
+                    shift_in_place(self._unknown_cols[None, :], dx, 0, True)
                 if fill:
                     self._fill_unknown_depths()
             self._water_fraction_stale = True
@@ -220,8 +235,14 @@ class RippleField:
         # meshgrid's values as read-only views of one row of x and one column of z: a film-depth function sees
         # (rows, cols) arrays as before, and the road's sampler spots the grid and samples each row's and each
         # column's part once (water_film._standing_on_grid: the same depths, a third of the cost).
-        xs = np.broadcast_to((ax + np.asarray(cols)) * self.cell_m, shape)
-        zs = np.broadcast_to(((az + np.asarray(rows)) * self.cell_m)[:, None], shape)
+        if cols is self._all_cols:  # the strips along z: every column, whose x changes only with the anchor's
+            if self._all_cols_x[0] != ax:
+                self._all_cols_x = (ax, (ax + self._all_cols) * self.cell_m)
+            x_line = self._all_cols_x[1]
+        else:
+            x_line = (ax + np.asarray(cols)) * self.cell_m
+        xs = _grid_view(x_line, shape, 1)
+        zs = _grid_view((az + np.asarray(rows)) * self.cell_m, shape, 0)
         depth = np.asarray(self._film_fn(xs, zs), dtype=np.float64)
         if depth.shape != shape:  # e.g. a constant depth
             depth = np.broadcast_to(depth, shape)
