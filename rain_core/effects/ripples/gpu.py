@@ -321,7 +321,7 @@ class WaveSolverGPU(WaveSolver):
         if self._queued or self._rain:  # laid under the old mask (a cell turning wet must not get them)
             self._flush()
         for rows, cols in regions:  # only the blocks travel; one pass then holds their dry cells
-            data = self._mask[rows, cols].astype(np.uint8) * np.uint8(255)
+            data = np.multiply(self._mask[rows, cols], np.uint8(255), dtype=np.uint8)  # 0 / 255, one pass
             self.mask_texture.write(data, viewport=(cols.start, rows.start, data.shape[1], data.shape[0]),
                                     alignment=1)
         self._hold_under_mask()

@@ -50,6 +50,7 @@ class RainRippleTexture:
         # may be shared with another tile): a value equal to the last one written there is skipped.
         self._constants = {"u_size": (float(self.size), float(self.size)), "u_cycle_s": RAIN_TILE_CYCLE_S,
                            "u_layers": self.layers, "u_seed": self.seed}
+        self._constant_pairs = tuple(self._constants.items())
         self._uniforms_for: tuple[float, dict] | None = None  # (rate, its uniforms): the rate rarely changes
         self._drawn = (0.0, 0.0, ())  # what the map holds now (time, strength, densities): flat after the clear
 
@@ -102,7 +103,7 @@ class RainRippleTexture:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
         else:
             owned = owned_uniforms(self._prog)
-            owned.update(self._constants)
+            owned.update_once(self._constant_pairs)  # one identity test while no other tile wrote its own
             owned.update(uniforms)
             owned.set("u_time", t)
             fbo.use()

@@ -342,7 +342,8 @@ class WaveSolver:
         if want <= 0.0:  # the last call ran ahead by more than this frame
             self._debt = want
             return 0, 0.0
-        for keep, sub in ((True, self._dt), (False, self.plan(self._dt_avg)[1])):
+        for keep in (True, False):
+            sub = self._dt if keep else self.plan(self._dt_avg)[1]  # the plan only when the sub-step misses
             if sub is None:
                 continue
             k = max(1, round(want / sub))

@@ -38,6 +38,7 @@ class RippleTextures:
             self._height_tex.repeat_x = self._height_tex.repeat_y = False
         self._version: int | None = None  # field.version the textures show (None: not drawn yet)
         self._uniforms = {"u_height": units.SCRATCH[0], "u_inv_2h": 0.5 / field.cell_m}
+        self._uniform_pairs = tuple(self._uniforms.items())  # update_once: one identity test a frame
 
     def refresh(self):
         """Bring height_texture and normal_texture up to date (done on access)."""
@@ -53,7 +54,7 @@ class RippleTextures:
         height.use(self._uniforms["u_height"])
         # Through the program's one owned-uniforms cache: the library's cached program may be shared with another
         # field's textures, and what this one wrote last is skipped (it never changes for one field).
-        owned_uniforms(self._prog).update(self._uniforms)
+        owned_uniforms(self._prog).update_once(self._uniform_pairs)
         self._normals.fbo.use()
         self._vao.render(vertices=3)
         self._version = field.version
