@@ -1,9 +1,12 @@
 """Compiled kernels of the ripples' CPU work (rain_core.jit): each replaces a chain of NumPy calls of the float32
-solver (``solver_f32.WaveSolverF32``) or the raindrop twin (``raindrops.raindrops``) with one loop.
+solver (``solver_f32.WaveSolverF32``), the raindrop twin (``raindrops.raindrops``) or the frame's sources with one
+loop.
 
 Their NumPy twins stay the fallback and the oracle: ``WaveSolverF32._advance`` (:func:`leapfrog`),
-``WaveSolver._bumps`` + ``_footprint`` + ``_deposit`` of the float32 solver (:func:`deposit_bumps`) and
-``raindrops.raindrops`` (:func:`raindrop_bumps`). The same operations in the same order: the stencil and the
+``WaveSolver._bumps`` + ``_footprint`` + ``_deposit`` of the float32 solver (:func:`deposit_bumps`),
+``raindrops.raindrops`` (:func:`raindrop_bumps`), ``wakes.wake_bumps`` (:func:`wake_bumps`), ``_bumps`` + the GPU
+solver's float32 instance rows (:func:`gpu_bump_rows`) and the spray droplets' dents of
+``RippleField.add_droplet_impacts`` (:func:`droplet_dents`). The same operations in the same order: the stencil and the
 raindrops are exact (integer hashes, + − × ÷ and float32 rounding as NumPy's); the footprints use libm's cos,
 which may differ from NumPy's by an ulp (tests/effects/ripples/test_kernels.py states the tolerances).
 Units: m, cells (ints), m for heights; grids are (n, n) [iz, ix], C-contiguous.
