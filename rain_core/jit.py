@@ -28,6 +28,7 @@ except ImportError:  # the fast extra is optional: every kernel has a NumPy twin
     numba = None
 
 F = TypeVar("F", bound=Callable)
+T = TypeVar("T")
 
 ENV_VAR = "RAINROAD_JIT"
 AVAILABLE: bool = numba is not None
@@ -68,6 +69,15 @@ def forced(on: bool) -> Iterator[None]:
         yield
     finally:
         set_active(before)
+
+
+def twin_and_kernel(run: Callable[[], T]) -> tuple[T, T]:
+    """(``run()`` with the NumPy twins, ``run()`` with the kernels): what a twin test compares."""
+    with forced(False):
+        twin = run()
+    with forced(True):
+        kernel = run()
+    return twin, kernel
 
 
 def kernel(fn: F) -> F:

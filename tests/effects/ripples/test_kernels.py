@@ -25,15 +25,6 @@ needs_numba = pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed 
 REPLAY_RTOL = 1e-5
 
 
-def _both(run):
-    """``run()`` with the NumPy twins and with the kernels."""
-    with jit.forced(False):
-        twin = run()
-    with jit.forced(True):
-        kernel = run()
-    return twin, kernel
-
-
 @needs_numba
 @pytest.mark.parametrize("masked", [False, True])
 def test_leapfrog_kernel_gives_the_twins_levels_exactly(masked):
@@ -62,7 +53,7 @@ def test_leapfrog_kernel_gives_the_twins_levels_exactly(masked):
             levels.append((solver._z.copy(), solver._zp.copy()))
         return levels
 
-    twin, kernel = _both(run)
+    twin, kernel = jit.twin_and_kernel(run)
     for (z0, p0), (z1, p1) in zip(twin, kernel, strict=True):
         np.testing.assert_array_equal(z1, z0)
         np.testing.assert_array_equal(p1, p0)
@@ -95,7 +86,7 @@ def test_deposit_kernel_equals_the_twins_footprints(masked):
         solver.add_impulses(xs, zs, radii, amounts)
         return solver._z.copy(), solver._zp.copy(), solver.asleep, solver._sourced
 
-    twin, kernel = _both(run)
+    twin, kernel = jit.twin_and_kernel(run)
     scale = np.abs(twin[0]).max()
     assert scale > 0.0
     np.testing.assert_allclose(kernel[0], twin[0], rtol=0.0, atol=REPLAY_RTOL * scale)
@@ -117,7 +108,7 @@ def test_deposit_kernel_clips_a_bump_wider_than_a_batch():
                             [1e-3, 1e-3, -2e-3])
         return solver._z.copy()
 
-    twin, kernel = _both(run)
+    twin, kernel = jit.twin_and_kernel(run)
     assert np.count_nonzero(twin) > 200_000
     np.testing.assert_allclose(kernel, twin, rtol=0.0, atol=REPLAY_RTOL * np.abs(twin).max())
 
@@ -206,7 +197,7 @@ def test_field_replay_kernels_against_the_twin():
     """70 frames of the float32 field with every CPU kernel on against the NumPy twins: the same drops, bumps and
     sub-steps each frame, heights within REPLAY_RTOL of the largest (exactly equal where libm's cos agrees
     with NumPy's, as it does on most machines)."""
-    (h0, r0), (h1, r1) = _both(lambda: _replay(70))
+    (h0, r0), (h1, r1) = jit.twin_and_kernel(lambda: _replay(70))
     assert r0 == r1
     scale = max(np.abs(h).max() for h in h0)
     assert scale > 0.0 and sum(r["drops"] for r in r0) > 1000
@@ -226,7 +217,7 @@ def test_bumps_wider_than_the_span_take_the_twin():
                                       np.array([1e-3, -1e-3]))
         return solver._z.copy()
 
-    twin, kernel = _both(run)
+    twin, kernel = jit.twin_and_kernel(run)
     assert twin.any()
     np.testing.assert_array_equal(kernel, twin)
 
@@ -254,7 +245,7 @@ def test_wake_kernel_gives_the_twins_bumps():
         counts = field._wakes(wheels)
         return counts, [np.concatenate(parts) for parts in zip(*field._batch, strict=True)]
 
-    (c0, b0), (c1, b1) = _both(run)
+    (c0, b0), (c1, b1) = jit.twin_and_kernel(run)
     np.testing.assert_array_equal(c1, c0)
     assert (c0 == 0).any() and (c0 == 1).any() and ((c0 > 0) & (c0 % 3 == 0)).sum() > 10  # a real test
     for g, want in zip(b1, b0, strict=True):

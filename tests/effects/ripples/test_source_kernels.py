@@ -15,15 +15,6 @@ from rain_core.effects.ripples.solver import WaveSolver
 needs_numba = pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed (pip install 'rainroad[fast]')")
 
 
-def _both(run):
-    """``run()`` with the NumPy twins and with the kernels."""
-    with jit.forced(False):
-        twin = run()
-    with jit.forced(True):
-        kernel = run()
-    return twin, kernel
-
-
 class _Grid:
     """What ``WaveSolverGPU._bump_rows`` reads of its solver (no GL context)."""
 
@@ -45,7 +36,7 @@ def test_gpu_bump_rows_kernel_gives_the_twins_rows():
     amounts = rng.uniform(-1e-3, 1e-3, k)
     amounts[::11] = 0.0  # dropped
     grid = _Grid()
-    twin, kernel = _both(lambda: grid._bump_rows(xs, zs, radii, amounts))
+    twin, kernel = jit.twin_and_kernel(lambda: grid._bump_rows(xs, zs, radii, amounts))
     assert kernel.dtype == np.float32 and 0 < len(twin) < k  # some kept, some dropped: a real test
     np.testing.assert_array_equal(kernel, twin)
 
@@ -68,7 +59,7 @@ def test_droplet_dents_kernel_gives_the_twins_dents():
         laid = field.add_droplet_impacts(impacts, radius_m=0.03)
         return laid, [np.concatenate(parts) for parts in zip(*field._batch, strict=True)]
 
-    (n0, b0), (n1, b1) = _both(run)
+    (n0, b0), (n1, b1) = jit.twin_and_kernel(run)
     assert n1 == n0 == len(b0[0]) and 0 < n0 < len(impacts)
     for got, want in zip(b1, b0, strict=True):
         np.testing.assert_array_equal(got, want)
