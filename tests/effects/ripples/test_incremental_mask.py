@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rain_core.effects.ripples.field import RAIN_FRACTION_STRIDE, RippleField, _runs
+from rain_core.effects.ripples.field import RAIN_FRACTION_STRIDE, RippleField
+from rain_core.effects.ripples.water_mask import _runs
 
 N = 48
 EXTENT = 4.7  # m: cells of 0.1 m
