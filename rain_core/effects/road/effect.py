@@ -197,7 +197,7 @@ class RoadEffect(Effect):
         standing.cache_key = key
         rc.shared.film_depth_fn = standing
         self._reflection_valid = False
-        if rc is not None and self.needs_reflection(frame):
+        if self.needs_reflection(frame):
             # The reflection's camera and context planned now, before the frame's draws (see mirror_context)
             target, camera = self._reflection_view(rc)
             rc.renderer.mirror_context(rc, target, camera, MIRROR_Y)
