@@ -6,7 +6,10 @@
 3. For active effects: ``frame_uniforms(frame)`` (uniforms every program of the frame receives, e.g. the rain
    medium; a function of the frame alone) and ``frame_lights(frame)`` (lights it adds, e.g. a flash), then in
    order ``update(frame, rc)`` (simulation, reading and writing ``rc.shared``), then ``render(stage, rc)`` for
-   each stage in ``stages``; ``bind_scene`` before the scene pass draws.
+   each stage in ``stages``; ``bind_scene`` before the scene pass draws. Every update runs before the frame's
+   first draw: GL work that publishes an update's result (an upload, a pass into a texture) belongs in
+   ``prepare``, so no draw leaves the CPU simulations after it with cold caches (llvmpipe runs vertex work on
+   the calling thread).
    Inactive effects get ``unbind_scene`` so the scene shader sees their neutral values.
 
 Effects never assign renderer attributes; they share data only through ``rc.shared`` (``SharedResources``).
