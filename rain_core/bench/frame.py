@@ -35,6 +35,12 @@ Method (also printed in the header):
   spent waiting for a core — this machine is shared — and llvmpipe's own rasterizer threads do not count;
   ``--clock wall`` uses wall time. "ms inside GL" is then the main thread's CPU time inside the driver; the
   frame's wall time (step + render + ``ctx.finish()``) is always wall time.
+* ``--skip-draws`` counts the draws (``VertexArray.render``/``transform``/``render_indirect``,
+  ``build_mipmaps``) without entering the driver. llvmpipe runs a draw's vertex work on the calling thread, and
+  Python's code and data are then cold for whatever follows (measured: the same glue costs 3–10× its warm time
+  between draws). Without the draws, the CPU figures bracket what a GPU driver that works on threads of its own
+  leaves to this thread. The pixels are meaningless then, the simulations run as usual, and "auto" may pick
+  another ripples solver (the chosen one is printed per case).
 * Every figure is the median over the measured frames after a warm-up (shader compiles, the ripples' backend
   choice and the rain's first fill happen there).
 
@@ -157,10 +163,11 @@ class GLCounter:
     ``bucket`` names where calls go now; ``tallies[bucket]`` is a ``Tally``. ``overhead_ns`` is the wrapper's
     own cost per call outside the time it measures (subtract calls × it from CPU times that include calls)."""
 
-    def __init__(self, clock: str = "thread"):
+    def __init__(self, clock: str = "thread", skip_draws: bool = False):
         if clock not in CLOCKS:
             raise ValueError(f"clock must be one of {', '.join(CLOCKS)}, got {clock!r}")
         self.clock = clock
+        self.skip_draws = bool(skip_draws)  # draws counted, not made (see the module docstring)
         self.clock_ns = CLOCKS[clock]
         self.tallies: dict[str, Tally] = defaultdict(Tally)
         self.pass_ms: dict[str, float] = {}  # wall ms of each Renderer._timed call this frame, by pass
@@ -176,6 +183,11 @@ class GLCounter:
     def _wrap(self, fn, kind: str, data_index: int | None, data_kw: str = "data"):
         counter = self
         clock = self.clock_ns
+        if kind == "draw" and self.skip_draws:
+            def skipped(*args, **kwargs):
+                return None
+
+            fn = skipped
 
         def wrapper(*args, **kwargs):
             if counter._inside:  # a wrapped call made by another: counted once, by the outer one
@@ -369,6 +381,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             if index < warmup:
                 continue
             _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6, (t2 - t1) * 1e-6, wall)
+        field = next((getattr(e, "field", None) for e in scene.effects if e.name == "ripples"), None)
+        solver = getattr(field, "backend", None) or "not built"  # what "auto" chose
     finally:
         Renderer._timed = original_timed
         if scene is not None:
@@ -378,7 +392,7 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
     rows = {name: {key: statistics.median(values) for key, values in cols.items()} for name, cols in samples.items()}
     frame = rows.pop("frame")
     return {"size": tuple(size), "budget": int(budget), "speed_kmh": float(speed_kmh), "frames": frames,
-            "ripples_backend": ripples_backend,
+            "ripples_backend": ripples_backend, "ripples_solver": solver, "skip_draws": counter.skip_draws,
             "warmup": warmup, "gpu_timing": gpu_timing, "overhead_ns": counter.overhead_ns, "clock": counter.clock,
             "passes": order,
             "rows": rows, "frame": frame}
@@ -458,7 +472,9 @@ def _table(headers, rows) -> str:
 
 
 def case_label(result: dict) -> str:
-    return f"{result['speed_kmh']:g} km/h, budget {result['budget']:,}"
+    label = f"{result['speed_kmh']:g} km/h, budget {result['budget']:,}"
+    solver = result.get("ripples_solver")
+    return label if solver is None or solver == result.get("ripples_backend") else f"{label}, ripples {solver}"
 
 
 def case_table(result: dict) -> str:
@@ -503,6 +519,7 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
 
     return (f"# Whole frames at heavy rain ({RAIN_MM_H:g} mm/h, wetness/cracks/puddles 1, driver camera, noon), "
             f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}"
+            + (", draws skipped (--skip-draws)" if getattr(args, "skip_draws", False) else "")
             + "".join(f", {path} = {value!r}" for path, value in getattr(args, "overrides", ())) + "\n\n"
             f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
@@ -560,6 +577,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                                               "atmosphere.scatter_lights=2 (repeatable)")
     p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
                    help="leave the renderer's timer queries off (no GPU columns)")
+    p.add_argument("--skip-draws", action="store_true",
+                   help="count the draws without making them: the CPU figures without llvmpipe's vertex work on "
+                        "this thread (pixels meaningless; see the module docstring)")
     args = p.parse_args(argv)
     if args.jit != "auto":
         try:
@@ -593,7 +613,7 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     ctx = create_headless_context()
     results = []
-    with GLCounter(args.clock) as counter:
+    with GLCounter(args.clock, skip_draws=args.skip_draws) as counter:
         renderer = ctx.info.get("GL_RENDERER", "?")
         print(header(args, counter.overhead_ns, renderer), flush=True)
         for speed in args.speeds:

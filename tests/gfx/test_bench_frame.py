@@ -31,6 +31,30 @@ def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
     assert math.isfinite(counter.overhead_ns) and counter.overhead_ns >= 0.0
 
 
+def test_skip_draws_counts_draws_without_making_them(gl_ctx):
+    """--skip-draws: a draw is counted and never reaches the driver (the target keeps its clear colour); the other
+    calls still do, and the case reports which ripples solver ran."""
+    prog = gl_ctx.program(vertex_shader="#version 330\nvoid main(){gl_Position=vec4(vec2(gl_VertexID&1,"
+                                        "gl_VertexID>>1)*4.0-1.0,0.0,1.0);}",
+                          fragment_shader="#version 330\nout vec4 c;void main(){c=vec4(1.0);}")
+    vao = gl_ctx.vertex_array(prog, [])
+    fbo = gl_ctx.simple_framebuffer((4, 4))
+    fbo.use()
+    with GLCounter(skip_draws=True) as counter:
+        fbo.clear(0.0, 0.0, 0.0, 1.0)
+        vao.render(moderngl.TRIANGLES, vertices=3)
+        tally = counter.tallies[counter.bucket]
+        assert tally.by_kind["draw"] == 1 and tally.by_kind["state"] == 1
+    assert fbo.read(components=1) == bytes(16)  # nothing drawn
+    with GLCounter(skip_draws=True) as counter:
+        result = measure_case(gl_ctx, (48, 27), budget=2000, speed_kmh=100.0, frames=1, warmup=1, counter=counter,
+                              ripples_backend="numpy32")
+    assert result["skip_draws"] and result["ripples_solver"] == "numpy32"
+    assert result["rows"]["scene"]["gl_calls"] > 0 and result["frame"]["cpu_ms"] > 0.0
+    for obj in (vao, prog, fbo):
+        obj.release()
+
+
 def test_counter_restores_moderngl():
     render = moderngl.VertexArray.render
     with GLCounter():
