@@ -54,6 +54,8 @@ def _uniform_film(depth_mm: float):
 def _heavy_rain_world(seed: int = 1):
     """What the spray sees of a heavy-rain street with traffic, stepped without a renderer: (settings, step)
     with step(dt) → the next frame (a SimpleNamespace with the Frame fields the spray reads)."""
+    from rain_core.camera import driver_camera
+    from rain_core.car_mesh import DRIVER_EYE_LOCAL
     from rain_core.settings import Settings
     from rain_core.traffic import Autopilot, Traffic
     from rain_core.vehicles import EgoCar
@@ -81,8 +83,9 @@ def _heavy_rain_world(seed: int = 1):
         ego.step(dt, throttle, brake, steer)
         traffic.step(dt)
         clock[0] += dt
+        # (the driver's camera: the spray's update makes the pass's camera motion)
         return SimpleNamespace(time_s=clock[0], dt_s=dt, vehicles=[ego, *traffic.vehicles], ego=ego, weather=state,
-                               settings=s, world=world)
+                               settings=s, world=world, camera=driver_camera(ego, DRIVER_EYE_LOCAL))
 
     return s, step
 
