@@ -33,7 +33,7 @@ class SprayEffect(Effect):
     """
 
     name = "spray"
-    stages = ("transparent",)
+    stages = ("prepare", "transparent")  # prepare: the new parcels into the GPU rings (update is CPU work alone)
 
     def __init__(self, ctx: moderngl.Context, settings=None, *, seed: int = 0, shaders=None):
         self.ctx = ctx
@@ -103,7 +103,6 @@ class SprayEffect(Effect):
         if sec.strength != self.emitter.strength:  # (the setter checks the value: only when it changes)
             self.emitter.strength = sec.strength
         self.emitter.emit(frame)
-        self._upload()
         # Where the spray lands in standing water, the ripple effect (if running) presses dents.
         rc.shared.droplet_impacts = self.emitter.landed_impacts()
         # The pass's camera velocity and forward, made here, before the frame's draws: made in render, after the
@@ -186,6 +185,9 @@ class SprayEffect(Effect):
         })
 
     def render(self, stage: str, rc) -> None:
+        if stage == "prepare":
+            self._upload()
+            return
         if stage != "transparent":
             return
         frame = rc.frame
