@@ -168,6 +168,26 @@ def test_raindrop_kernel_inverse_cdf_at_the_nodes_and_ends():
     np.testing.assert_array_equal(radii, np.interp(u, cdf, grid))  # crater 1 m per mm: the diameters
 
 
+def test_quantile_buckets_bracket_the_inverse_cdfs_node():
+    """The raindrops' search starts from a bucket of the quantile's top bits: the node np.interp takes (the last
+    with cdf ≤ u) lies in the bucket's bracket, for a steep law and for flat stretches; a CDF that decreases
+    somewhere gets the whole range (the full search)."""
+    fn = getattr(kernels._quantile_buckets, "py_func", kernels._quantile_buckets)
+    buckets = 1 << kernels.QUANTILE_BUCKET_BITS
+    steep = np.concatenate([[0.0], np.cumsum(np.geomspace(1.0, 1e-6, 512))])
+    for cdf in (steep / steep[-1], np.array([0.0, 0.0, 0.25, 0.25, 0.5, 1.0])):
+        first = np.empty(buckets + 1, np.int64)
+        fn(cdf, first)
+        k = np.random.default_rng(5).integers(0, 1 << 24, 20_000)
+        u = k / float(1 << 24)
+        node = np.searchsorted(cdf, u, side="right") - 1
+        j = k >> (24 - kernels.QUANTILE_BUCKET_BITS)
+        assert ((first[j] <= node) & (node <= first[j + 1])).all()
+    first = np.empty(buckets + 1, np.int64)
+    fn(np.array([0.0, 0.5, 0.4, 1.0]), first)
+    assert (first[:-1] == 0).all() and first[-1] == 3
+
+
 def _replay(backend_frames: int, seed: int = 4):
     """A 70-frame drive over a film with puddles: rain (capped drops), two wheels' wakes, spray impacts,
     scrolls in both directions. Returns the heights after each frame and the reports."""
