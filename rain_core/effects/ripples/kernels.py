@@ -7,8 +7,9 @@ Their NumPy twins stay the fallback and the oracle: ``WaveSolverF32._advance`` (
 ``raindrops.raindrops`` (:func:`raindrop_bumps`), ``wakes.wake_bumps`` (:func:`wake_bumps`), ``_bumps`` + the GPU
 solver's float32 instance rows (:func:`gpu_bump_rows`) and the spray droplets' dents of
 ``RippleField.add_droplet_impacts`` (:func:`droplet_dents`). The same operations in the same order: the stencil and the
-raindrops are exact (integer hashes, + − × ÷ and float32 rounding as NumPy's); the footprints use libm's cos,
-which may differ from NumPy's by an ulp (tests/effects/ripples/test_kernels.py states the tolerances).
+raindrops are exact (integer hashes, + − × ÷ and float32 rounding as NumPy's); the footprints add the float32
+values libm's cos gives (estimated by a polynomial where that provably rounds the same), which may differ from
+NumPy's cos by an ulp (tests/effects/ripples/test_kernels.py states the tolerances).
 Units: m, cells (ints), m for heights; grids are (n, n) [iz, ix], C-contiguous.
 """
 
@@ -22,9 +23,14 @@ from rain_core import jit
 from rain_core.effects.ripples.cache_hints import prefetch
 
 _M32 = 0xFFFFFFFF
-# The bump deposit fetches the cells of the bump this many ahead of the one it adds (cache_hints.prefetch): far
-# enough for the fetch to arrive during the bumps between, near enough for the lines to still be there.
-PREFETCH_AHEAD = 4
+# The bump deposit lists a chunk of candidate cells (in the order it adds them), then evaluates and adds them in
+# passes over the list: the cosines vectorised, the adds fetched ahead while the list was made.
+DEPOSIT_CHUNK_CELLS = 2048
+# A bound on |estimate − exact| / |peak| of a cell's deposit ½(1 + cos πd/r)·peak, where the estimate takes
+# _cos_pi's polynomial instead of libm's cos: the two cosines differ by < 4e-16 on [0, π] (measured; a priori,
+# libm's is within an ulp of the truth and the polynomial within 3e-15: truncation < 1e-19, roundings), and the
+# value's own roundings add a few ulps: a ≥ 30-fold margin.
+PROFILE_ERROR = 1e-13
 
 
 @jit.kernel
@@ -66,23 +72,59 @@ def leapfrog(z, zp, mask, use_mask, k, alpha, kc2):
 
 
 @jit.kernel
-def _prefetch_bump(zf, pf, mf, use_mask, n, col, row, w):
-    """Fetch the cache lines of both flat levels (and the mask) under the window of a bump at (``col``, ``row``)
-    cells of reach ``w`` cells, when it spans a few rows (a raindrop's 4, a wheel's 6): a hint, no values
-    change. The ends of each window row (a raindrop's row of 4 float32 cells lies on one or two lines)."""
-    c0, r0 = np.int64(math.floor(col)), np.int64(math.floor(row))
-    lo_r, hi_r = max(1, r0 - w), min(n - 2, r0 + w)
-    if hi_r - lo_r > 8:  # a wide bump: its rows are long runs, which the hardware prefetcher follows
-        return
-    lo_c, hi_c = max(1, c0 - w), min(n - 2, c0 + w)
-    for rr in range(lo_r, hi_r + 1):
-        first, last = rr * n + lo_c, rr * n + hi_c
-        prefetch(zf, first)
-        prefetch(zf, last)
-        prefetch(pf, first)
-        prefetch(pf, last)
-        if use_mask:
-            prefetch(mf, first)
+def _cos_pi(rel):
+    """cos(π·rel) for rel ∈ [0, 1] by its Taylor polynomial on [0, π/2] (to x²², truncation < 1e-19), reflected
+    about π/2 (π − x is exact there): branch-free, so a loop of it vectorises. Within 4e-16 of libm's cos
+    (tests/effects/ripples/test_kernels.py); an estimate only (see PROFILE_ERROR)."""
+    x = np.pi * rel
+    y = min(x, np.pi - x)
+    u = y * y
+    c = 1.0 + u * (-1.0 / 2 + u * (1.0 / 24 + u * (-1.0 / 720 + u * (1.0 / 40320 + u * (
+        -1.0 / 3628800 + u * (1.0 / 479001600 + u * (-1.0 / 87178291200 + u * (1.0 / 20922789888000 + u * (
+            -1.0 / 6402373705728000 + u * (1.0 / 2432902008176640000 + u * (-1.0 / 1124000727777607680000)))))))))))
+    return c if x <= 0.5 * np.pi else -c
+
+
+@jit.kernel
+def _deposit_listed(zf, pf, mf, use_mask, cells, values, count):
+    """The deposit of ``count`` listed cells, in their order (``deposit_bumps``): d / r, and the value
+    ½(1 + cos πd/r)·peak estimated for all of them in one vectorised pass (rows of ``values``: d² → d / r, radius,
+    peak, → estimate); then each cell inside the rim gets its value rounded to float32 (× the mask) and added to
+    both levels. The estimate is used where it is certain to round to the same float32 as libm's cos would give
+    (it lies more than PROFILE_ERROR·|peak| from 0 and from every float32 rounding boundary); otherwise (rarely:
+    cells on the rim, or within 1e-13 of a float32 boundary) libm's cos decides. Returns the cells whose (exact)
+    value is nonzero before the mask."""
+    rel = values[0]
+    radius = values[1]
+    peak = values[2]
+    estimate = values[3]
+    for t in range(count):
+        # np.divide: IEEE ÷ as `/`, without Numba's zero-division check, which stops the loop's vectorisation
+        rel[t] = np.divide(math.sqrt(rel[t]), radius[t])
+        estimate[t] = 0.5 * (1.0 + _cos_pi(rel[t])) * peak[t]
+    deposited = 0
+    for t in range(count):
+        if not rel[t] < 1.0:
+            continue
+        cell = cells[t]
+        m = np.float64(mf[cell]) if use_mask else 1.0
+        v = estimate[t]
+        err = abs(peak[t]) * PROFILE_ERROR
+        certain = abs(v) > err  # the exact value is nonzero and of the estimate's sign
+        if certain:
+            v = v * m
+            err = err * abs(m) + abs(v) * 1e-15  # the product's roundings
+            f = np.float32(v)
+            certain = np.float32(v - err) == np.float32(v + err)
+        if not certain:
+            v = 0.5 * (1.0 + math.cos(np.pi * rel[t])) * peak[t]
+            if v == 0.0:
+                continue
+            f = np.float32(v * m) if use_mask else np.float32(v)
+        deposited += 1
+        zf[cell] += f
+        pf[cell] += f
+    return deposited
 
 
 @jit.kernel
@@ -91,12 +133,13 @@ def deposit_bumps(z, zp, mask, use_mask, xs, zs, radii, amounts, cell_m, min_rad
     """Raised-cosine bumps (centres ``xs``, ``zs`` m from cell (0, 0), radii m, peaks m) added to both float32
     levels ``z`` and ``zp`` (n, n) on the interior cells (× ``mask`` where ``use_mask``): the float32 solver's
     ``_bumps`` (widened to ``min_radius_m`` with the volume kept, off-grid and zero bumps dropped), its
-    footprint (bumps by reach, stably; each bump's cells row by row; values ½(1 + cos πd/r)·peak in float64)
-    and its deposit (each value rounded to float32 and added in that order: the twin's sums). ``batch_cells``:
+    footprint (bumps by reach, stably; each bump's cells row by row; values ½(1 + cos πd/r)·peak in float64,
+    with libm's cos: see _deposit_listed) and its deposit (each value rounded to float32 and added in that order:
+    the twin's sums). ``batch_cells``:
     the twin's bound on a batch (bumps wider than it are clipped to the grid there: the same cells). Returns
-    the number of cells that got a nonzero value before the mask (the twin's footprint size). Scratch (no
-    allocation per call): ``scratch`` float64 (2, ≥ K), ``order`` int64 (2, ≥ K), ``starts`` int64 (≥ n + 2);
-    −1, with nothing added, when the reaches span more levels than ``starts`` holds."""
+    the number of cells that got a nonzero value before the mask (the twin's footprint size). Scratch (the
+    cells' list is allocated per call): ``scratch`` float64 (2, ≥ K), ``order`` int64 (2, ≥ K), ``starts``
+    int64 (≥ n + 2); −1, with nothing added, when the reaches span more levels than ``starts`` holds."""
     n = z.shape[0]
     h = cell_m
     count = xs.size
@@ -136,15 +179,16 @@ def deposit_bumps(z, zp, mask, use_mask, xs, zs, radii, amounts, cell_m, min_rad
             slot = reach[b] - lo_reach
             sorted_bumps[starts[slot]] = b
             starts[slot] += 1
-    deposited = 0
-    pi = np.pi
     zf = z.reshape(-1)
     pf = zp.reshape(-1)
     mf = mask.reshape(-1)
+    # The list: each candidate's cell, d² (d / r once evaluated), radius and peak (a row never splits across chunks).
+    cap = max(DEPOSIT_CHUNK_CELLS, n)
+    cells = np.empty(cap, np.int64)
+    values = np.empty((4, cap))
+    deposited = 0
+    listed = 0
     for o in range(kept):
-        if o + PREFETCH_AHEAD < kept:
-            q = sorted_bumps[o + PREFETCH_AHEAD]
-            _prefetch_bump(zf, pf, mf, use_mask, n, xs[q] / h, zs[q] / h, reach[q])
         b = sorted_bumps[o]
         x, y, r, a, w = xs[b], zs[b], r_eff[b], peak[b], reach[b]
         c0 = np.int64(math.floor(x / h))
@@ -160,24 +204,29 @@ def deposit_bumps(z, zp, mask, use_mask, xs, zs, radii, amounts, cell_m, min_rad
             row_lo, row_hi = max(1, r0 - first), min(n - 2, r0 + w)
         near = r * r * (1.0 + 1e-9)  # the reference's pre-test: sqrt and ÷ only for cells about inside the rim
         for row in range(row_lo, row_hi + 1):
+            if listed + (col_hi - col_lo + 1) > cap:
+                deposited += _deposit_listed(zf, pf, mf, use_mask, cells, values, listed)
+                listed = 0
+            start = row * n
+            # The row's cells are added a few hundred bumps from now: fetch them on the way (a hint only).
+            prefetch(zf, start + col_lo)
+            prefetch(zf, start + col_hi)
+            prefetch(pf, start + col_lo)
+            prefetch(pf, start + col_hi)
+            if use_mask:
+                prefetch(mf, start + col_lo)
+                prefetch(mf, start + col_hi)
             dz = row * h - y
             dz2 = dz * dz
-            for col in range(col_lo, col_hi + 1):
+            for col in range(col_lo, col_hi + 1):  # listed without a branch: the next slot is kept if about inside
                 dx = col * h - x
                 d2 = dx * dx + dz2
-                if d2 > near:
-                    continue
-                rel = math.sqrt(d2) / r
-                if rel < 1.0:
-                    v = 0.5 * (1.0 + math.cos(pi * rel)) * a
-                    if v != 0.0:
-                        deposited += 1
-                        cell = row * n + col
-                        if use_mask:
-                            v = v * np.float64(mf[cell])
-                        f = np.float32(v)
-                        zf[cell] += f
-                        pf[cell] += f
+                cells[listed] = start + col
+                values[0, listed] = d2
+                values[1, listed] = r
+                values[2, listed] = a
+                listed += d2 <= near
+    deposited += _deposit_listed(zf, pf, mf, use_mask, cells, values, listed)
     return deposited
 
 

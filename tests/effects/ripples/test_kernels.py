@@ -6,6 +6,7 @@ rounding almost always absorbs)."""
 from __future__ import annotations
 
 import functools
+import math
 import operator
 
 import numpy as np
@@ -295,8 +296,8 @@ def test_the_byte_mask_steps_as_the_float_mask_did(kernel_path, monkeypatch):
 @needs_numba
 def test_deposit_kernel_with_its_cache_hints_equals_its_plain_python_self():
     """The deposit fetches the cells of bumps ahead (cache_hints.prefetch, a no-op in Python): the compiled
-    kernel adds the same float32 values bit for bit as its own Python function (libm's cos on both sides),
-    with the mask and without, bumps near the edges and of several reaches included."""
+    kernel adds the same float32 values bit for bit as its own Python function, with the mask and without, bumps
+    near the edges and of several reaches included."""
     from rain_core.effects.ripples.cache_hints import prefetch
     from rain_core.effects.ripples.constants import FOOTPRINT_BATCH_CELLS, MIN_FOOTPRINT_CELLS
 
@@ -320,6 +321,82 @@ def test_deposit_kernel_with_its_cache_hints_equals_its_plain_python_self():
         assert c0 == c1 > 1000
         np.testing.assert_array_equal(z0, z1)
         np.testing.assert_array_equal(p0, p1)
+
+
+def _libm_deposit(z, zp, mask, use_mask, xs, zs, radii, amounts, h, min_radius_m, length_m) -> int:
+    """The deposit cell by cell with libm's cos for every value (the kernel before its estimates): bumps by
+    reach, stably; each bump's cells row by row; the same pre-test, rim test, float64 values and float32 adds."""
+    r_eff = np.maximum(radii, min_radius_m)
+    peaks = amounts * (radii / r_eff) ** 2
+    keep = (xs > -r_eff) & (xs < length_m + r_eff) & (zs > -r_eff) & (zs < length_m + r_eff) & (peaks != 0.0)
+    reach = np.where(keep, np.ceil(r_eff / h), -1).astype(np.int64)
+    n, count = z.shape[0], 0
+    for b in np.argsort(reach, kind="stable")[np.count_nonzero(~keep):]:
+        x, y, r, a, w = float(xs[b]), float(zs[b]), float(r_eff[b]), float(peaks[b]), int(reach[b])
+        c0, r0 = math.floor(x / h), math.floor(y / h)
+        near = r * r * (1.0 + 1e-9)
+        for row in range(max(1, r0 - w), min(n - 2, r0 + w) + 1):
+            dz = row * h - y
+            for col in range(max(1, c0 - w), min(n - 2, c0 + w) + 1):
+                dx = col * h - x
+                d2 = dx * dx + dz * dz
+                if d2 > near or not math.sqrt(d2) / r < 1.0:
+                    continue
+                v = 0.5 * (1.0 + math.cos(math.pi * (math.sqrt(d2) / r))) * a
+                if v != 0.0:
+                    count += 1
+                    f = np.float32(v * float(mask[row, col]) if use_mask else v)
+                    z[row, col] += f
+                    zp[row, col] += f
+    return count
+
+
+@needs_numba
+@pytest.mark.parametrize("mask_kind", ["none", "bool", "fractions"])
+def test_deposit_kernels_estimates_add_libms_values_exactly(mask_kind):
+    """The deposit estimates its values with a polynomial cosine and takes libm's cos only where the float32
+    could differ: the same bits (signed zeros included) and the same count as libm's cos everywhere, for peaks
+    from 1e-30 to 100 m of both signs, cells on the rim (d / r within 1e-13 of 1, where libm decides) and a
+    mask of bytes or of float32 fractions."""
+    from rain_core.effects.ripples.constants import FOOTPRINT_BATCH_CELLS, MIN_FOOTPRINT_CELLS
+
+    n, h = 48, 0.05
+    rng = np.random.default_rng(13)
+    k = 600
+    xs, zs = rng.uniform(-0.1, n * h, k), rng.uniform(-0.1, n * h, k)
+    radii = rng.choice((0.001, 0.07, 0.09, 0.12, 0.2), k)
+    amounts = rng.choice((-1.0, 1.0), k) * 10.0 ** rng.uniform(-30.0, 2.0, k)
+    # Rims through a cell's centre: cell (12, 20) at d / r = 1 − 1e-13, 1 − 1e-9, 1 and 1 + 1e-13.
+    x0, z0 = 10.3 * h, 20 * h
+    dx = 12 * h - x0
+    rim = dx / np.array([1.0 - 1e-13, 1.0 - 1e-9, 1.0, 1.0 + 1e-13])
+    xs, zs = np.concatenate([xs, np.full(4, x0)]), np.concatenate([zs, np.full(4, z0)])
+    radii, amounts = np.concatenate([radii, rim]), np.concatenate([amounts, [1e-3, -1e-3, 1e-3, 1e-3]])
+    estimate = 0.5 * (1.0 + kernels._cos_pi(dx / rim[0])) * 1e-3
+    assert abs(estimate) <= 1e-3 * kernels.PROFILE_ERROR  # the first rim bump's cell is libm's to decide
+    mask = {"none": np.ones((1, 1), bool), "bool": rng.random((n, n)) > 0.3,
+            "fractions": rng.choice((0.0, 1.0, 0.3, 0.77), (n, n)).astype(np.float32)}[mask_kind]
+    use_mask = mask_kind != "none"
+    start = rng.standard_normal((2, n, n)).astype(np.float32) * np.float32(1e-3)
+    start[:, rng.random((n, n)) > 0.5] = np.float32(-0.0)
+    args = (xs, zs, radii, amounts, h, MIN_FOOTPRINT_CELLS * h, (n - 1) * h)
+    z, zp = start[0].copy(), start[1].copy()
+    cells = kernels.deposit_bumps(z, zp, mask, use_mask, *args, FOOTPRINT_BATCH_CELLS, np.empty((2, k + 4)),
+                                  np.empty((2, k + 4), np.int64), np.empty(n + 3, np.int64))
+    want_z, want_zp = start[0].copy(), start[1].copy()
+    assert cells == _libm_deposit(want_z, want_zp, mask, use_mask, *args) > 5000
+    np.testing.assert_array_equal(z.view(np.uint32), want_z.view(np.uint32))
+    np.testing.assert_array_equal(zp.view(np.uint32), want_zp.view(np.uint32))
+
+
+def test_polynomial_cosine_stays_within_its_bound_of_libms():
+    """PROFILE_ERROR rests on _cos_pi lying within 4e-16 of libm's cos over [0, 1] (a 30-fold margin)."""
+    fn = getattr(kernels._cos_pi, "py_func", kernels._cos_pi)
+    rel = np.concatenate([np.linspace(0.0, 1.0, 20_001), 0.5 + np.linspace(-1e-6, 1e-6, 101),
+                          1.0 - np.geomspace(1e-16, 1e-3, 200)])
+    worst = max(abs(fn(float(u)) - math.cos(math.pi * float(u))) for u in rel)
+    assert worst < 4e-16
+    assert worst * 30 < kernels.PROFILE_ERROR
 
 
 def test_prefetch_changes_no_value(kernel_path):
