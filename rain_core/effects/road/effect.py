@@ -26,8 +26,11 @@ from rain_core.water_film import (
     smooth_heightmap_for,
 )
 
-# The scene shader's dry path (the road effect inactive).
-_UNBOUND = {"u_road_wet": 0.0, "u_road_mirror": 0.0, "u_road_debug": 0.0, "u_road_reflect": 0.0}
+# The scene shader's dry path (the road effect inactive), as (name, value) pairs for OwnedUniforms.update_once.
+_UNBOUND = (("u_road_wet", 0.0), ("u_road_mirror", 0.0), ("u_road_debug", 0.0), ("u_road_reflect", 0.0))
+# The reflection pass's own inputs: no reflection, ripples, rain rings or cabin in the mirrored view.
+_MIRROR_PASS = (("u_road_mirror", 1.0), ("u_road_reflect", 0.0), ("u_road_ripple_window", (0.0, 0.0, 1.0, 0.0)),
+                ("u_road_rain_rings_tile", (1.0, 0.0)), ("u_road_cabin_box", (0.0, 0.0, 0.0, 0.0)))
 
 
 def _any_positive(levels: tuple[float, float, float]) -> bool:
@@ -81,11 +84,10 @@ class RoadEffect(Effect):
         self._gutter_k = 0.0  # the kerb streams' spread coefficient this frame (rain_core.gutter)
         self._road = None
         self._waves = (0.0, 0.0, 0.0)
-        self._film_values = None  # (levels key, film uniforms) last bound
-        self._scene_static = None  # (settings key, scene uniforms that only the settings change)
+        self._film_values = None  # (levels key, film uniform pairs, world) last made
+        self._scene_plan = None  # (key, projection, {mirror pass: the scene inputs that stay}), see _plan_scene
         self._cabin_spec = None  # (car spec, cabin box)
-        self._cabin_inv = None  # (ego model array, shift_z, u_road_cabin bytes)
-        self._cabin_ahead = False  # the mirror pass makes the main view's u_road_cabin (see bind_scene)
+        self._cabin_inv = None  # (ego model array, shift_z, u_road_cabin bytes), made in update
 
     def set_world(self, world) -> None:
         """Take the road heightmap and roofs of ``world`` (done on the first update from ``frame.world`` when
@@ -155,17 +157,22 @@ class RoadEffect(Effect):
         """Bind the maps and levels of shaders/road/film.glsl on a program that includes it:
         road_film_depth_mm(xz) then gives the film depth at wrapped-frame positions. gutter_k: the kerb streams'
         spread coefficient (rain_core.gutter; 0 without)."""
-        if self.world is None:
-            raise RuntimeError("RoadEffect has no world yet: call set_world or render a frame first")
+        pairs = self._film_pairs(wetness, cracks, puddles, puddle_amount, gutter_k)
         self._height_tex.use(units.ROAD_HEIGHT)
         self._maps(int(seed)).use(units.ROAD_MAPS)
+        owned_uniforms(program).update_pairs(pairs)
+
+    def _film_pairs(self, wetness, cracks, puddles, puddle_amount, gutter_k) -> tuple:
+        """shaders/road/film.glsl's uniforms as (name, value) pairs: the same tuple while the levels stay."""
+        if self.world is None:
+            raise RuntimeError("RoadEffect has no world yet: call set_world or render a frame first")
         key = (float(wetness), float(cracks), float(puddles), float(puddle_amount), float(gutter_k))
         if self._film_values is None or self._film_values[0] != key or self._film_values[2] is not self.world:
-            self._film_values = (key, {
-                "u_road_height": units.ROAD_HEIGHT, "u_road_maps": units.ROAD_MAPS,
-                "u_road_levels": (key[0], crack_level(cracks), puddle_level(puddles, puddle_amount), key[4]),
-                "u_road_height_extent": tuple(float(v) for v in self.world.heightmap_extent_m)}, self.world)
-        owned_uniforms(program).update(self._film_values[1])
+            self._film_values = (key, (
+                ("u_road_height", units.ROAD_HEIGHT), ("u_road_maps", units.ROAD_MAPS),
+                ("u_road_levels", (key[0], crack_level(cracks), puddle_level(puddles, puddle_amount), key[4])),
+                ("u_road_height_extent", tuple(float(v) for v in self.world.heightmap_extent_m))), self.world)
+        return self._film_values[1]
 
     # --- per frame ---
     def update(self, frame: Frame, rc: RenderContext) -> None:
@@ -197,6 +204,13 @@ class RoadEffect(Effect):
         standing.cache_key = key
         rc.shared.film_depth_fn = standing
         self._reflection_valid = False
+        ego = frame.ego
+        if frame.camera.inside_car and ego is not None:
+            # The main view's u_road_cabin made now, before the frame's draws (LAPACK's code is warm: the renderer
+            # has just inverted the view-projection); bind_scene then finds it kept. Made between the draws (in
+            # the reflection or the scene pass) it cost ~85 µs instead of ~10.
+            self._cabin_inverse(ego, rc.shift_z)
+        self._plan_scene(road, rc.projection)
         if self.needs_reflection(frame):
             # The reflection's camera and context planned now, before the frame's draws (see mirror_context)
             target, camera = self._reflection_view(rc)
@@ -228,7 +242,6 @@ class RoadEffect(Effect):
     def _render_reflection(self, rc: RenderContext) -> None:
         target, camera = self._reflection_view(rc)
         self._mirror_pass = True
-        self._cabin_ahead = bool(rc.frame.camera.inside_car and rc.frame.ego is not None)
         try:
             rc.renderer.draw_mirror_view(rc, target, camera, MIRROR_Y, MIRROR_CLIP_PLANE)
         finally:
@@ -246,24 +259,30 @@ class RoadEffect(Effect):
 
     # --- the scene shader's inputs ---
     def bind_scene(self, program: moderngl.Program, rc: RenderContext) -> None:
-        # The road alone writes u_road_* in the scene program: owned_uniforms skips values it wrote last (most
-        # stay from frame to frame; the mirror view and the main view differ in a few).
+        # The road alone writes u_road_* in the scene programs. What stays from frame to frame was planned in
+        # update (_plan_scene) as one tuple per view: one identity test while it stays (the reflection pass has
+        # nothing else); owned_uniforms skips the rest's values it wrote last.
         road = self._road if self._road is not None else self._road_settings(rc.frame)
-        w, c, p = self._levels
         mirror = self._mirror_pass
-        self.bind_film_uniforms(program, w, c, p, road.puddle_amount, road.puddle_seed, self._gutter_k)
+        plan = self._scene_plan
+        if plan is None or plan[1] is not rc.projection:
+            plan = self._plan_scene(road, rc.projection)
+        self._height_tex.use(units.ROAD_HEIGHT)
+        self._maps(int(road.puddle_seed)).use(units.ROAD_MAPS)
         out = owned_uniforms(program)
-        out.update(self._scene_values(road))
-        out.set("u_road_mirror", 1.0 if mirror else 0.0)
-        if self._reflection_valid and not mirror:
+        out.update_once(plan[2][mirror])
+        out.set("u_road_waves", self._waves)  # the wind's: changes with the gusts
+        if mirror:  # never the texture being drawn into
+            for unit in (units.ROAD_REFLECTION, units.ROAD_RIPPLES, units.ROAD_RAIN_RINGS):
+                self._black.use(unit)
+            return
+        if self._reflection_valid:
             self._reflection.color.use(units.ROAD_REFLECTION)
             out.set("u_road_reflect", 1.0)
         else:
-            self._black.use(units.ROAD_REFLECTION)  # never the texture being drawn into
+            self._black.use(units.ROAD_REFLECTION)
             out.set("u_road_reflect", 0.0)
-        proj = rc.projection
-        out.set("u_road_proj_scale", (0.5 * float(proj[0, 0]), 0.5 * float(proj[1, 1])))
-        ripple = None if mirror else (self._ripple if self._ripple_explicit else rc.shared.water_normals)
+        ripple = self._ripple if self._ripple_explicit else rc.shared.water_normals
         if ripple is not None:
             ripple.texture.use(units.ROAD_RIPPLES)
             ox, oz = (float(v) for v in ripple.origin_xz_m)
@@ -271,7 +290,7 @@ class RoadEffect(Effect):
         else:
             self._black.use(units.ROAD_RIPPLES)
             out.set("u_road_ripple_window", (0.0, 0.0, 1.0, 0.0))
-        rings = None if mirror else rc.shared.rain_rings
+        rings = rc.shared.rain_rings
         if rings is not None:
             rings.texture.use(units.ROAD_RAIN_RINGS)
             out.set("u_road_rain_rings_tile", (float(rings.tile_m), 1.0))
@@ -279,15 +298,32 @@ class RoadEffect(Effect):
             self._black.use(units.ROAD_RAIN_RINGS)
             out.set("u_road_rain_rings_tile", (1.0, 0.0))
         ego = rc.frame.ego
-        if rc.frame.camera.inside_car and ego is not None and not mirror:
+        if rc.frame.camera.inside_car and ego is not None:
             out.set("u_road_cabin", self._cabin_inverse(ego, rc.shift_z))
             out.set("u_road_cabin_box", self._cabin_box(ego.spec))
         else:
-            if mirror and self._cabin_ahead and ego is not None:
-                # The main view's inverse made now, just after this view's sky inverse: LAPACK's code is then in
-                # cache (a cold call, as in the scene pass after the reflection's GL work, costs ~50 µs more).
-                self._cabin_inverse(ego, rc.shift_z)
             out.set("u_road_cabin_box", (0.0, 0.0, 0.0, 0.0))
+
+    def _plan_scene(self, road, projection: np.ndarray) -> tuple:
+        """(key, projection, {mirror pass: pairs}): the scene shader's road inputs that only the levels, the
+        settings and the lens change (film, texture units, debug view, projection scale; in the reflection pass
+        also its fixed ones), the same tuples while they stay so that bind_scene writes them through
+        ``OwnedUniforms.update_once``. Made in update, before the frame's draws, where it is cheap."""
+        w, c, p = self._levels
+        film = self._film_pairs(w, c, p, road.puddle_amount, self._gutter_k)
+        key = (bool(road.debug_regions), 0.5 * float(projection[0, 0]), 0.5 * float(projection[1, 1]))
+        plan = self._scene_plan
+        if plan is not None and plan[0][0] is film and plan[0][1:] == key:
+            if plan[1] is not projection:
+                plan = self._scene_plan = (plan[0], projection, plan[2])
+            return plan
+        shared = film + (
+            ("u_road_wet", 1.0), ("u_road_debug", 1.0 if key[0] else 0.0), ("u_road_proj_scale", key[1:]),
+            ("u_road_reflection", units.ROAD_REFLECTION), ("u_road_ripples", units.ROAD_RIPPLES),
+            ("u_road_rain_rings", units.ROAD_RAIN_RINGS))
+        plan = self._scene_plan = ((film, *key), projection,
+                                   {False: shared + (("u_road_mirror", 0.0),), True: shared + _MIRROR_PASS})
+        return plan
 
     def _cabin_inverse(self, ego, shift_z: float) -> bytes:
         """u_road_cabin: the inverse of the ego's model matrix in the wrapped frame, kept while its read-only model
@@ -302,16 +338,6 @@ class RoadEffect(Effect):
         self._cabin_inv = (model, shift_z, data) if not model.flags.writeable else None
         return data
 
-    def _scene_values(self, road) -> dict:
-        """The scene shader's road inputs that only the settings change (units, debug view, waves)."""
-        key = (bool(road.debug_regions), self._waves)
-        if self._scene_static is None or self._scene_static[0] != key:
-            self._scene_static = (key, {
-                "u_road_wet": 1.0, "u_road_debug": 1.0 if key[0] else 0.0,
-                "u_road_reflection": units.ROAD_REFLECTION, "u_road_ripples": units.ROAD_RIPPLES,
-                "u_road_rain_rings": units.ROAD_RAIN_RINGS, "u_road_waves": self._waves})
-        return self._scene_static[1]
-
     def _cabin_box(self, spec) -> tuple:
         """(cowl z + 2 cm, 0.2, half width + 5 cm, 1): where the cabin hides the road (per car spec)."""
         if self._cabin_spec is None or self._cabin_spec[0] is not spec:
@@ -322,7 +348,7 @@ class RoadEffect(Effect):
         return self._cabin_spec[1]
 
     def unbind_scene(self, program: moderngl.Program, rc: RenderContext) -> None:
-        owned_uniforms(program).update(_UNBOUND)
+        owned_uniforms(program).update_once(_UNBOUND)  # bind_scene's tuples are then written in full again
 
     # --- GPU twin of film_depth_mm ---
     def film_depth_gpu(self, x_m, z_m, cracks, puddles, puddle_amount=0.5, seed=0, wetness=0.0,

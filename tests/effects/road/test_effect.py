@@ -90,6 +90,23 @@ def test_dry_road_takes_the_dry_path(gl_ctx, wet_scene):
     np.testing.assert_array_equal(scene.image(), bare)
 
 
+def test_scene_inputs_come_back_after_the_road_was_off(wet_scene):
+    """The wet inputs are written again after a frame of the dry path with the same levels: bind_scene's planned
+    tuple is then the same object, which OwnedUniforms.update_once would skip had unbind_scene not gone through it."""
+    scene, effect = wet_scene
+    prog = scene.renderer.scene.scene_prog
+    _apply(scene, _settings(wetness=1.0))
+    scene.render()
+    wet, plan = scene.image(), effect._scene_plan
+    _apply(scene, _settings(wetness=1.0, enabled=False))
+    scene.render()
+    assert prog["u_road_wet"].value == 0.0
+    _apply(scene, _settings(wetness=1.0))
+    scene.render()
+    assert effect._scene_plan is plan and prog["u_road_wet"].value == 1.0
+    np.testing.assert_array_equal(scene.image(), wet)
+
+
 def _display(hdr_rgb) -> np.ndarray:
     """shaders/tonemap.frag in NumPy: ACES fit, then sRGB, 0–255."""
     x = np.maximum(np.asarray(hdr_rgb, float), 0.0)
@@ -281,7 +298,7 @@ def test_benchmark_quick_writes_table_and_plot(gl_ctx, tmp_path):
 
 
 def test_cabin_inverse_follows_the_ego_with_and_without_the_mirror_pass(gl_ctx):
-    """u_road_cabin (made ahead in the reflection pass, kept per model array and shift) is the inverse of the ego's
+    """u_road_cabin (made ahead in update, kept per model array and shift) is the inverse of the ego's
     model in the wrapped frame after every move, with reflections on and off, and after a pose set in place."""
     from rain_core.gfx.linalg import inverse
     from rain_core.gfx.uniforms import mat4_bytes
