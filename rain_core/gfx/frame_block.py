@@ -119,9 +119,9 @@ def unpack(data: bytes) -> dict:
 class _ProgramInfo:
     """Per program: whether it reads the frame block, and which frame names it declares as plain uniforms."""
 
-    __slots__ = ("program", "has_block", "plain", "_last", "_keys", "_names")
+    __slots__ = ("program", "has_block", "plain", "_last", "_keys", "_names", "_keys_of")
 
-    def __init__(self, program):
+    def __init__(self, program, keys_of=tuple):
         self.program = program
         block = program.get(BLOCK_NAME, None)
         self.has_block = block is not None
@@ -129,19 +129,27 @@ class _ProgramInfo:
             block.binding = BINDING  # the default too; set once so a program never depends on it
         self.plain: dict[str, object] = {}  # name → moderngl Uniform or None, filled as names are asked for
         self._last = (None, ())  # (values dict, its (uniform, value) pairs this program declares as plain)
+        self._keys_of = keys_of  # values dict → tuple of its names (FrameBlocks.keys_of: one tuple for all programs)
         self._keys: tuple = ()
         self._names: tuple = ()  # (uniform, name) of those keys that this program declares as plain
 
     def plain_values(self, values: dict) -> tuple:
         """(uniform, value) for the names of ``values`` this program declares outside the block; kept while the
         same dict object is asked for again (a view's values are one dict until they change)."""
-        if self._last[0] is not values:
-            keys = tuple(values)
-            if keys != self._keys:  # the names rarely change (the shadow's come and go with the sun)
-                self._keys = keys
+        last = self._last
+        if last[0] is values:
+            return last[1]
+        # A new dict every frame: its names are the same tuple object as last time unless they changed (the
+        # shadow's come and go with the sun), and most programs declare none of them plainly.
+        keys = self._keys_of(values)
+        if keys is not self._keys:
+            if keys != self._keys:
                 self._names = tuple((u, n) for u, n in ((self.uniform(n), n) for n in keys) if u is not None)
-            self._last = (values, tuple((u, values[n]) for u, n in self._names))
-        return self._last[1]
+            self._keys = keys
+        names = self._names
+        pairs = tuple((u, values[n]) for u, n in names) if names else ()
+        self._last = (values, pairs)
+        return pairs
 
     def uniform(self, name: str):
         try:
@@ -163,6 +171,7 @@ class FrameBlocks:
         self._programs: dict[int, _ProgramInfo] = {}
         self._last = 0
         self._packed: tuple[dict, bytes] | None = None  # (values, bytes) packed last: pack() starts from them
+        self._keys: list[tuple] = [(None, ())]  # (values dict, tuple of its names), the two asked for last
 
     def pack(self, values: dict) -> bytes:
         """``frame_block.pack(values)``, made from the values packed last (``pack_changes``)."""
@@ -174,13 +183,33 @@ class FrameBlocks:
     def program_info(self, program) -> _ProgramInfo:
         info = self._programs.get(program.glo)
         if info is None or info.program is not program:  # a released program's GL name may be reused
-            info = self._programs[program.glo] = _ProgramInfo(program)
+            info = self._programs[program.glo] = _ProgramInfo(program, self.keys_of)
         return info
+
+    def keys_of(self, values: dict) -> tuple:
+        """``tuple(values)``, the same tuple object as for the values asked for before while the names stay: each
+        program then knows its plain names unchanged by one identity test. The main view's and the road's mirror
+        view's dicts alternate within a frame: the last two are kept."""
+        cache = self._keys
+        for known, keys in cache:
+            if known is values:
+                return keys
+        keys = tuple(values)
+        for _, known_keys in cache:
+            if known_keys == keys:
+                keys = known_keys
+                break
+        self._keys = [(values, keys), cache[0]]
+        return keys
 
     def use(self, data: bytes) -> None:
         """Bind (at ``BINDING``) a buffer whose contents are ``data``. Bound every call: other renderers on the
         same context bind their own."""
         contents = self._contents
+        index = self._last
+        if contents and contents[index] is data:  # a view's bytes are one object: the programs after its first
+            self._buffers[index].bind_to_uniform_block(BINDING)
+            return
         for index in self._order[::-1]:  # most recent first: usually the first compare matches
             if contents[index] == data:
                 break

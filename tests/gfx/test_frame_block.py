@@ -232,6 +232,30 @@ def test_two_renderers_on_one_context_alternate_without_mixing_their_frames(gl_c
         night.release()
 
 
+def test_plain_values_follow_each_new_dict_and_its_names(gl_ctx):
+    """A view's values are a new dict every frame: a program's plain pairs follow the values and the names as they
+    come and go, while dicts of the same names share one names tuple (FrameBlocks.keys_of)."""
+
+    class Program:  # what _ProgramInfo asks of a moderngl program
+        glo = 1
+        get = {"u_time": "time uniform", "u_shadow_map": "shadow uniform"}.get
+
+    blocks = frame_block.FrameBlocks(gl_ctx)
+    try:
+        info = blocks.program_info(Program())
+        a = {"u_exposure": 2.0, "u_time": 1.0}
+        assert info.plain_values(a) == (("time uniform", 1.0),)
+        b = {"u_exposure": 2.0, "u_time": 3.0}
+        assert blocks.keys_of(b) is blocks.keys_of(a)
+        assert info.plain_values(b) == (("time uniform", 3.0),)
+        with_shadow = {"u_exposure": 2.0, "u_time": 4.0, "u_shadow_map": 5}
+        assert info.plain_values(with_shadow) == (("time uniform", 4.0), ("shadow uniform", 5))
+        assert info.plain_values({"u_exposure": 2.0}) == ()
+        assert info.plain_values(b) == (("time uniform", 3.0),)
+    finally:
+        blocks.release()
+
+
 def test_road_uniforms_skipped_only_when_unchanged_across_effects_sharing_a_program(gl_ctx):
     """Two renderers share one shader library (so one scene program) with a road effect each, at different
     puddle amounts: the road's skip-unchanged writes must not leave one road's values for the other."""
