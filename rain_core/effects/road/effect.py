@@ -73,6 +73,7 @@ class RoadEffect(Effect):
         self._reflection = None  # RenderTarget, created at the first reflection pass
         self._reflection_valid = False
         self._planned_view = None  # (render context, (target, mirrored camera)) of the frame's reflection pass
+        self._reflects = None  # (frame, needs_reflection(frame)) decided in update
         self._sampler = None  # (key, world, film_depth_sampler) of the last frame
         self._mirror_pass = False  # True while the reflection pass draws: no reflection, ripples, rings, cabin
         self._ripple_explicit = False
@@ -211,13 +212,19 @@ class RoadEffect(Effect):
             # the reflection or the scene pass) it cost ~85 µs instead of ~10.
             self._cabin_inverse(ego, rc.shift_z)
         self._plan_scene(road, rc.projection)
-        if self.needs_reflection(frame):
+        self._reflects = (frame, self.needs_reflection(frame))
+        if self._reflects[1]:
             # The reflection's camera and context planned now, before the frame's draws (see mirror_context)
             target, camera = self._reflection_view(rc)
             rc.renderer.mirror_context(rc, target, camera, MIRROR_Y)
 
     def render(self, stage: str, rc: RenderContext) -> None:
-        if stage == "prepare" and self.needs_reflection(rc.frame):
+        if stage != "prepare":
+            return
+        decided = self._reflects  # update's answer: asked again here, between the draws, it cost ~10 µs
+        if decided is None or decided[0] is not rc.frame:  # not updated for this frame
+            decided = (rc.frame, self.needs_reflection(rc.frame))
+        if decided[1]:
             self._render_reflection(rc)
 
     def _reflection_target(self, size: tuple[int, int]):
