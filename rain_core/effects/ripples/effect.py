@@ -3,8 +3,6 @@ spray's droplets) and publishes the water's slopes and the far puddles' ring map
 
 from __future__ import annotations
 
-import numpy as np
-
 from rain_core.effects.ripples.backend import make_field
 from rain_core.effects.ripples.field import RippleField
 from rain_core.effects.ripples.rain_tiles import RainRippleTexture
@@ -83,11 +81,9 @@ class RipplesEffect(Effect):
             x, z = float(vehicle.position[0]), float(vehicle.position[2])
             if ox - 20.0 < x < ox + reach + 20.0 and oz - 20.0 < z < oz + reach + 20.0:
                 rows += wheel_rows(vehicle)
-        if not rows:
-            return WheelBatch.of(())
-        # One array for all wheels (a few vehicles, 4 wheels each: Python floats cost less than NumPy per vehicle).
-        a = np.array(rows)
-        return WheelBatch(a[:, 0:2], a[:, 2:4], a[:, 4], a[:, 5])
+        # One array for all wheels (a few vehicles, 4 wheels each: Python floats cost less than NumPy per vehicle),
+        # checked here once: the field's update then trusts it.
+        return WheelBatch.from_rows(rows)
 
     @staticmethod
     def window_centre(frame, field: RippleField) -> tuple[float, float] | None:

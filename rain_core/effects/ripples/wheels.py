@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -42,6 +42,8 @@ class WheelBatch:
     speed_m_s: np.ndarray
     tire_width_m: np.ndarray
     film_depth_mm: np.ndarray | None = None
+    # Checked when made (``from_rows``): ``of`` returns it as it is.
+    _checked: bool = field(default=False, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.speed_m_s)
@@ -55,7 +57,7 @@ class WheelBatch:
         """A validated batch (ValueError naming the bad field): a WheelBatch, or an iterable of ``WheelSweep``
         or (p0, p1, speed, film depth mm or None, tyre width) tuples."""
         if isinstance(wheels, WheelBatch):
-            if wheels._valid():  # the effect's batch every frame: a few reductions, no copies
+            if wheels._checked or wheels._valid():  # a batch checked before: no copies
                 return wheels
             p0, p1, speed, width, depth = (wheels.p0_xz, wheels.p1_xz, wheels.speed_m_s, wheels.tire_width_m,
                                            wheels.film_depth_mm)
@@ -79,6 +81,28 @@ class WheelBatch:
         if not (len(p0) == len(p1) == len(speed) == len(width)) or (depth is not None and len(depth) != len(speed)):
             raise ValueError("the wheel arrays must have one entry per wheel")
         return cls(p0, p1, speed, width, depth)
+
+    @classmethod
+    def from_rows(cls, rows) -> WheelBatch:
+        """A checked batch (ValueError naming the bad field, as ``of``) from rows (x0, z0, x1, z1 world m, speed
+        m/s, tyre width m), ``wheel_rows``'s, film depths left to the function: the effect's batch every frame,
+        checked here in one pass over one (W, 6) array, so ``update``'s ``of`` returns it as it is. Its arrays
+        are views of that array: treat them as read-only."""
+        a = np.array(rows, dtype=np.float64)
+        if a.size == 0:
+            return _NO_WHEELS
+        if a.ndim != 2 or a.shape[1] != 6:
+            raise ValueError(f"wheel rows must be (W, 6): x0, z0, x1, z1, speed, tyre width; got shape {a.shape}")
+        batch = cls(a[:, 0:2], a[:, 2:4], a[:, 4], a[:, 5])
+        # Positions finite, speed and width in range (NaN fails every comparison): a few dozen Python floats,
+        # cheaper than NumPy's calls between the frame's GL work.
+        big = _BIG
+        for x0, z0, x1, z1, speed, width in a.tolist():
+            if not (-big <= x0 <= big and -big <= z0 <= big and -big <= x1 <= big and -big <= z1 <= big
+                    and 0.0 <= speed <= 1e3 and 1e-3 <= width <= 10.0):
+                return cls.of(batch)  # the long way, which names what is wrong
+        object.__setattr__(batch, "_checked", True)
+        return batch
 
     def depth_points(self) -> np.ndarray:
         """(k, 2) world (x, z) in m where the unknown film depths are asked: the middle of each such path."""
@@ -142,6 +166,7 @@ def _bounds(w: int) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
+_BIG = float(np.finfo(np.float64).max)  # finite positions lie within ±_BIG
 _NO_WHEELS = WheelBatch(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
 
 

@@ -204,6 +204,30 @@ def test_wheel_batch_of_a_valid_batch_is_that_batch_and_bad_ones_still_name_the_
     assert as_lists.speed_m_s.dtype == np.float64 and as_lists.p0_xz.shape == (1, 2)
 
 
+
+def test_wheel_batch_from_rows_is_checked_once_and_names_a_bad_field():
+    """``WheelBatch.from_rows`` (the effect's batch every frame) checks its rows once: ``of`` then returns it as it
+    is, with the same arrays as the batch built column by column; a bad row names its field, as ``of`` does."""
+    from rain_core.effects.ripples.wheels import WheelBatch
+
+    rows = [(0.0, 1.0, 0.5, 1.5, 9.0, 0.2), (-3.0, 2.0, -3.0, 2.5, 0.0, 0.3)]
+    batch = WheelBatch.from_rows(rows)
+    assert batch._checked and WheelBatch.of(batch) is batch and batch.film_depth_mm is None
+    a = np.array(rows)
+    plain = WheelBatch.of(WheelBatch(a[:, 0:2].copy(), a[:, 2:4].copy(), a[:, 4].copy(), a[:, 5].copy()))
+    assert not plain._checked
+    for name in ("p0_xz", "p1_xz", "speed_m_s", "tire_width_m"):
+        assert getattr(batch, name).tobytes() == getattr(plain, name).tobytes()
+    assert len(WheelBatch.from_rows([])) == 0
+    bad = {"p0_xz": (0, np.nan), "p1_xz": (3, np.inf), "speed_m_s": (4, -1.0), "tire_width_m": (5, 0.0)}
+    for name, (column, value) in bad.items():
+        wrong = [list(r) for r in rows]
+        wrong[1][column] = value
+        with pytest.raises(ValueError, match=name):
+            WheelBatch.from_rows(wrong)
+    with pytest.raises(ValueError, match="W, 6"):
+        WheelBatch.from_rows([(0.0, 1.0, 0.5)])
+
 def test_wheel_rows_give_the_vehicles_own_bits():
     """``wheel_rows`` (Python floats) gives ``wheel_contacts``, ``previous_wheel_contacts``, |``wheel_speeds``| and
     ``wheel_widths`` bit for bit, turning, reversing and at rest, with and without previous contacts; the effect's
