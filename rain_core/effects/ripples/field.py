@@ -32,7 +32,7 @@ from rain_core.effects.ripples.raindrops import (
     rain_key,
     raindrops,
 )
-from rain_core.effects.ripples.scroll import shift_in_place
+from rain_core.effects.ripples.scroll import shift_line
 from rain_core.effects.ripples.solver import WaveSolver
 from rain_core.effects.ripples.solver_f32 import WaveSolverF32
 from rain_core.effects.ripples.wakes import wake_bumps
@@ -156,10 +156,8 @@ class RippleField(WaterFollowing):
             if self._row_water is not None:
                 self._scroll_row_water(dx, dz)
             if self._following:  # the mask scrolled with the solver: ask only about the cells that entered
-                if dz:
-                    shift_in_place(self._unknown_rows[:, None], 0, dz, True)
-                if dx:
-                    shift_in_place(self._unknown_cols[None, :], dx, 0, True)
+                shift_line(self._unknown_rows, dz, True)
+                shift_line(self._unknown_cols, dx, True)
                 if fill:
                     self._fill_unknown_depths()
             self._water_fraction_stale = True

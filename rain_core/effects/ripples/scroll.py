@@ -1,6 +1,6 @@
 """Scrolling a grid by whole cells (the ripple window follows the car): ``shifted`` makes a moved copy,
-``shift_in_place`` moves an array itself and fills the strips that enter. Used by the wave solvers' state and
-mask and by the field's bookkeeping of which cells' water depth is known."""
+``shift_in_place`` moves an array itself and fills the strips that enter (``shift_line`` a 1-D one). Used by the
+wave solvers' state and mask and by the field's bookkeeping of which cells' water depth is known."""
 
 from __future__ import annotations
 
@@ -50,6 +50,22 @@ def shift_in_place(a: np.ndarray, dx: int, dz: int, fill) -> np.ndarray:
         a[:, n_x - dx:] = fill
     elif dx < 0:
         a[:, :-dx] = fill
+    return a
+
+
+def shift_line(a: np.ndarray, d: int, fill) -> np.ndarray:
+    """``shift_in_place`` of a 1-D array (returned): a[i] = a[i + d] where that exists, else ``fill``. Two slice
+    assignments, no kernel call: the field's flags of unknown rows and columns and its rows' water counts
+    scroll with every scroll."""
+    n = a.shape[0]
+    if abs(d) >= n:
+        a[...] = fill
+    elif d > 0:  # overlapping views copy as if through a temporary: exact in either direction
+        a[:n - d] = a[d:]
+        a[n - d:] = fill
+    elif d < 0:
+        a[-d:] = a[:n + d]
+        a[:-d] = fill
     return a
 
 

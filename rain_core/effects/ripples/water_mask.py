@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from rain_core.effects.ripples.scroll import shift_line
 from rain_core.effects.ripples.wheels import FilmDepthFn
 
 # The water fraction that sizes the candidates is counted on every RAIN_FRACTION_STRIDE-th row and column.
@@ -199,16 +200,10 @@ class WaterFollowing:
     def _scroll_row_water(self, dx: int, dz: int) -> None:
         """Scroll the rows' counts with the mask (``shifted``'s rows; the entering rows are water everywhere, as
         the mask's); a lateral scroll moves the lattice's columns: count afresh."""
-        counts = self._row_water
-        full = len(range(1, self.n - 1, RAIN_FRACTION_STRIDE))  # a row of water on the lattice's columns
         if dx or abs(dz) >= self.n:
             self._row_water = None
-        elif dz > 0:
-            counts[:-dz] = counts[dz:]
-            counts[-dz:] = full
-        elif dz < 0:
-            counts[-dz:] = counts[:dz]
-            counts[:-dz] = full
+        else:  # the entering rows: a row of water on the lattice's columns
+            shift_line(self._row_water, dz, len(range(1, self.n - 1, RAIN_FRACTION_STRIDE)))
 
     def _count_row_water(self, row0: int, row1: int) -> None:
         """Count the water of mask rows row0 … row1 − 1 on the lattice's columns into ``_row_water``."""

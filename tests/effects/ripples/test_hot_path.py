@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rain_core.effects.ripples.scroll import RowWindow, shift_in_place, shifted
+from rain_core.effects.ripples.scroll import RowWindow, shift_in_place, shift_line, shifted
 
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32, bool])
@@ -24,6 +24,19 @@ def test_shift_in_place_equals_shifted(dtype, kernel_path):
     shift_in_place(flags[:, None], 0, 2, True)
     np.testing.assert_array_equal(flags, shifted(np.eye(1, 12, 3, dtype=bool).T, 0, 2, True)[:, 0])
 
+
+
+@pytest.mark.parametrize("dtype", [np.int64, bool])
+def test_shift_line_equals_shifted(dtype):
+    """``shift_line`` (the field's flags of unknown rows and columns, its rows' water counts) is ``shifted`` of the
+    line as a column, in place, for scrolls either way, none, and past its end."""
+    rng = np.random.default_rng(3)
+    for d in (19, -19, 1, -1, 0, 39, -39, 40, -41):
+        a = rng.integers(0, 2 if dtype is bool else 100, 40).astype(dtype)
+        fill = True if dtype is bool else 31
+        want = shifted(a[:, None], 0, d, fill)[:, 0]
+        assert shift_line(a, d, fill) is a
+        np.testing.assert_array_equal(a, want)
 
 @pytest.mark.parametrize("dtype", [np.float32, bool])
 def test_row_window_scrolls_equal_shifted(dtype, kernel_path):
