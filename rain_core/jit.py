@@ -8,7 +8,10 @@ compare against; ``active()`` says which one runs.
 
 ``RAINROAD_JIT=0`` turns the kernels off for a process (A/B benchmarks, bisecting a difference); ``forced`` does
 it for a block (tests). Kernels compile on their first call (about a second each) and are cached on disk beside
-their module, so later processes load them.
+their module, so later processes load them. Numba keys a cached kernel to its own file's time stamp alone, and a
+kernel that calls another file's kernels carries their code: ``kernel`` adds those files' stamps to its key, so an
+edit of a callee's file alone (a ``git pull``) recompiles its callers instead of running stale code. A constant
+imported by name (``from m import C``) is not followed: kernels read other modules' constants as ``m.C``.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import hashlib
 import os
 import subprocess
 import sys
+import types
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -33,6 +37,10 @@ T = TypeVar("T")
 ENV_VAR = "RAINROAD_JIT"
 AVAILABLE: bool = numba is not None
 _KERNELS: list = []  # every compiled dispatcher made so far (``cold`` looks at their disk caches)
+# A source file with kernels → the other files their compiled code takes code from (the kernels they call, and the
+# files those take code from): a kernel of another module that refers to this one by name depends on them too.
+_DEPENDS: dict[str, frozenset[str]] = {}
+_PACKAGE = os.path.realpath(os.path.dirname(__file__)) + os.sep  # this package's files (numpy's are not followed)
 
 
 def _from_environment() -> bool:
@@ -89,7 +97,67 @@ def kernel(fn: F) -> F:
         return fn
     dispatcher = numba.njit(cache=True, nogil=True)(fn)
     _KERNELS.append(dispatcher)
+    _stamp_dependencies(dispatcher, fn)
     return dispatcher
+
+
+def _code_names(code) -> set[str]:
+    """The global names ``code`` and the code objects nested in it refer to."""
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            names |= _code_names(const)
+    return names
+
+
+def dependency_files(fn) -> frozenset[str]:
+    """The source files other than its own whose code ``fn``'s compiled code takes in: the kernels it calls by name
+    (``g(…)``, from any file) and this package's functions (an ``overload``ed helper) and modules (``m.g(…)``,
+    ``m.CONSTANT``) it names, with theirs in turn. Defined above ``fn`` (imported, or earlier in its file), they are
+    known when ``fn`` is decorated."""
+    own = os.path.realpath(fn.__code__.co_filename)
+    files: set[str] = set()
+    for name in _code_names(fn.__code__):
+        value = fn.__globals__.get(name)
+        py_func = getattr(value, "py_func", None)  # a Numba dispatcher
+        if isinstance(py_func, types.FunctionType):
+            path = os.path.realpath(py_func.__code__.co_filename)
+        elif isinstance(value, types.FunctionType):
+            path = os.path.realpath(value.__code__.co_filename)
+        elif isinstance(value, types.ModuleType) and getattr(value, "__file__", None):
+            path = os.path.realpath(value.__file__)
+        else:
+            continue
+        if path != own and (path in _DEPENDS or path.startswith(_PACKAGE) or py_func is not None):
+            files.add(path)
+            files |= _DEPENDS.get(path, frozenset())
+    files.discard(own)
+    _DEPENDS[own] = _DEPENDS.get(own, frozenset()) | files
+    return frozenset(files)
+
+
+_SOURCE_HASHES: dict[str, bytes] = {}  # path → SHA-256 of its bytes, read once per process
+
+
+def _source_hash(path: str) -> bytes:
+    digest = _SOURCE_HASHES.get(path)
+    if digest is None:
+        digest = _SOURCE_HASHES[path] = hashlib.sha256(Path(path).read_bytes()).digest()
+    return digest
+
+
+def _stamp_dependencies(dispatcher, fn) -> None:
+    """Key ``dispatcher``'s disk cache by the contents of ``dependency_files(fn)`` too, as Numba keys it by its own
+    file's (a SHA-256; its cache index takes any picklable stamp). A kernel that calls nothing from another file
+    keeps Numba's own stamp."""
+    files = dependency_files(fn)
+    if not files:
+        return
+    try:
+        cache_file = dispatcher._cache._cache_file
+        cache_file._source_stamp = (cache_file._source_stamp, tuple((p, _source_hash(p)) for p in sorted(files)))
+    except Exception:  # noqa: BLE001 - a Numba without these internals (or a file gone): its own stamp, as before
+        return
 
 
 def describe() -> str:

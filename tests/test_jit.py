@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -110,3 +112,36 @@ def test_warm_up_scene_runs():
             pytest.skip("Numba not installed")
         loadable, total = warmup.warm_up(frames_at_speed=3, frames_parked=2)
     assert 0 < total and 0 <= loadable <= total
+
+
+@pytest.mark.skipif(not jit.AVAILABLE, reason="Numba's disk cache")
+def test_an_edit_of_a_called_kernel_alone_recompiles_its_callers(tmp_path):
+    """Numba keys a cached kernel to its own file; a caller carries its callees' code. An edit of the callee's file
+    alone (a git pull) must not leave the caller running the old code from the disk cache."""
+    import subprocess
+    import sys
+
+    callee = tmp_path / "callee.py"
+    (tmp_path / "caller.py").write_text("from rain_core import jit\nfrom callee import g\n\n\n@jit.kernel\n"
+                                        "def f(x):\n    return g(x) * 10\n")
+
+    def run(step: int) -> int:
+        callee.write_text(f"from rain_core import jit\n\n\n@jit.kernel\ndef g(x):\n    return x + {step}\n")
+        code = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import caller; print(caller.f(1))"
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+        return int(out.stdout.strip())
+
+    assert run(1) == 20
+    assert run(1) == 20  # from the disk cache
+    assert run(22) == 230
+
+
+@pytest.mark.skipif(not jit.AVAILABLE, reason="the dispatchers' dependencies")
+def test_a_kernel_depends_on_the_files_of_the_kernels_it_calls():
+    from rain_core.effects.spray.kernels import spawn_frame
+    from rain_core.effects.windshield.kernels import rows
+
+    files = {Path(p).name for p in jit.dependency_files(spawn_frame.launch_to_records.py_func)}
+    assert {"records.py", "flight.py", "launches.py", "body_test.py"} <= files
+    assert {"common.py", "motion.py"} <= {Path(p).name for p in jit.dependency_files(rows.sort_rows.py_func)}
+    assert jit.dependency_files(_dot.py_func) == frozenset()  # NumPy's functions are not followed
