@@ -10,16 +10,19 @@ compare against; ``active()`` says which one runs.
 it for a block (tests). Kernels compile on their first call (about a second each) and are cached on disk beside
 their module, so later processes load them. Numba keys a cached kernel to its own file's time stamp alone, and a
 kernel that calls another file's kernels carries their code: ``kernel`` adds those files' stamps to its key, so an
-edit of a callee's file alone (a ``git pull``) recompiles its callers instead of running stale code. A constant
-imported by name (``from m import C``) is not followed: kernels read other modules' constants as ``m.C``.
+edit of a callee's file alone (a ``git pull``), or of a module whose constants a kernel imports, recompiles it
+instead of running stale code.
 """
 
 from __future__ import annotations
 
+import ast
 import hashlib
+import importlib.util
 import os
 import subprocess
 import sys
+import sysconfig
 import types
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -40,7 +43,9 @@ _KERNELS: list = []  # every compiled dispatcher made so far (``cold`` looks at 
 # A source file with kernels → the other files their compiled code takes code from (the kernels they call, and the
 # files those take code from): a kernel of another module that refers to this one by name depends on them too.
 _DEPENDS: dict[str, frozenset[str]] = {}
-_PACKAGE = os.path.realpath(os.path.dirname(__file__)) + os.sep  # this package's files (numpy's are not followed)
+_PACKAGE = os.path.realpath(os.path.dirname(__file__)) + os.sep  # this package's files
+# Installed libraries' and the standard library's files are not followed (numpy's constants, math's functions).
+_LIBRARIES = tuple({os.path.realpath(sysconfig.get_paths()[key]) + os.sep for key in ("stdlib", "purelib", "platlib")})
 
 
 def _from_environment() -> bool:
@@ -110,25 +115,69 @@ def _code_names(code) -> set[str]:
     return names
 
 
+def _followed(path: str) -> bool:
+    """Whether a source file's code may be compiled into a kernel: this package's, and any outside the installed
+    libraries (a user's own kernels)."""
+    return path.startswith(_PACKAGE) or not path.startswith(_LIBRARIES)
+
+
+_IMPORTED: dict[str, dict[str, str]] = {}  # source file → {name bound by ``from m import name``: m}
+
+
+def _imported_names(path: str, package: str | None) -> dict[str, str]:
+    """The names the module at ``path`` binds with ``from m import name`` (relative ones resolved), by name."""
+    names = _IMPORTED.get(path)
+    if names is None:
+        names = {}
+        for node in ast.walk(ast.parse(Path(path).read_bytes())):
+            if isinstance(node, ast.ImportFrom) and node.module != "__future__":
+                try:
+                    module = importlib.util.resolve_name("." * node.level + (node.module or ""), package)
+                except (ImportError, ValueError):
+                    continue
+                names.update({alias.asname or alias.name: module for alias in node.names})
+        _IMPORTED[path] = names
+    return names
+
+
 def dependency_files(fn) -> frozenset[str]:
-    """The source files other than its own whose code ``fn``'s compiled code takes in: the kernels it calls by name
-    (``g(…)``, from any file) and this package's functions (an ``overload``ed helper) and modules (``m.g(…)``,
-    ``m.CONSTANT``) it names, with theirs in turn. Defined above ``fn`` (imported, or earlier in its file), they are
-    known when ``fn`` is decorated."""
+    """The source files other than its own whose code or constants ``fn``'s compiled code takes in (Numba freezes
+    a global's value into the code): the kernels it calls (``g(…)``), the functions (an ``overload``ed helper),
+    modules (``m.g(…)``, ``m.CONSTANT``) and constants (``from m import CONSTANT``) it names, with the files those
+    files' kernels take in. Installed libraries are not followed. Defined above ``fn`` (imported, or earlier in its
+    file), they are known when ``fn`` is decorated."""
     own = os.path.realpath(fn.__code__.co_filename)
+    imported = None
     files: set[str] = set()
     for name in _code_names(fn.__code__):
-        value = fn.__globals__.get(name)
+        if name not in fn.__globals__:
+            continue
+        value = fn.__globals__[name]
         py_func = getattr(value, "py_func", None)  # a Numba dispatcher
         if isinstance(py_func, types.FunctionType):
-            path = os.path.realpath(py_func.__code__.co_filename)
+            path = py_func.__code__.co_filename
         elif isinstance(value, types.FunctionType):
-            path = os.path.realpath(value.__code__.co_filename)
-        elif isinstance(value, types.ModuleType) and getattr(value, "__file__", None):
-            path = os.path.realpath(value.__file__)
-        else:
+            path = value.__code__.co_filename
+        elif isinstance(value, types.ModuleType):
+            path = getattr(value, "__file__", None)
+        else:  # a constant: the modules it was imported through, to the one that binds it
+            if imported is None:
+                imported = _imported_names(own, fn.__globals__.get("__package__"))
+            path = None
+            module_name = imported.get(name)
+            for _ in range(8):  # a re-export chain (a package's __init__ passing a name on)
+                module = sys.modules.get(module_name or "")
+                through = getattr(module, "__file__", None)
+                if through is None:
+                    break
+                through = os.path.realpath(through)
+                if through != own and _followed(through):
+                    files.add(through)
+                module_name = _imported_names(through, module.__package__).get(name)
+        if path is None:
             continue
-        if path != own and (path in _DEPENDS or path.startswith(_PACKAGE) or py_func is not None):
+        path = os.path.realpath(path)
+        if path != own and _followed(path):
             files.add(path)
             files |= _DEPENDS.get(path, frozenset())
     files.discard(own)

@@ -115,25 +115,29 @@ def test_warm_up_scene_runs():
 
 
 @pytest.mark.skipif(not jit.AVAILABLE, reason="Numba's disk cache")
-def test_an_edit_of_a_called_kernel_alone_recompiles_its_callers(tmp_path):
-    """Numba keys a cached kernel to its own file; a caller carries its callees' code. An edit of the callee's file
-    alone (a git pull) must not leave the caller running the old code from the disk cache."""
+def test_an_edit_of_a_callee_or_a_constant_alone_recompiles_the_kernel(tmp_path):
+    """Numba keys a cached kernel to its own file, but the kernel carries its callees' code and its globals' values.
+    An edit of a callee's file alone, or of the module a constant comes from (through a re-export here), must not
+    leave the kernel running old code from the disk cache (a git pull)."""
     import subprocess
     import sys
 
-    callee = tmp_path / "callee.py"
-    (tmp_path / "caller.py").write_text("from rain_core import jit\nfrom callee import g\n\n\n@jit.kernel\n"
-                                        "def f(x):\n    return g(x) * 10\n")
+    (tmp_path / "mid.py").write_text("from consts import C  # noqa: F401 - passed on\n")
+    (tmp_path / "caller.py").write_text("from rain_core import jit\nfrom callee import g\nfrom mid import C\n\n\n"
+                                        "@jit.kernel\ndef f(x):\n    return g(x) * 10 + C\n")
 
-    def run(step: int) -> int:
-        callee.write_text(f"from rain_core import jit\n\n\n@jit.kernel\ndef g(x):\n    return x + {step}\n")
+    def run(step: int, constant: int) -> int:
+        (tmp_path / "callee.py").write_text(f"from rain_core import jit\n\n\n@jit.kernel\ndef g(x):\n"
+                                            f"    return x + {step}\n")
+        (tmp_path / "consts.py").write_text(f"C = {constant}\n")
         code = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import caller; print(caller.f(1))"
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
         return int(out.stdout.strip())
 
-    assert run(1) == 20
-    assert run(1) == 20  # from the disk cache
-    assert run(22) == 230
+    assert run(1, 0) == 20
+    assert run(1, 0) == 20  # from the disk cache
+    assert run(22, 0) == 230
+    assert run(22, 5) == 235
 
 
 @pytest.mark.skipif(not jit.AVAILABLE, reason="the dispatchers' dependencies")
@@ -143,5 +147,7 @@ def test_a_kernel_depends_on_the_files_of_the_kernels_it_calls():
 
     files = {Path(p).name for p in jit.dependency_files(spawn_frame.launch_to_records.py_func)}
     assert {"records.py", "flight.py", "launches.py", "body_test.py"} <= files
-    assert {"common.py", "motion.py"} <= {Path(p).name for p in jit.dependency_files(rows.sort_rows.py_func)}
+    # and on the modules whose constants it takes (Numba freezes them into the code)
+    assert {"common.py", "motion.py", "constants.py", "drop_rows.py"} <= {
+        Path(p).name for p in jit.dependency_files(rows.sort_rows.py_func)}
     assert jit.dependency_files(_dot.py_func) == frozenset()  # NumPy's functions are not followed
