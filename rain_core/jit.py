@@ -8,10 +8,10 @@ compare against; ``active()`` says which one runs.
 
 ``RAINROAD_JIT=0`` turns the kernels off for a process (A/B benchmarks, bisecting a difference); ``forced`` does
 it for a block (tests). Kernels compile on their first call (about a second each) and are cached on disk beside
-their module, so later processes load them. Numba keys a cached kernel to its own file's time stamp alone, and a
-kernel that calls another file's kernels carries their code: ``kernel`` adds those files' stamps to its key, so an
-edit of a callee's file alone (a ``git pull``), or of a module whose constants a kernel imports, recompiles it
-instead of running stale code.
+their module, so later processes load them. Numba keys a cached kernel to its own file's contents alone, but a
+kernel carries its callees' code and the values of the constants it imports: ``kernel`` adds those files' hashes
+to its key, so an edit of a callee's file alone (a ``git pull``), or of a module whose constants a kernel imports,
+recompiles it instead of running stale code.
 """
 
 from __future__ import annotations
@@ -140,6 +140,22 @@ def _imported_names(path: str, package: str | None) -> dict[str, str]:
     return names
 
 
+def _constant_sources(name: str, module_name: str | None, own: str) -> set[str]:
+    """The files a constant ``name`` imported from ``module_name`` passes through, to the one that binds it (a
+    re-export chain: a package's __init__ passing a name on)."""
+    files = set()
+    for _ in range(8):
+        module = sys.modules.get(module_name or "")
+        path = getattr(module, "__file__", None)
+        if path is None:
+            break
+        path = os.path.realpath(path)
+        if path != own and _followed(path):
+            files.add(path)
+        module_name = _imported_names(path, module.__package__).get(name)
+    return files
+
+
 def dependency_files(fn) -> frozenset[str]:
     """The source files other than its own whose code or constants ``fn``'s compiled code takes in (Numba freezes
     a global's value into the code): the kernels it calls (``g(…)``), the functions (an ``overload``ed helper),
@@ -160,20 +176,11 @@ def dependency_files(fn) -> frozenset[str]:
             path = value.__code__.co_filename
         elif isinstance(value, types.ModuleType):
             path = getattr(value, "__file__", None)
-        else:  # a constant: the modules it was imported through, to the one that binds it
+        else:  # a constant
             if imported is None:
                 imported = _imported_names(own, fn.__globals__.get("__package__"))
-            path = None
-            module_name = imported.get(name)
-            for _ in range(8):  # a re-export chain (a package's __init__ passing a name on)
-                module = sys.modules.get(module_name or "")
-                through = getattr(module, "__file__", None)
-                if through is None:
-                    break
-                through = os.path.realpath(through)
-                if through != own and _followed(through):
-                    files.add(through)
-                module_name = _imported_names(through, module.__package__).get(name)
+            files |= _constant_sources(name, imported.get(name), own)
+            continue
         if path is None:
             continue
         path = os.path.realpath(path)
@@ -238,14 +245,15 @@ def _loads_from_disk(dispatcher) -> bool:
 
 
 def _stamp_path() -> Path | None:
-    """A file saying a warm-up finished for these kernel sources, this Numba and this Python: a kernel the
-    warm-up scene never calls would otherwise make every start look cold."""
+    """A file saying a warm-up finished for these kernel sources (and the files they take code and constants from:
+    an edit there recompiles them too), this Numba and this Python: a kernel the warm-up scene never calls would
+    otherwise make every start look cold."""
     if not _KERNELS:
         return None
     digest = hashlib.sha1(f"{numba.__version__} {sys.version}".encode())
-    files = sorted({d.py_func.__code__.co_filename for d in _KERNELS})
-    for name in files:
-        digest.update(Path(name).read_bytes())
+    files = {os.path.realpath(d.py_func.__code__.co_filename) for d in _KERNELS}
+    for name in sorted(files.union(*_DEPENDS.values())):
+        digest.update(_source_hash(name))
     try:
         folder = sorted(d._cache._cache_path for d in _KERNELS)[0]
     except Exception:  # noqa: BLE001 - no cache folder known: no stamp

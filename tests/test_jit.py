@@ -104,6 +104,20 @@ def test_the_stamp_names_the_sources():
     assert path is not None and path.name.startswith("rainroad-kernels-") and path.suffix == ".warm"
 
 
+def test_the_stamp_covers_the_files_kernels_take_code_from(monkeypatch, tmp_path):
+    """An edit of only a callee's or a constants file recompiles kernels: the warm-up's stamp must change too, or
+    the window would think the kernels warm and compile them on its first frame."""
+    if not jit._KERNELS:
+        pytest.skip("no compiled kernels")
+    stamps = []
+    for text in ("C = 1\n", "C = 2\n"):
+        dependency = tmp_path / f"consts_{len(stamps)}.py"
+        dependency.write_text(text)
+        monkeypatch.setattr(jit, "_DEPENDS", {**jit._DEPENDS, "kernel_file": frozenset({str(dependency)})})
+        stamps.append(jit._stamp_path())
+    assert stamps[0] != stamps[1]
+
+
 def test_warm_up_scene_runs():
     from rain_core import warmup
 
