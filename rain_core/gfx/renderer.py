@@ -249,6 +249,9 @@ class Renderer:
 
     def _render(self, frame: Frame) -> None:
         ctx = self.ctx
+        if self._gpu_timing:  # the last frame's timer queries, read before any pass (PassTimer.collect)
+            for timer in self._timers.values():
+                timer.collect()
         self.stats = []
         self._to_describe = []
         self.scene.forget_vehicles(frame.vehicles)

@@ -2,7 +2,10 @@
 
 A timer query's result is only ready once the GPU has done the pass: reading it at once stalls the CPU until
 then. The renderer therefore times the GPU only while a performance table is shown (``Renderer.gpu_timing``)
-and reads each query one frame late (``PassTimer(lagged=True)``), when the result is long ready."""
+and reads each query one frame late (``PassTimer(lagged=True)``), when the result is long ready. It reads them
+all before the frame's first pass (``PassTimer.collect``): with a driver thread (``context.request_driver_thread``)
+every read waits until the thread has run all the calls queued before it, so a read after each pass made the
+driver's work run in step with the passes, ~24 times a frame."""
 
 from __future__ import annotations
 
@@ -33,6 +36,7 @@ class PassTimer:
         self._queries: list | None = None  # one or two timer queries, made on first use
         self._index = 0
         self._pending = [False, False]  # whether query i holds an unread measurement (lagged)
+        self._collected: float | None = None  # the previous measurement, read by collect() (lagged)
         self.gpu_source = "none"
         if gpu:
             self._make_queries()
@@ -48,6 +52,15 @@ class PassTimer:
     def forget(self) -> None:
         """Drop unread lagged measurements (GPU timing was switched off: a later read would be stale)."""
         self._pending = [False, False]
+        self._collected = None
+
+    def collect(self) -> None:
+        """Read the previous measurement's query now (lagged only), for the next ``measure`` to return: a renderer
+        collects all its timers before its first pass, so reading them waits for a threaded driver once a frame."""
+        other = 1 - self._index  # the query measure() reads after its own (the one it does not use next)
+        if self.lagged and self._queries and self._pending[other]:
+            self._pending[other] = False
+            self._collected = _gpu_ms(self._queries[other].elapsed)
 
     def measure(self, fn, gpu: bool | None = None) -> tuple[float, float | None]:
         """Run fn(); return (cpu_ms, gpu_ms or None). ``gpu``: time the GPU too (default: ``self.gpu``)."""
@@ -70,10 +83,11 @@ class PassTimer:
             return cpu, _gpu_ms(query.elapsed)
         self._pending[self._index] = True
         self._index = 1 - self._index
-        if not self._pending[self._index]:
-            return cpu, None
-        self._pending[self._index] = False  # the other query: this pass in the previous frame, done by now
-        return cpu, _gpu_ms(self._queries[self._index].elapsed)
+        gpu_ms, self._collected = self._collected, None
+        if self._pending[self._index]:  # not collected: the other query (this pass a frame ago) is read now
+            self._pending[self._index] = False
+            gpu_ms = _gpu_ms(self._queries[self._index].elapsed)
+        return cpu, gpu_ms
 
 
 def _gpu_ms(elapsed_ns: int) -> float | None:
