@@ -13,6 +13,7 @@ from app.controls import KeyboardDriver, reset_to_lane
 from app.recording import save_png
 from rain_core import jit
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
+from rain_core.gfx.context import request_driver_thread
 from rain_core.scene import Scene
 
 KEY_NAMES = {"W": "up", "UP": "up", "S": "down", "DOWN": "down", "A": "left", "LEFT": "left", "D": "right",
@@ -37,7 +38,8 @@ def missing_backend_message(backend: str, exc: ImportError) -> str:
 
 
 def create_window(backend: str, size: tuple[int, int], title: str = "Rainroad"):
-    """A moderngl-window window of the given backend (pyglet, glfw, … or headless), GL 3.3 core."""
+    """A moderngl-window window of the given backend (pyglet, glfw, … or headless), GL 3.3 core, with Mesa's
+    driver thread asked for (``request_driver_thread``) before its context."""
     import moderngl_window
     from moderngl_window.conf import settings as mglw_settings
 
@@ -50,6 +52,7 @@ def create_window(backend: str, size: tuple[int, int], title: str = "Rainroad"):
     mglw_settings.WINDOW["resizable"] = True
     if backend == "headless":
         mglw_settings.WINDOW["backend"] = "egl"
+    request_driver_thread()
     return moderngl_window.create_window_from_settings()
 
 

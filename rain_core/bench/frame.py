@@ -41,6 +41,12 @@ Method (also printed in the header):
   between draws). Without the draws, the CPU figures bracket what a GPU driver that works on threads of its own
   leaves to this thread. The pixels are meaningless then, the simulations run as usual, and "auto" may pick
   another ripples solver (the chosen one is printed per case).
+* The driver thread: the context asks Mesa for its driver thread (``mesa_glthread``, see
+  ``rain_core.gfx.context.request_driver_thread``; the header says what the environment asked). GL calls are
+  then queued for that thread, and the draws' vertex work runs there, not on this thread. "ms inside GL" is the
+  queueing plus what the calls that must wait (a texture written from memory, a buffer write over 8 KiB, a
+  query read, ``finish``) wait for; such a call also runs, on this thread, the calls not yet handed to the
+  driver thread. Run with ``mesa_glthread=false`` for the driver on this thread.
 * Every figure is the median over the measured frames after a warm-up (shader compiles, the ripples' backend
   choice and the rain's first fill happen there).
 
@@ -507,6 +513,13 @@ def _gpu(result: dict, key: str) -> str:
     return f"{value:.3f}" if result["gpu_timing"] and value is not None and math.isfinite(value) else "-"
 
 
+def driver_thread_note() -> str:
+    """Whether Mesa runs the GL driver on its own thread, as the environment asked it when the context was made
+    (``rain_core.gfx.context.request_driver_thread``; read from the environment so older trees report theirs)."""
+    value = os.environ.get("mesa_glthread")
+    return "Mesa's default" if value is None else f"mesa_glthread={value}"
+
+
 def header(args, overhead_ns: float, renderer: str = "?") -> str:
     import rain_core
 
@@ -521,7 +534,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
             f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}"
             + (", draws skipped (--skip-draws)" if getattr(args, "skip_draws", False) else "")
             + "".join(f", {path} = {value!r}" for path, value in getattr(args, "overrides", ())) + "\n\n"
-            f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}\n\n"
+            f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}; driver thread: "
+            f"{driver_thread_note()}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
             "framebuffer binds, uniform writes, context state, object creation, timer queries) are wrapped by "
             "counters of calls, bytes written and time inside; CPU outside GL = the pass's CPU time (measured around "
