@@ -19,6 +19,7 @@ from imgui_bundle import imgui
 from app.controls import KEY_HELP, reset_to_lane
 from app.imgui_layer import ImGuiLayer
 from rain_core import jit, physics
+from rain_core.gfx.context import describe_driver
 from rain_core.settings import SettingsError, all_fields, apply_rain_preset, field_info, get_value, set_value
 
 # The sections in panel order: (settings section or None, title). A section is "wired" when an effect or the
@@ -116,6 +117,7 @@ class RainManagerPanel:
         self.frame_ms = deque(maxlen=120)
         self._ctx = ctx
         self._height_view = None  # RGBA8 texture of the ripple heights, made when first shown
+        self._driver: str | None = None  # the GL driver in words (describe_driver), for the performance section
         self.fields = {}
         for info in all_fields():
             self.fields.setdefault(info.path.split(".")[0], []).append(info)
@@ -254,6 +256,9 @@ class RainManagerPanel:
         width, height = renderer.size
         imgui.text(f"render {width}x{height}   GPU timing: {renderer.timing_source}")
         imgui.text(f"CPU simulations: {jit.describe()}")
+        if self._driver is None:  # (the context's strings: read once)
+            self._driver = describe_driver(self._ctx)
+        imgui.text_wrapped(f"GL: {self._driver}")
         imgui.text_disabled("GPU ms are timed only while this section is open (one frame late)")
         # Columns as wide as their text (no cut pass names); a table wider than the panel scrolls sideways.
         flags = (imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value

@@ -57,6 +57,18 @@ def driver_thread_requested(environ: MutableMapping[str, str] = os.environ) -> b
     return environ.get(DRIVER_THREAD_OPTION, "").strip().lower() in _ON
 
 
+def describe_driver(ctx: moderngl.Context) -> str:
+    """The GL driver in words, e.g. "llvmpipe (LLVM 15.0.6, 256 bits), Mesa 22.3.6, driver thread on": its renderer,
+    Mesa's version where it is Mesa, and then whether the environment asked Mesa for its driver thread."""
+    renderer = ctx.info.get("GL_RENDERER", "unknown renderer")
+    version = str(ctx.info.get("GL_VERSION", ""))
+    mesa = version.find("Mesa")
+    if mesa < 0:
+        return renderer
+    thread = "on" if driver_thread_requested() else "off"
+    return f"{renderer}, {version[mesa:]}, driver thread {thread}"
+
+
 def create_headless_context() -> moderngl.Context:
     """A standalone context with no window: EGL first (works without a display), then the platform default. Asks
     for Mesa's driver thread first (``request_driver_thread``)."""

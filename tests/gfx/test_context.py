@@ -8,7 +8,12 @@ import sys
 
 import pytest
 
-from rain_core.gfx.context import DRIVER_THREAD_OPTION, driver_thread_requested, request_driver_thread
+from rain_core.gfx.context import (
+    DRIVER_THREAD_OPTION,
+    describe_driver,
+    driver_thread_requested,
+    request_driver_thread,
+)
 
 
 def test_request_sets_the_option_and_silences_mesas_notice():
@@ -72,3 +77,18 @@ def test_the_driver_thread_draws_the_same_pixels_and_prints_nothing():
         assert (workers, direct_workers) == (1, 0)
     assert len(threaded) == len(hashlib.sha256().hexdigest())
     assert threaded == direct
+
+
+class _Info:
+    def __init__(self, renderer, version):
+        self.info = {"GL_RENDERER": renderer, "GL_VERSION": version}
+
+
+def test_the_driver_in_words(monkeypatch):
+    mesa = _Info("llvmpipe (LLVM 15.0.6, 256 bits)", "4.5 (Core Profile) Mesa 22.3.6")
+    monkeypatch.setenv(DRIVER_THREAD_OPTION, "true")
+    assert describe_driver(mesa) == "llvmpipe (LLVM 15.0.6, 256 bits), Mesa 22.3.6, driver thread on"
+    monkeypatch.setenv(DRIVER_THREAD_OPTION, "false")
+    assert describe_driver(mesa).endswith("driver thread off")
+    # Other drivers ignore Mesa's option: their renderer alone.
+    assert describe_driver(_Info("NVIDIA H200/PCIe/SSE2", "4.6.0 NVIDIA 550.54")) == "NVIDIA H200/PCIe/SSE2"
