@@ -19,7 +19,7 @@ from imgui_bundle import imgui
 from app.controls import KEY_HELP, reset_to_lane
 from app.imgui_layer import ImGuiLayer
 from rain_core import jit, physics
-from rain_core.gfx.context import describe_driver
+from rain_core.gfx.driver import describe_driver
 from rain_core.settings import SettingsError, all_fields, apply_rain_preset, field_info, get_value, set_value
 
 # The sections in panel order: (settings section or None, title). A section is "wired" when an effect or the

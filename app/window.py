@@ -13,7 +13,7 @@ from app.controls import KeyboardDriver, reset_to_lane
 from app.recording import save_png
 from rain_core import jit
 from rain_core.car_mesh import DRIVER_EYE_LOCAL
-from rain_core.gfx.context import request_driver_thread
+from rain_core.gfx.driver import request_driver_thread
 from rain_core.scene import Scene
 
 KEY_NAMES = {"W": "up", "UP": "up", "S": "down", "DOWN": "down", "A": "left", "LEFT": "left", "D": "right",
