@@ -259,7 +259,7 @@ class RainManagerPanel:
         if self._driver is None:  # (the context's strings: read once)
             self._driver = describe_driver(self._ctx)
         imgui.text_wrapped(f"GL: {self._driver}")
-        imgui.text_disabled("GPU ms are timed only while this section is open (one frame late)")
+        imgui.text_disabled("GPU ms are timed only while this section is open (two frames late)")
         # Columns as wide as their text (no cut pass names); a table wider than the panel scrolls sideways.
         flags = (imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
                  | imgui.TableFlags_.sizing_fixed_fit.value | imgui.TableFlags_.scroll_x.value)

@@ -20,12 +20,13 @@ Method (also printed in the header):
   call lands in the pass that made it; ``Scene.step`` is its own bucket ("sim: scene.step"); what the renderer
   does between passes is "renderer (between passes)".
 * CPU ms outside the driver of a pass = its CPU time — measured around its ``Renderer._timed`` call, i.e.
-  what the renderer's ``PassStat.cpu_ms`` covers plus the timer-query read-back — minus the time inside wrapped
-  GL calls of that pass (the read-back's stall included) minus the wrapper's own cost outside the time it
-  records (measured at start-up on a no-op, per call). ``Scene.step`` is timed alone the same way. The whole
-  frame is the time of ``Scene.step`` + ``Scene.render`` minus all time inside wrapped calls (and the wrapper
-  cost).
-* "GPU ms" is the pass's GPU time from the renderer's timer queries (read one frame late, so nothing stalls) and
+  what the renderer's ``PassStat.cpu_ms`` covers — minus the time inside wrapped GL calls of that pass minus the
+  wrapper's own cost outside the time it records (measured at start-up on a no-op, per call). The renderer reads
+  the timer queries before the frame's first pass (``PassTimer.collect``): "renderer (between passes)" holds
+  them, with their waits counted inside GL (trees before 27b694d read each after its pass). ``Scene.step`` is
+  timed alone the same way. The whole frame is the time of ``Scene.step`` + ``Scene.render`` minus all time
+  inside wrapped calls (and the wrapper cost).
+* "GPU ms" is the pass's GPU time from the renderer's timer queries (read two frames late, so nothing stalls) and
   "GPU %" its share of the frame's; they need the timer queries, on by default here. On llvmpipe, which emulates
   the GPU on the CPU and defers draws to a later flush, only the ratios mean anything; on a real GPU both are
   real (the header names the driver). "rain GPU ms" in the summary is the sum over the rain's own effects
@@ -42,11 +43,11 @@ Method (also printed in the header):
   leaves to this thread. The pixels are meaningless then, the simulations run as usual, and "auto" may pick
   another ripples solver (the chosen one is printed per case).
 * The driver thread: the context asks Mesa for its driver thread (``mesa_glthread``, see
-  ``rain_core.gfx.context.request_driver_thread``; the header says what the environment asked). GL calls are
-  then queued for that thread, and the draws' vertex work runs there, not on this thread. "ms inside GL" is the
-  queueing plus what the calls that must wait (a texture written from memory, a buffer write over 8 KiB, a
-  query read, ``finish``) wait for; such a call also runs, on this thread, the calls not yet handed to the
-  driver thread. Run with ``mesa_glthread=false`` for the driver on this thread.
+  ``rain_core.gfx.driver``; the header says what the environment asked). GL calls are then queued for that
+  thread, and the draws' vertex work runs there, not on this thread. "ms inside GL" is the queueing plus what
+  the calls that must wait for that thread wait for (e.g. reads, a texture written from memory, a buffer write
+  over 8 KiB, object creation, a query read, ``finish``); such a call also runs, on this thread, the calls not
+  yet handed to the driver thread. Run with ``mesa_glthread=false`` for the driver on this thread.
 * Every figure is the median over the measured frames after a warm-up (shader compiles, the ripples' backend
   choice and the rain's first fill happen there).
 
@@ -539,7 +540,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
             "framebuffer binds, uniform writes, context state, object creation, timer queries) are wrapped by "
             "counters of calls, bytes written and time inside; CPU outside GL = the pass's CPU time (measured around "
-            "Renderer._timed: PassStat.cpu_ms + the timer-query read; or Scene.step timed alone) minus the time "
+            "Renderer._timed: PassStat.cpu_ms; or Scene.step timed alone; the timer queries are read before the "
+            "first pass, in 'renderer (between passes)') minus the time "
             "inside wrapped calls minus the wrapper's own cost "
             f"({overhead_ns / 1e3:.2f} µs a call, measured). Clock: {args.clock} "
             f"({'main-thread CPU time' if args.clock == 'thread' else 'wall time'}). Medians over {args.frames} "

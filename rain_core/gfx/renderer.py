@@ -53,7 +53,7 @@ class Renderer:
 
     ``render(frame)`` runs the passes; ``image()`` returns the last frame as uint8 (H, W, 3) sRGB, top row first;
     ``present(fbo, size)`` draws it into a window's framebuffer. ``stats`` lists the passes of the last frame:
-    CPU ms always, GPU ms only while ``gpu_timing`` is on (a timer query per pass, read a frame late; turn it
+    CPU ms always, GPU ms only while ``gpu_timing`` is on (a timer query per pass, read two frames late; turn it
     on only while someone looks at the figures — a performance table).
     """
 
@@ -96,7 +96,7 @@ class Renderer:
 
     @property
     def gpu_timing(self) -> bool:
-        """Whether passes are timed on the GPU too (timer queries, read one frame late). Switch it on only while
+        """Whether passes are timed on the GPU too (timer queries, read two frames late). Switch it on only while
         the figures are shown: it adds queries to every pass."""
         return self._gpu_timing
 
