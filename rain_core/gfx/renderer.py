@@ -249,7 +249,7 @@ class Renderer:
 
     def _render(self, frame: Frame) -> None:
         ctx = self.ctx
-        if self._gpu_timing:  # the last frame's timer queries, read before any pass (PassTimer.collect)
+        if self._gpu_timing:  # the timer queries due (two frames old), read before any pass (PassTimer.collect)
             for timer in self._timers.values():
                 timer.collect()
         self.stats = []
