@@ -35,7 +35,9 @@ Method (also printed in the header):
 * Clock (``--clock``): by default the main thread's CPU time (``time.thread_time_ns``), so time the process
   spent waiting for a core — this machine is shared — and llvmpipe's own rasterizer threads do not count;
   ``--clock wall`` uses wall time. "ms inside GL" is then the main thread's CPU time inside the driver; the
-  frame's wall time (step + render + ``ctx.finish()``) is always wall time.
+  frame's wall time (step + render + ``ctx.finish()``) is always wall time. "CPU ms, all threads" in the summary
+  is the CPU time of every thread of the process over the same span (``time.process_time``): the driver's thread
+  and, on llvmpipe, its rasterizer threads included, so work that moved off the main thread still shows there.
 * ``--skip-draws`` counts the draws (``VertexArray.render``/``transform``/``render_indirect``,
   ``build_mipmaps``) without entering the driver. llvmpipe runs a draw's vertex work on the calling thread, and
   Python's code and data are then cold for whatever follows (measured: the same glue costs 3–10× its warm time
@@ -375,6 +377,7 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             counter.reset()
             counter.bucket = STEP_BUCKET
             wall0 = time.perf_counter()
+            process0 = time.process_time_ns()
             t0 = clock()
             scene.step(dt_s, drive)
             t1 = clock()
@@ -384,10 +387,12 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             counter.bucket = "finish"
             ctx.finish()
             wall = (time.perf_counter() - wall0) * 1e3
+            process = (time.process_time_ns() - process0) * 1e-6
             counter.bucket = BETWEEN_BUCKET
             if index < warmup:
                 continue
-            _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6, (t2 - t1) * 1e-6, wall)
+            _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6, (t2 - t1) * 1e-6, wall,
+                     process)
         field = next((getattr(e, "field", None) for e in scene.effects if e.name == "ripples"), None)
         solver = getattr(field, "backend", None) or "not built"  # what "auto" chose
     finally:
@@ -405,8 +410,10 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             "rows": rows, "frame": frame}
 
 
-def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_ms: float, wall_ms: float) -> None:
-    """Add one frame's figures to ``samples`` (name → column → list)."""
+def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_ms: float, wall_ms: float,
+             process_ms: float) -> None:
+    """Add one frame's figures to ``samples`` (name → column → list); ``process_ms``: the CPU time of all the
+    process's threads over the frame (step, render and finish)."""
     ovh_ms = counter.overhead_ns * 1e-6
     tallies = counter.tallies
     total_gpu = sum(s.gpu_ms for s in stats if s.ran and s.gpu_ms is not None) or math.nan
@@ -460,7 +467,7 @@ def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_m
             total.by_kind[kind] += n
     rain_gpu = sum(acc["gpu_ms"] for effect, acc in effects.items() if effect in RAIN_EFFECTS)
     add("frame", {**row(total, step_ms + render_ms), "gpu_ms": total_gpu, "gpu_share": 100.0,
-                  "rain_gpu_ms": rain_gpu, "wall_ms": wall_ms})
+                  "rain_gpu_ms": rain_gpu, "wall_ms": wall_ms, "process_cpu_ms": process_ms})
 
 
 # --- report ------------------------------------------------------------------------------------------------
@@ -504,9 +511,11 @@ def summary_table(results: list[dict]) -> str:
              f"{r['frame']['gl_calls']:.0f}", f"{r['frame'].get('uniform_writes', 0):.0f}",
              f"{r['frame']['upload_kb']:.1f}", f"{r['frame']['uniform_kb']:.1f}",
              f"{r['frame']['gl_ms']:.1f}", f"{r['frame']['wall_ms']:.1f}",
-             _gpu(r, "gpu_ms"), _gpu(r, "rain_gpu_ms")] for r in results]
+             f"{r['frame'].get('process_cpu_ms', math.nan):.1f}", _gpu(r, "gpu_ms"), _gpu(r, "rain_gpu_ms")]
+            for r in results]
     return _table(["km/h", "streak budget", "CPU ms outside GL", "GL calls", "uniform writes", "upload KB",
-                   "uniform KB", "ms inside GL", "frame wall ms", "GPU ms", "rain GPU ms"], body)
+                   "uniform KB", "ms inside GL", "frame wall ms", "CPU ms, all threads", "GPU ms", "rain GPU ms"],
+                  body)
 
 
 def _gpu(result: dict, key: str) -> str:
@@ -516,7 +525,7 @@ def _gpu(result: dict, key: str) -> str:
 
 def driver_thread_note() -> str:
     """Whether Mesa runs the GL driver on its own thread, as the environment asked it when the context was made
-    (``rain_core.gfx.context.request_driver_thread``; read from the environment so older trees report theirs)."""
+    (``rain_core.gfx.driver.request_driver_thread``; read from the environment so older trees report theirs)."""
     value = os.environ.get("mesa_glthread")
     return "Mesa's default" if value is None else f"mesa_glthread={value}"
 

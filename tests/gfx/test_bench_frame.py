@@ -17,9 +17,11 @@ def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
         result = measure_case(gl_ctx, (48, 27), budget=2000, speed_kmh=100.0, frames=2, warmup=2, counter=counter)
     frame = result["frame"]
     assert frame["gl_calls"] > 0 and frame["upload_kb"] + frame["uniform_kb"] > 0
-    for key in ("cpu_ms", "gl_ms", "wall_ms", "gl_calls", "upload_kb", "uniform_kb"):
+    for key in ("cpu_ms", "gl_ms", "wall_ms", "process_cpu_ms", "gl_calls", "upload_kb", "uniform_kb"):
         assert math.isfinite(frame[key]) and frame[key] >= 0.0, key
     assert frame["cpu_ms"] > 0.0 and frame["wall_ms"] >= frame["cpu_ms"]
+    # Every thread's CPU holds at least the main thread's outside and inside GL (clock ticks aside).
+    assert frame["process_cpu_ms"] >= 0.9 * (frame["cpu_ms"] + frame["gl_ms"])
     assert "scene" in result["rows"] and result["rows"]["scene"]["gl_calls"] > 0
     # uniform writes are GL calls too (the scene pass writes at least each mesh's model matrix)
     assert 0 < result["rows"]["scene"]["uniform_writes"] < result["rows"]["scene"]["gl_calls"]
