@@ -45,7 +45,7 @@ Method (also printed in the header):
   leaves to this thread. The pixels are meaningless then, the simulations run as usual, and "auto" may pick
   another ripples solver (the chosen one is printed per case).
 * The driver thread: the context asks Mesa for its driver thread (``mesa_glthread``, see
-  ``rain_core.gfx.driver``; the header says what the environment asked). GL calls are then queued for that
+  ``rain_core.gfx.driver``; the header says whether it runs). GL calls are then queued for that
   thread, and the draws' vertex work runs there, not on this thread. "ms inside GL" is the queueing plus what
   the calls that must wait for that thread wait for (e.g. reads, a texture written from memory, a buffer write
   over 8 KiB, object creation, a query read, ``finish``); such a call also runs, on this thread, the calls not
@@ -523,11 +523,14 @@ def _gpu(result: dict, key: str) -> str:
     return f"{value:.3f}" if result["gpu_timing"] and value is not None and math.isfinite(value) else "-"
 
 
-def driver_thread_note() -> str:
-    """Whether Mesa runs the GL driver on its own thread, as the environment asked it when the context was made
-    (``rain_core.gfx.driver.request_driver_thread``; read from the environment so older trees report theirs)."""
-    value = os.environ.get("mesa_glthread")
-    return "Mesa's default" if value is None else f"mesa_glthread={value}"
+def gl_description(ctx) -> str:
+    """The GL driver in words: ``gfx.driver.describe_driver`` (renderer, Mesa's version, whether its driver thread
+    runs); in an older tree without it, the renderer and what the environment asked of Mesa."""
+    try:
+        from rain_core.gfx.driver import describe_driver
+    except ImportError:
+        return f"{ctx.info.get('GL_RENDERER', '?')}, mesa_glthread={os.environ.get('mesa_glthread', 'unset')}"
+    return describe_driver(ctx)
 
 
 def header(args, overhead_ns: float, renderer: str = "?") -> str:
@@ -544,8 +547,7 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
             f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}"
             + (", draws skipped (--skip-draws)" if getattr(args, "skip_draws", False) else "")
             + "".join(f", {path} = {value!r}" for path, value in getattr(args, "overrides", ())) + "\n\n"
-            f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}; driver thread: "
-            f"{driver_thread_note()}\n\n"
+            f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
             "framebuffer binds, uniform writes, context state, object creation, timer queries) are wrapped by "
             "counters of calls, bytes written and time inside; CPU outside GL = the pass's CPU time (measured around "
@@ -639,7 +641,7 @@ def main(argv=None) -> int:
     ctx = create_headless_context()
     results = []
     with GLCounter(args.clock, skip_draws=args.skip_draws) as counter:
-        renderer = ctx.info.get("GL_RENDERER", "?")
+        renderer = gl_description(ctx)
         print(header(args, counter.overhead_ns, renderer), flush=True)
         for speed in args.speeds:
             for budget in args.budgets:

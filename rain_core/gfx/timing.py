@@ -61,8 +61,10 @@ class PassTimer:
         """Read now (lagged only) the query the next ``measure`` returns, that of the measurement LAG calls before
         it: a renderer collects all its timers before its first pass, so they wait for a threaded driver once a
         frame, not once a pass."""
-        due = (self._index + 1) % len(self._pending)  # after the next measurement, the ring's oldest
-        if self.lagged and self._queries and self._pending[due]:
+        if not (self.lagged and self._queries):
+            return
+        due = (self._index + 1) % len(self._queries)  # after the next measurement, the ring's oldest
+        if self._pending[due]:
             self._pending[due] = False
             self._collected_ms = _gpu_ms(self._queries[due].elapsed)
 
