@@ -42,8 +42,9 @@ Method (also printed in the header):
   ``build_mipmaps``) without entering the driver. llvmpipe runs a draw's vertex work on the calling thread, and
   Python's code and data are then cold for whatever follows (measured: the same glue costs 3–10× its warm time
   between draws). Without the draws, the CPU figures bracket what a GPU driver that works on threads of its own
-  leaves to this thread. The pixels are meaningless then, the simulations run as usual, and "auto" may pick
-  another ripples solver (the chosen one is printed per case).
+  leaves to this thread. The pixels are meaningless then and the simulations run as usual. "auto" is
+  resolved before, with the draws made (``auto_solver_with_draws``): timed without them, the GPU solver's steps
+  would look free, and the case would time another solver than a run with draws.
 * The driver thread: the context asks Mesa for its driver thread (``mesa_glthread``, see
   ``rain_core.gfx.driver``; the header says whether it runs). GL calls are then queued for that
   thread, and the draws' vertex work runs there, not on this thread. "ms inside GL" is the queueing plus what
@@ -533,6 +534,21 @@ def gl_description(ctx) -> str:
     return describe_driver(ctx)
 
 
+def auto_solver_with_draws(ctx, overrides=()) -> str:
+    """The ripples solver "auto" picks on this machine for the heavy-rain settings, timed with its draws made.
+    Under ``--skip-draws`` the GPU solver's steps would be skipped too and "auto" would pick it as free: the case
+    would then time another solver than a run with draws (on llvmpipe: the GPU solver, ~1 ms less of the CPU's
+    own work, instead of numpy32). "auto" in an older tree without ``choose_backend``."""
+    try:
+        from rain_core.effects.ripples.backend import choose_backend
+        from rain_core.effects.ripples.window import field_grid
+    except ImportError:
+        return "auto"
+    settings = with_overrides(heavy_rain_settings(BUDGETS[0]), overrides)
+    n, _, cell_m = field_grid(settings.quality.ripple_grid, settings.ripples.extent_m)
+    return choose_backend(ctx, n, cell_m=cell_m, speed_m_s=settings.ripples.speed_m_s)[0]
+
+
 def header(args, overhead_ns: float, renderer: str = "?") -> str:
     import rain_core
 
@@ -545,7 +561,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
 
     return (f"# Whole frames at heavy rain ({RAIN_MM_H:g} mm/h, wetness/cracks/puddles 1, driver camera, noon), "
             f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}"
-            + (", draws skipped (--skip-draws)" if getattr(args, "skip_draws", False) else "")
+            + (", draws skipped (--skip-draws; the solver as auto picks it with draws)"
+               if getattr(args, "skip_draws", False) else "")
             + "".join(f", {path} = {value!r}" for path, value in getattr(args, "overrides", ())) + "\n\n"
             f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
@@ -639,6 +656,8 @@ def main(argv=None) -> int:
 
     args = parse_args(argv)
     ctx = create_headless_context()
+    if args.skip_draws and args.ripples_backend == "auto":
+        args.ripples_backend = auto_solver_with_draws(ctx, args.overrides)
     results = []
     with GLCounter(args.clock, skip_draws=args.skip_draws) as counter:
         renderer = gl_description(ctx)

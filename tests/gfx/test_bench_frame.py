@@ -58,6 +58,35 @@ def test_skip_draws_counts_draws_without_making_them(gl_ctx):
         obj.release()
 
 
+def test_skip_draws_resolves_auto_with_the_draws_made(gl_ctx, monkeypatch, tmp_path):
+    """--skip-draws with the ripples solver on "auto": the choice is timed before the draws are skipped (skipped,
+    the GPU solver's steps would look free and the case would time another solver than a run with draws)."""
+    from rain_core.bench import frame as bench_frame
+    from rain_core.effects.ripples import backend
+
+    real_render = moderngl.VertexArray.render
+    asked = []
+
+    def choose(ctx, n, **kwargs):
+        asked.append((n, moderngl.VertexArray.render is real_render))
+        return "numpy32", {}
+
+    monkeypatch.setattr(backend, "choose_backend", choose)
+    class Stop(Exception):
+        pass
+
+    def measure(*args, ripples_backend, **kwargs):
+        asked.append(ripples_backend)
+        raise Stop  # only the choice is tested
+
+    monkeypatch.setattr(bench_frame, "measure_case", measure)
+    monkeypatch.setattr("rain_core.gl.create_headless_context", lambda: gl_ctx)
+    with pytest.raises(Stop):
+        bench_frame.main(["--skip-draws", "--budgets", "2000", "--speeds", "0", "--out", str(tmp_path)])
+    # The default grid, timed with the real draws; the case then runs the chosen solver by name.
+    assert asked == [(512, True), "numpy32"]
+
+
 def test_counter_restores_moderngl():
     render = moderngl.VertexArray.render
     with GLCounter():
