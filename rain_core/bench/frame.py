@@ -52,7 +52,9 @@ Method (also printed in the header):
   over 8 KiB, object creation, a query read, ``finish``); such a call also runs, on this thread, the calls not
   yet handed to the driver thread. Run with ``mesa_glthread=false`` for the driver on this thread.
 * Every figure is the median over the measured frames after a warm-up (shader compiles, the ripples' backend
-  choice and the rain's first fill happen there).
+  choice and the rain's first fill happen there). ``--rounds N`` measures every case N times, one case after
+  the other in each round, and reports the median of the rounds' medians, with the whole frame's lowest and
+  highest CPU ms in the summary: on a shared machine one run of a case varies by more than most changes save.
 
 It uses only APIs older trees have as well (``Scene``, ``set_value``, ``Renderer._timed``, ``PassStat``), so it
 measures another checkout when run as a file from that checkout's root:
@@ -471,6 +473,26 @@ def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_m
                   "rain_gpu_ms": rain_gpu, "wall_ms": wall_ms, "process_cpu_ms": process_ms})
 
 
+def combine_rounds(rounds: list[dict]) -> dict:
+    """One case measured ``len(rounds)`` times (``--rounds``) as one result: every figure is the median over the
+    rounds of the rounds' medians, and ``cpu_ms_range`` the lowest and highest whole-frame CPU ms outside GL of
+    the rounds. On a shared machine the same case varies from run to run by more than a change measures; the
+    rounds, alternated with the other cases, and their spread say how far to trust a difference."""
+    first = rounds[0]
+    if len(rounds) == 1:
+        return first
+
+    def median_rows(rows: list[dict]) -> dict:
+        return {key: statistics.median(r[key] for r in rows if key in r) for key in rows[0]}
+
+    names = [n for n in first["passes"] if all(n in r["rows"] for r in rounds)]
+    cpu = [r["frame"]["cpu_ms"] for r in rounds]
+    return {**first, "passes": names, "rows": {n: median_rows([r["rows"][n] for r in rounds]) for n in names},
+            "frame": median_rows([r["frame"] for r in rounds]), "rounds": len(rounds),
+            "cpu_ms_range": (min(cpu), max(cpu)),
+            "ripples_solver": "/".join(sorted({str(r["ripples_solver"]) for r in rounds}))}
+
+
 # --- report ------------------------------------------------------------------------------------------------
 
 _COLUMNS = (("CPU ms outside GL", "cpu_ms", "{:.2f}"), ("GL calls", "gl_calls", "{:.0f}"),
@@ -507,8 +529,17 @@ def case_table(result: dict) -> str:
     return _table(["pass"] + [c[0] for c in _COLUMNS], body)
 
 
+def _cpu_with_range(result: dict) -> str:
+    """The whole frame's CPU ms outside GL, with the rounds' lowest and highest when there were several."""
+    text = f"{result['frame']['cpu_ms']:.2f}"
+    if "cpu_ms_range" in result:
+        lo, hi = result["cpu_ms_range"]
+        text += f" [{lo:.2f}–{hi:.2f}]"
+    return text
+
+
 def summary_table(results: list[dict]) -> str:
-    body = [[f"{r['speed_kmh']:g}", f"{r['budget']:,}", f"{r['frame']['cpu_ms']:.2f}",
+    body = [[f"{r['speed_kmh']:g}", f"{r['budget']:,}", _cpu_with_range(r),
              f"{r['frame']['gl_calls']:.0f}", f"{r['frame'].get('uniform_writes', 0):.0f}",
              f"{r['frame']['upload_kb']:.1f}", f"{r['frame']['uniform_kb']:.1f}",
              f"{r['frame']['gl_ms']:.1f}", f"{r['frame']['wall_ms']:.1f}",
@@ -574,7 +605,10 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
             f"({overhead_ns / 1e3:.2f} µs a call, measured). Clock: {args.clock} "
             f"({'main-thread CPU time' if args.clock == 'thread' else 'wall time'}). Medians over {args.frames} "
             f"frames after "
-            f"{args.warmup} warm-up frames. GL calls exclude timer queries; GPU ms = the pass's timer-query time, "
+            f"{args.warmup} warm-up frames"
+            + (f"; {args.rounds} rounds, the cases alternated: the median of the rounds' medians, the summary's "
+               "range the rounds' lowest and highest" if getattr(args, "rounds", 1) > 1 else "")
+            + ". GL calls exclude timer queries; GPU ms = the pass's timer-query time, "
             "GPU % its share of the frame's (on llvmpipe, which emulates the GPU on the CPU and defers draws, "
             "compare ratios only); rain GPU ms = " + " + ".join(RAIN_EFFECTS) + ".\n")
 
@@ -608,6 +642,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--speeds", default=None, help="ego speeds in km/h, e.g. 0,100 (default both)")
     p.add_argument("--frames", type=int, default=None, help="measured frames per case (default 30)")
     p.add_argument("--warmup", type=int, default=None, help="warm-up frames per case (default 8)")
+    p.add_argument("--rounds", type=int, default=1,
+                   help="measure every case this many times, the cases alternated; report the median of the rounds "
+                        "and the whole frame's CPU range (default 1)")
     p.add_argument("--clock", choices=tuple(CLOCKS), default="thread",
                    help="thread: the main thread's CPU time (default; robust on a shared machine); wall: wall time")
     p.add_argument("--ripples-backend", choices=("auto", "numpy32", "gpu", "reference"), default="auto",
@@ -638,6 +675,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.warmup = args.warmup or (4 if args.quick else 8)
     if args.frames < 1 or args.warmup < 0:
         p.error("--frames must be >= 1 and --warmup >= 0")
+    if not 1 <= args.rounds <= 100:
+        p.error(f"--rounds must be in [1, 100], got {args.rounds}")
     if args.overrides:  # validated here, before any frame is drawn
         from rain_core.settings import Settings, SettingsError
 
@@ -662,13 +701,21 @@ def main(argv=None) -> int:
     with GLCounter(args.clock, skip_draws=args.skip_draws) as counter:
         renderer = gl_description(ctx)
         print(header(args, counter.overhead_ns, renderer), flush=True)
-        for speed in args.speeds:
-            for budget in args.budgets:
+        cases = [(speed, budget) for speed in args.speeds for budget in args.budgets]
+        rounds: dict[tuple, list] = {case: [] for case in cases}
+        for index in range(args.rounds):  # every case once a round: a slow spell of the machine hits them all
+            for speed, budget in cases:
                 result = measure_case(ctx, args.size, budget, speed, args.frames, args.warmup, args.gpu_timing,
                                       counter=counter, ripples_backend=args.ripples_backend,
                                       overrides=args.overrides)
-                results.append(result)
-                print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
+                rounds[(speed, budget)].append(result)
+                if args.rounds > 1:
+                    print(f"round {index + 1}/{args.rounds}, {case_label(result)}: "
+                          f"{result['frame']['cpu_ms']:.2f} ms outside GL", flush=True)
+        for case in cases:
+            result = combine_rounds(rounds[case])
+            results.append(result)
+            print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
     md = (header(args, counter.overhead_ns, renderer) + "\n## Summary\n\n" + summary_table(results) + "\n\n"
           + "\n\n".join(f"## {case_label(r)}\n\n{case_table(r)}" for r in results))
     print("## Summary\n\n" + summary_table(results))

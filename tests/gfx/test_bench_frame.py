@@ -113,3 +113,50 @@ def test_set_overrides_settings_by_path_and_rejects_bad_values(capsys):
             parse_args(["--set", bad])
     err = capsys.readouterr().err
     assert "reflection_scale" in err and "--size" in err
+
+
+def _fake_result(speed: float, cpu: float, scene_cpu: float) -> dict:
+    """A measure_case result with the figures the report reads (a frame and two rows)."""
+    frame = {"cpu_ms": cpu, "gl_ms": 1.0, "gl_calls": 10.0, "uniform_writes": 2.0, "upload_kb": 4.0,
+             "uniform_kb": 1.0, "wall_ms": 9.0, "process_cpu_ms": 20.0, "gpu_ms": 0.0, "gpu_share": 100.0,
+             "rain_gpu_ms": 0.0}
+    row = {"cpu_ms": scene_cpu, "gl_ms": 0.5, "gl_calls": 5.0, "queries": 0.0, "uniform_writes": 1.0,
+           "upload_kb": 0.0, "uniform_kb": 0.5, "read_kb": 0.0, "gpu_ms": 0.0, "gpu_share": 0.0}
+    return {"size": (48, 27), "budget": 2000, "speed_kmh": speed, "frames": 1, "ripples_backend": "numpy32",
+            "ripples_solver": "numpy32", "skip_draws": False, "warmup": 0, "gpu_timing": False, "overhead_ns": 0.0,
+            "clock": "thread", "passes": ["scene", "sim: scene.step"],
+            "rows": {"scene": row, "sim: scene.step": dict(row, cpu_ms=0.1)}, "frame": frame}
+
+
+def test_rounds_report_the_median_of_the_rounds_and_the_frames_range():
+    from rain_core.bench.frame import combine_rounds, summary_table
+
+    one = _fake_result(0.0, 4.0, 1.0)
+    assert combine_rounds([one]) is one
+    both = combine_rounds([_fake_result(0.0, 4.0, 1.0), _fake_result(0.0, 6.0, 3.0), _fake_result(0.0, 5.5, 2.0)])
+    assert both["rounds"] == 3 and both["cpu_ms_range"] == (4.0, 6.0)
+    assert both["frame"]["cpu_ms"] == 5.5 and both["rows"]["scene"]["cpu_ms"] == 2.0
+    assert both["rows"]["sim: scene.step"]["cpu_ms"] == 0.1 and both["frame"]["gl_calls"] == 10.0
+    assert "5.50 [4.00–6.00]" in summary_table([both])
+
+
+def test_rounds_alternate_the_cases(gl_ctx, monkeypatch, tmp_path, capsys):
+    """--rounds 2: every case once a round (a slow spell of a shared machine hits them all), then one table each."""
+    from rain_core.bench import frame as bench_frame
+
+    order = []
+
+    def measure(ctx, size, budget, speed, *args, **kwargs):
+        order.append(speed)
+        return _fake_result(speed, 4.0 + len(order), 1.0)
+
+    monkeypatch.setattr(bench_frame, "measure_case", measure)
+    monkeypatch.setattr("rain_core.gl.create_headless_context", lambda: gl_ctx)
+    monkeypatch.setattr(gl_ctx, "release", lambda: None)  # the session's context stays for the other tests
+    assert bench_frame.main(["--rounds", "2", "--budgets", "2000", "--speeds", "0,100", "--ripples-backend",
+                             "numpy32", "--out", str(tmp_path)]) == 0
+    assert order == [0.0, 100.0, 0.0, 100.0]
+    report = (tmp_path / "frame.md").read_text()
+    assert "2 rounds" in report and "6.00 [5.00–7.00]" in report and "7.00 [6.00–8.00]" in report
+    with pytest.raises(SystemExit):
+        parse_args(["--rounds", "0"])
