@@ -568,8 +568,8 @@ def gl_description(ctx) -> str:
 def auto_solver_with_draws(ctx, overrides=()) -> str:
     """The ripples solver "auto" picks on this machine for the heavy-rain settings, timed with its draws made.
     Under ``--skip-draws`` the GPU solver's steps would be skipped too and "auto" would pick it as free: the case
-    would then time another solver than a run with draws (on llvmpipe: the GPU solver, ~1 ms less of the CPU's
-    own work, instead of numpy32). "auto" in an older tree without ``choose_backend``."""
+    would then time another solver than a run with draws (on llvmpipe: the GPU solver instead of numpy32).
+    "auto" in an older tree without ``choose_backend``."""
     try:
         from rain_core.effects.ripples.backend import choose_backend
         from rain_core.effects.ripples.window import field_grid
@@ -709,13 +709,17 @@ def main(argv=None) -> int:
                                       counter=counter, ripples_backend=args.ripples_backend,
                                       overrides=args.overrides)
                 rounds[(speed, budget)].append(result)
-                if args.rounds > 1:
+                if args.rounds == 1:  # its table at once, as each case ends
+                    results.append(result)
+                    print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
+                else:
                     print(f"round {index + 1}/{args.rounds}, {case_label(result)}: "
                           f"{result['frame']['cpu_ms']:.2f} ms outside GL", flush=True)
-        for case in cases:
-            result = combine_rounds(rounds[case])
-            results.append(result)
-            print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
+        if args.rounds > 1:
+            for case in cases:
+                result = combine_rounds(rounds[case])
+                results.append(result)
+                print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
     md = (header(args, counter.overhead_ns, renderer) + "\n## Summary\n\n" + summary_table(results) + "\n\n"
           + "\n\n".join(f"## {case_label(r)}\n\n{case_table(r)}" for r in results))
     print("## Summary\n\n" + summary_table(results))
