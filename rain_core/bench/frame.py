@@ -483,7 +483,7 @@ def combine_rounds(rounds: list[dict]) -> dict:
         return first
 
     def median_rows(rows: list[dict]) -> dict:
-        return {key: statistics.median(r[key] for r in rows if key in r) for key in rows[0]}
+        return {key: statistics.median(r[key] for r in rows) for key in rows[0]}
 
     names = [n for n in first["passes"] if all(n in r["rows"] for r in rounds)]
     cpu = [r["frame"]["cpu_ms"] for r in rounds]
@@ -569,15 +569,13 @@ def auto_solver_with_draws(ctx, overrides=()) -> str:
     """The ripples solver "auto" picks on this machine for the heavy-rain settings, timed with its draws made.
     Under ``--skip-draws`` the GPU solver's steps would be skipped too and "auto" would pick it as free: the case
     would then time another solver than a run with draws (on llvmpipe: the GPU solver instead of numpy32).
-    "auto" in an older tree without ``choose_backend``."""
+    "auto" in an older tree without ``auto_backend``."""
     try:
-        from rain_core.effects.ripples.backend import choose_backend
-        from rain_core.effects.ripples.window import field_grid
+        from rain_core.effects.ripples.backend import auto_backend
     except ImportError:
         return "auto"
     settings = with_overrides(heavy_rain_settings(BUDGETS[0]), overrides)
-    n, _, cell_m = field_grid(settings.quality.ripple_grid, settings.ripples.extent_m)
-    return choose_backend(ctx, n, cell_m=cell_m, speed_m_s=settings.ripples.speed_m_s)[0]
+    return auto_backend(ctx, settings.quality.ripple_grid, settings.ripples.extent_m, settings.ripples.speed_m_s)[0]
 
 
 def header(args, overhead_ns: float, renderer: str = "?") -> str:
@@ -709,17 +707,12 @@ def main(argv=None) -> int:
                                       counter=counter, ripples_backend=args.ripples_backend,
                                       overrides=args.overrides)
                 rounds[(speed, budget)].append(result)
-                if args.rounds == 1:  # its table at once, as each case ends
-                    results.append(result)
-                    print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
-                else:
+                if args.rounds > 1:
                     print(f"round {index + 1}/{args.rounds}, {case_label(result)}: "
                           f"{result['frame']['cpu_ms']:.2f} ms outside GL", flush=True)
-        if args.rounds > 1:
-            for case in cases:
-                result = combine_rounds(rounds[case])
-                results.append(result)
-                print(f"## {case_label(result)}\n\n{case_table(result)}\n", flush=True)
+                if index == args.rounds - 1:  # the case's last round: its table now, as before --rounds
+                    results.append(combine_rounds(rounds[(speed, budget)]))
+                    print(f"## {case_label(results[-1])}\n\n{case_table(results[-1])}\n", flush=True)
     md = (header(args, counter.overhead_ns, renderer) + "\n## Summary\n\n" + summary_table(results) + "\n\n"
           + "\n\n".join(f"## {case_label(r)}\n\n{case_table(r)}" for r in results))
     print("## Summary\n\n" + summary_table(results))

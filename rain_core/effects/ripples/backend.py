@@ -71,6 +71,15 @@ def make_solver(backend: str, n: int, cell_m: float, speed_m_s: float, damping_p
 
 
 
+def auto_backend(ctx, n: int, extent_m: float, speed_m_s: float) -> tuple[str, dict[str, float]]:
+    """What "auto" picks for a field of n cells per side over extent_m (m) at wave speed speed_m_s (m/s), and the
+    timings (ms per step) it picked by: ``choose_backend`` on its grid, numpy32 without a context."""
+    if ctx is None:
+        return "numpy32", {}
+    n, _, cell_m = field_grid(n, extent_m)
+    return choose_backend(ctx, n, cell_m=cell_m, speed_m_s=speed_m_s)
+
+
 def make_field(ctx=None, n: int = 512, extent_m: float = 25.0, speed_m_s: float = CAPILLARY_SPEED_M_S,
                damping_per_s: float = DEFAULT_DAMPING_PER_S, backend: str = "auto", *, shaders=None,
                **field_kwargs) -> RippleField:
@@ -82,10 +91,7 @@ def make_field(ctx=None, n: int = 512, extent_m: float = 25.0, speed_m_s: float 
     n, extent, cell_m = field_grid(n, extent_m)
     timings: dict[str, float] = {}
     if backend == "auto":
-        if ctx is None:
-            backend = "numpy32"
-        else:
-            backend, timings = choose_backend(ctx, n, cell_m=cell_m, speed_m_s=speed_m_s)
+        backend, timings = auto_backend(ctx, n, extent_m, speed_m_s)
     extra = {"shaders": shaders} if backend == "gpu" else {}
     solver = make_solver(backend, n, cell_m, speed_m_s, damping_per_s, ctx=ctx, **extra)
     try:
