@@ -119,7 +119,7 @@ def heavy_rain_run(ctx, reference: bool | None = None, frames: int = 120, warmup
         effect.observe(frame)
         if effect.active(frame):
             effect.update(frame, rc)
-            effect.render("prepare", rc)  # the upload of the new parcels
+            effect.render("upload", rc)  # the new parcels
         c1, w1 = time.thread_time(), time.perf_counter()
         if i >= warmup:
             wall.append((w1 - w0) * 1e3)

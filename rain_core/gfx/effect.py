@@ -7,9 +7,14 @@
    medium; a function of the frame alone) and ``frame_lights(frame)`` (lights it adds, e.g. a flash), then in
    order ``update(frame, rc)`` (simulation, reading and writing ``rc.shared``), then ``render(stage, rc)`` for
    each stage in ``stages``; ``bind_scene`` before the scene pass draws. Every update runs before the frame's
-   first draw: GL work that publishes an update's result (an upload, a pass into a texture) belongs in
-   ``prepare``, so no draw leaves the CPU simulations after it with cold caches (llvmpipe runs vertex work on
-   the calling thread).
+   first draw, and so does every effect's ``upload`` (writes of what the update made new into buffers and
+   textures, no draws): GL work that publishes an update's result with a draw (a pass into a texture) belongs
+   in ``prepare``, so no draw leaves the CPU simulations after it with cold caches (llvmpipe runs vertex work on
+   the calling thread). Uploads come before the draws because with Mesa's driver thread (``gfx/driver.py``) a
+   buffer write of more than 8 KiB or a texture written from memory waits for that thread, and the calling
+   thread then runs every call not yet handed over itself: after the shadow pass and the road's reflection that
+   was ~28 ms of llvmpipe's vertex work a frame on the main thread; before the first draw there is nothing to
+   run. An effect whose ``prepare`` is called without its ``upload`` (a benchmark, a test) uploads there.
    Inactive effects get ``unbind_scene`` so the scene shader sees their neutral values.
 
 Effects never assign renderer attributes; they share data only through ``rc.shared`` (``SharedResources``).
@@ -22,7 +27,8 @@ import moderngl
 
 from rain_core.gfx.frame import Frame, RenderContext
 
-STAGES = ("prepare", "transparent", "post", "overlay")
+STAGES = ("upload", "prepare", "transparent", "post", "overlay")
+DRAW_STAGES = STAGES[2:]  # the stages the renderer runs after the scene pass, into the HDR target
 
 
 class Effect:

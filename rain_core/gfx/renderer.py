@@ -19,7 +19,7 @@ import numpy as np
 
 from rain_core import layout
 from rain_core.gfx import units
-from rain_core.gfx.effect import STAGES, Effect
+from rain_core.gfx.effect import DRAW_STAGES, Effect
 from rain_core.gfx.exposure import AutoExposure
 from rain_core.gfx.frame import Frame, FrameUniforms, PassStat, RenderContext, SharedResources
 from rain_core.gfx.frame_block import FrameBlocks
@@ -293,6 +293,9 @@ class Renderer:
             self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
             # Its note is written when the table is asked for (pass_table): a headless frame never reads it.
             self._to_describe.append((self.stats[-1], effect))
+        for effect in active:  # what the updates made new, written before the first draw (gfx/effect.py)
+            if "upload" in effect.stages:
+                self._timed(f"{effect.name}.upload", lambda e=effect: e.render("upload", rc))
         if sun_up:
             self._timed("shadow", lambda: self.shadow.render(
                 rc, self.scene.draw_items(rc, False, cull=self.shadow.light_view_proj(rc))))
@@ -314,7 +317,7 @@ class Renderer:
             self._draw_scene(rc, mirror_view=self.mirrors.texture if mirrors else None)
 
         self._timed("scene", scene)
-        for stage in STAGES[1:]:
+        for stage in DRAW_STAGES:
             for effect in active:
                 if stage in effect.stages:
                     def draw(e=effect, s=stage):

@@ -1,24 +1,39 @@
-"""The effect contract (rain_core.gfx.effect): every update is CPU work and the renderer runs them all before the
-frame's first draw; an effect's GL work (uploads, passes that publish a simulation's result) is in its stages.
+"""The effect contract (rain_core.gfx.effect): every update is CPU work, and the renderer runs them all, then every
+effect's upload (writes, no draws), before the frame's first draw; an effect's draws are in its other stages.
 
 On llvmpipe a draw runs its vertex work on the calling thread and leaves Python's caches cold for whatever runs
 after it: one GL pass in the middle of the updates made the rainfall's and the windshield's updates after it cost
-~130 and ~150 µs more a frame. The ripples (numpy32: its height upload and normals pass) and the spray (its new
-parcels into the GPU rings) publish in ``prepare``."""
+~130 and ~150 µs more a frame. With Mesa's driver thread a write of more than 8 KiB, or a texture written from
+memory, waits for the thread and runs every call not yet handed over on the calling thread: the spray's parcels
+written after the shadow pass and the road's reflection ran ~28 ms of their vertex work on the main thread a frame.
+So the ripples (numpy32: its height), the spray (its new parcels) and the windshield (its film and splat rows)
+write in ``upload``, before the draws."""
 
 from __future__ import annotations
 
 from rain_core.bench.frame import GLCounter, measure_case
 
 
-def test_no_effect_update_makes_a_gl_call(gl_ctx):
+def test_no_effect_update_makes_a_gl_call_and_the_uploads_precede_every_draw(gl_ctx):
     with GLCounter() as counter:
         result = measure_case(gl_ctx, (48, 27), budget=2000, speed_kmh=100.0, frames=2, warmup=2, counter=counter,
                               ripples_backend="numpy32", gpu_timing=False)
-    rows = result["rows"]
-    updates = [name for name in result["passes"] if name.endswith(".update")]
+        tallies = dict(counter.tallies)
+    rows, passes = result["rows"], result["passes"]
+    updates = [name for name in passes if name.endswith(".update")]
     assert {"spray.update", "ripples.update", "rainfall.update", "windshield.update"} <= set(updates)
     assert {name: rows[name]["gl_calls"] for name in updates} == dict.fromkeys(updates, 0)
-    # what they publish is drawn and written in prepare: the ripples' normals pass, the spray's new parcels
-    assert rows["ripples.prepare"]["gl_calls"] > 0 and rows["ripples.prepare"]["upload_kb"] > 0.0
-    assert rows["spray.prepare"]["upload_kb"] > 0.0
+    # What they publish is written in their upload: the ripples' height, the spray's new parcels, the
+    # windshield's film and drop rows; an upload draws nothing.
+    uploads = [name for name in passes if name.endswith(".upload")]
+    assert {"spray.upload", "ripples.upload", "windshield.upload"} <= set(uploads)
+    assert all(rows[name]["upload_kb"] > 0.0 for name in ("spray.upload", "ripples.upload", "windshield.upload"))
+    assert all(tallies[name].by_kind.get("draw", 0) == 0 for name in uploads)
+    # Every upload comes before the first pass that draws (the shadow, the road's reflection, the scene).
+    drawing = [name for name in passes if name in tallies and tallies[name].by_kind.get("draw", 0)]
+    assert "scene" in drawing and "ripples.prepare" in drawing  # (the normals pass)
+    first_draw = min(passes.index(name) for name in drawing)
+    assert max(passes.index(name) for name in uploads) < first_draw
+    # After it, no pass writes more than the few KiB a driver thread takes without waiting (uniform-sized data).
+    late = {name: rows[name]["upload_kb"] for name in passes[first_draw:] if name in tallies}  # (passes, not totals)
+    assert late and max(late.values()) < 8.0, late

@@ -34,7 +34,8 @@ class RipplesEffect(Effect):
     # leaves Python's caches cold for whatever follows it, so the frame runs every effect's CPU update first: with
     # the normals pass and the ring map drawn here in update, the rainfall's and the windshield's updates after it
     # cost ~130 and ~150 µs more a frame.
-    stages = ("prepare",)
+    # upload writes the NumPy solvers' height texture before the frame's first draw (gfx/effect.py).
+    stages = ("upload", "prepare")
 
     def __init__(self, ctx, settings=None, *, seed: int = 0, shaders=None):
         self.ctx = ctx
@@ -124,9 +125,16 @@ class RipplesEffect(Effect):
         self._to_publish = (frame.time_s, rate)
 
     def render(self, stage: str, rc) -> None:
-        """prepare: the field's textures (height upload or the GPU solver's state, the normals pass) and, while
-        it rains, the ring map, published on ``rc.shared`` for the road's scene pass."""
-        if stage != "prepare" or self._to_publish is None:
+        """upload: the NumPy solvers' height into its texture. prepare: the field's textures (the height, uploaded
+        here if upload was not asked, or the GPU solver's state; the normals pass) and, while it rains, the ring
+        map, published on ``rc.shared`` for the road's scene pass."""
+        if self._to_publish is None:
+            return
+        if stage == "upload":
+            if self.textures is not None:
+                self.textures.upload()
+            return
+        if stage != "prepare":
             return
         time_s, rate = self._to_publish
         self._to_publish = None

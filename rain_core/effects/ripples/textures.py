@@ -37,8 +37,18 @@ class RippleTextures:
             self._height_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
             self._height_tex.repeat_x = self._height_tex.repeat_y = False
         self._version: int | None = None  # field.version the textures show (None: not drawn yet)
+        self._uploaded: int | None = None  # field.version the height texture holds (NumPy solvers)
         self._uniforms = {"u_height": units.SCRATCH[0], "u_inv_2h": 0.5 / field.cell_m}
         self._uniform_pairs = tuple(self._uniforms.items())  # update_once: one identity test a frame
+
+    def upload(self):
+        """Write the NumPy solver's height into height_texture if the field changed since (``refresh`` does it too;
+        the effect calls this before the frame's first draw: see gfx/effect.py's "upload"). No draw."""
+        version = self.field.version
+        if self._height_tex is not None and self._uploaded != version:
+            # Written from the array itself (buffer protocol): no 4n²-byte copy through tobytes() every frame.
+            self._height_tex.write(np.ascontiguousarray(self.field.solver.height, dtype=np.float32))
+            self._uploaded = version
 
     def refresh(self):
         """Bring height_texture and normal_texture up to date (done on access)."""
@@ -46,8 +56,7 @@ class RippleTextures:
         if self._version == field.version:
             return
         if self._height_tex is not None:
-            # Written from the array itself (buffer protocol): no 4n²-byte copy through tobytes() every frame.
-            self._height_tex.write(np.ascontiguousarray(field.solver.height, dtype=np.float32))
+            self.upload()
             height = self._height_tex
         else:
             height = field.solver.texture

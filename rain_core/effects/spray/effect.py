@@ -33,7 +33,7 @@ class SprayEffect(Effect):
     """
 
     name = "spray"
-    stages = ("prepare", "transparent")  # prepare: the new parcels into the GPU rings (update is CPU work alone)
+    stages = ("upload", "transparent")  # upload: the new parcels into the GPU rings (update is CPU work alone)
 
     def __init__(self, ctx: moderngl.Context, settings=None, *, seed: int = 0, shaders=None):
         self.ctx = ctx
@@ -185,7 +185,7 @@ class SprayEffect(Effect):
         })
 
     def render(self, stage: str, rc) -> None:
-        if stage == "prepare":
+        if stage == "upload":
             self._upload()
             return
         if stage != "transparent":

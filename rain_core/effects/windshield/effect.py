@@ -70,7 +70,7 @@ class WindshieldEffect(WaterPass, Effect):
     """
 
     name = "windshield"
-    stages = ("prepare", "overlay")
+    stages = ("upload", "prepare", "overlay")
 
     def __init__(self, ctx, settings=None, *, seed: int = 0, shaders=None, spec: VehicleSpec = CAR_SPEC):
         self.ctx = ctx
@@ -137,6 +137,7 @@ class WindshieldEffect(WaterPass, Effect):
         self._drop_vao = ctx.vertex_array(self.drop_prog, [(self._splat_bufs[1], _DROP_FORMAT, "in_seg", "in_radius")])
         self._drop_builder = DropRows()
         self._early = None  # what update made for the water pass: water_pass._make_rows_early
+        self._uploaded = None  # (rc, film splats, drop splats) the upload stage wrote for the water pass
         self._film_builder = FilmRows()
         self._drop_rows = 0  # rows in the drop buffer this frame
         self.upload_bytes = 0  # bytes written to the GPU by the last frame's water pass
@@ -277,7 +278,9 @@ class WindshieldEffect(WaterPass, Effect):
             self._make_rows_early(rc)
 
     def render(self, stage: str, rc) -> None:
-        if stage == "prepare":
+        if stage == "upload":
+            self._upload_water(rc)
+        elif stage == "prepare":
             self._draw_water(rc)
         elif stage == "overlay":
             self._draw_glass(rc)
@@ -403,7 +406,7 @@ class WindshieldEffect(WaterPass, Effect):
     def release(self) -> None:
         """Free the textures, buffers and vertex arrays, and the programs when the shader library is our own."""
         self._release_textures()
-        self._early = None
+        self._early = self._uploaded = None
         gl_objects = [
             *self._coarse,
             self._mesh_vbo,

@@ -31,8 +31,8 @@ _UNIT_A, _UNIT_B, _UNIT_C, _UNIT_D = units.WINDSHIELD  # each pass binds its (up
 
 
 class WaterPass:
-    """The water textures of ``WindshieldEffect`` (its programs, buffers, builders and simulation): ``_draw_water``
-    is its "prepare" stage."""
+    """The water textures of ``WindshieldEffect`` (its programs, buffers, builders and simulation): ``_upload_water``
+    is its "upload" stage, ``_draw_water`` its "prepare" stage."""
 
     def _ensure_textures(self, resolution: int) -> None:
         if resolution == self.resolution:
@@ -114,35 +114,56 @@ class WaterPass:
             return early[4:]
         return None
 
-    def _draw_splats(self, which: int, splats: np.ndarray) -> None:
-        """Splats into the bound target with one instanced draw, blended as set by the caller. ``which``: 0 the
-        film deposits, 1 the drops and beads (each has its own buffer)."""
+    def _write_splats(self, which: int, splats: np.ndarray) -> int:
+        """Write splat rows into their buffer (``which``: 0 the film deposits, 1 the drops and beads, each in its
+        own); returns how many (``_draw_splats`` draws them)."""
         if not len(splats):
-            return
+            return 0
         data = splats if which else np.ascontiguousarray(splats, dtype=np.float32)  # drops: splats.DROP_ROW
         buf = self._splat_bufs[which]
         if data.nbytes > buf.size:
             buf.orphan(int(data.nbytes * 1.5))
         buf.write(data)
         self.upload_bytes += data.nbytes
-        self.splat_draws += 1
-        self._splat_vaos[which].render(moderngl.TRIANGLES, vertices=6, instances=len(data))
+        return len(data)
+
+    def _draw_splats(self, which: int, count: int) -> None:
+        """The ``count`` splats ``_write_splats`` wrote into the bound target with one instanced draw, blended as
+        set by the caller."""
+        if count:
+            self.splat_draws += 1
+            self._splat_vaos[which].render(moderngl.TRIANGLES, vertices=6, instances=count)
+
+    def _upload_water(self, rc) -> None:
+        """The "upload" stage: the water pass's writes (the CPU film as float16 bits per cell, the film deposits'
+        and the drops' splat rows), before the frame's first draw (gfx/effect.py: each of them makes Mesa's
+        driver thread wait); ``_draw_water`` draws them."""
+        self._ensure_textures(self._resolution_of(self._settings(rc.frame)))
+        early = self._take_early(rc)
+        sim = self.sim
+        # The CPU film now, as mean thickness (µm) per cell, as float16 bits (half floats end at 65504; NumPy's
+        # float16 cast is slow), into the coarse texture the pass does not read as last frame's.
+        coarse = self._coarse_bits() if early is None else early[2]
+        self._coarse[1 - self._coarse_index].write(coarse)
+        self.upload_bytes = coarse.nbytes
+        film = self._write_splats(0, self._film_builder.rows(sim, self._texel_m()) if early is None else early[1])
+        drops = self._write_splats(1, self._drop_builder.rows(sim) if early is None else early[0])
+        self._drop_rows = drops
+        self._uploaded = (rc, film, drops)
 
     def _draw_water(self, rc) -> None:
         ctx = self.ctx
-        settings = self._settings(rc.frame)
-        self._ensure_textures(self._resolution_of(settings))
-        early = self._take_early(rc)
+        uploaded = self._uploaded
+        if uploaded is None or uploaded[0] is not rc:  # prepare asked alone (a benchmark, a test): upload here
+            self._upload_water(rc)
+            uploaded = self._uploaded
+        self._uploaded = None
+        _, film_splats, drop_splats = uploaded
         sim = self.sim
         n = self.resolution
         lod = math.log2(n / FILM_CELLS)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)  # one call: each costs
-        # The CPU film now, as mean thickness (µm) per cell.
-        cur = 1 - self._coarse_index
-        # As float16 bits (half floats end at 65504; NumPy's float16 cast is slow).
-        coarse = self._coarse_bits() if early is None else early[2]
-        self._coarse[cur].write(coarse)
-        self.upload_bytes = coarse.nbytes
+        cur = 1 - self._coarse_index  # the film the upload wrote
         self.splat_draws = 0
         prev = self._coarse[self._coarse_index]
         src, dst = self._film[self._film_index], self._film[1 - self._film_index]
@@ -187,16 +208,14 @@ class WaterPass:
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.ONE, moderngl.ONE)
         ctx.blend_equation = moderngl.FUNC_ADD
-        self._draw_splats(0, self._film_builder.rows(sim, texel_m) if early is None else early[1])
+        self._draw_splats(0, film_splats)
         dst.color.build_mipmaps()
         # 3. drops and beads: heights (mm), overlapping splats keep the highest.
         self._drops.fbo.use()
         self._drops.fbo.clear(0.0, 0.0, 0.0, 0.0)
         self._splat_u.update_for("static", (self._token, n), lambda: dict(u_min_radius=0.75 * texel_m))
-        rows = self._drop_builder.rows(sim) if early is None else early[0]
-        self._drop_rows = len(rows)
         ctx.blend_equation = moderngl.MAX
-        self._draw_splats(1, rows)
+        self._draw_splats(1, drop_splats)
         ctx.blend_equation = moderngl.FUNC_ADD
         ctx.disable(moderngl.BLEND)
         # 4. the water texture: thickness, film, slopes.
