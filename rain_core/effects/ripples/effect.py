@@ -30,11 +30,11 @@ class RipplesEffect(Effect):
     first active frame and whenever the grid settings change."""
 
     name = "ripples"
-    # update simulates (CPU only, with the NumPy solvers); prepare publishes the field to GL. On llvmpipe a draw
-    # leaves Python's caches cold for whatever follows it, so the frame runs every effect's CPU update first: with
-    # the normals pass and the ring map drawn here in update, the rainfall's and the windshield's updates after it
-    # cost ~130 and ~150 µs more a frame.
-    # upload writes the NumPy solvers' height texture before the frame's first draw (gfx/effect.py).
+    # update simulates (CPU only, with the NumPy solvers); upload writes their height into its texture before the
+    # frame's first draw (gfx/effect.py); prepare publishes the field to GL. On llvmpipe a draw leaves Python's
+    # caches cold for whatever follows it, so the frame runs every effect's CPU update first: with the normals
+    # pass and the ring map drawn here in update, the rainfall's and the windshield's updates after it cost ~130
+    # and ~150 µs more a frame.
     stages = ("upload", "prepare")
 
     def __init__(self, ctx, settings=None, *, seed: int = 0, shaders=None):

@@ -58,7 +58,8 @@ def roof_height(world, x: float, z: float) -> float:
 class WindshieldEffect(WaterPass, Effect):
     """The windshield effect: runs ``WindshieldSim``, draws the glass.
 
-    Stages: ``prepare`` (the water textures: film relaxation and deposits with the beads of drops' trails, drop
+    Stages: ``upload`` (the CPU film and the splat rows the update made, written before the frame's first draw),
+    ``prepare`` (the water textures: film relaxation and deposits with the beads of drops' trails, drop
     and bead splats, the water thickness/slope texture) and ``overlay`` (copy the frame without the glass, then
     draw the glass mesh over it with the film's refraction, beads, haze, glints and the blades, then each drop
     as an analytic lens from the same instance rows the drop texture was splatted with). Active only with the
