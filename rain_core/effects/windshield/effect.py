@@ -90,6 +90,8 @@ class WindshieldEffect(WaterPass, Effect):
         self.drop_splat_prog = self.shaders.program("windshield/drop_splat.vert", "windshield/splat.frag")
         self.glass_prog = self.shaders.program("windshield/glass.vert", "windshield/glass.frag")
         self.drop_prog = self.shaders.program("windshield/drop.vert", "windshield/drop.frag")
+        self.copy_prog = self.shaders.program("common/fullscreen.vert", "windshield/frame_copy.frag")
+        set_uniforms(self.copy_prog, u_color=_UNIT_A, u_depth=_UNIT_B)
         progs = (self.film_prog, self.normals_prog, self.splat_prog, self.drop_splat_prog, self.glass_prog,
                  self.drop_prog)
         for prog in progs:
@@ -114,6 +116,10 @@ class WindshieldEffect(WaterPass, Effect):
             owned_uniforms(p) for p in (self.film_prog, self.drop_splat_prog, self.normals_prog, self.glass_prog,
                                         self.drop_prog))
         self._film_vao = fullscreen_triangle(ctx, self.film_prog)
+        self._copy_vao = fullscreen_triangle(ctx, self.copy_prog)
+        # The frame's depth read as values (its texture compares by default), by the frame copy.
+        self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
+                                          repeat_x=False, repeat_y=False)
         self._normals_vao = fullscreen_triangle(ctx, self.normals_prog)
         pos, nrm, uv, tris = windshield_surface(spec, 48, 24)
         verts = np.hstack([pos, nrm, uv]).astype(np.float32)
@@ -310,9 +316,7 @@ class WindshieldEffect(WaterPass, Effect):
         ctx = self.ctx
         frame = rc.frame
         settings = self._settings(frame)
-        copy = self._ensure_frame_copy(rc.size)
-        ctx.copy_framebuffer(copy.fbo, rc.hdr.fbo)
-        copy.color.build_mipmaps()
+        copy = self._copy_frame(rc)
         prog = self.glass_prog
         rc.set_frame_uniforms(prog)
         # The car's uniforms in Python floats (a few NumPy calls on 3- and 4-vectors cost more than the arithmetic).
@@ -381,6 +385,26 @@ class WindshieldEffect(WaterPass, Effect):
         ctx.blend_func = moderngl.DEFAULT_BLENDING
         rc.hdr.fbo.depth_mask = True
 
+    def _copy_frame(self, rc):
+        """The frame so far (colour, with mipmaps for the blurred views through water, and depth) copied into the
+        effect's target by a draw: ``ctx.copy_framebuffer`` reads GL state back (moderngl restores the read and
+        draw buffers around its blit), which makes the main thread wait for Mesa's driver thread to run every
+        call queued before it (~200 ms of wall on llvmpipe). Returns the target. Leaves depth testing on, with
+        the renderer's "<", as the glass pass expects."""
+        ctx = self.ctx
+        copy = self._ensure_frame_copy(rc.size)
+        rc.hdr.color.use(_UNIT_A)
+        rc.hdr.depth.use(_UNIT_B)
+        self._depth_sampler.use(_UNIT_B)
+        copy.fbo.use()
+        ctx.enable(moderngl.DEPTH_TEST)  # (depth is written only while the test is on: "always" passes it)
+        ctx.depth_func = "1"
+        self._copy_vao.render(moderngl.TRIANGLES, vertices=3)
+        ctx.depth_func = "<"
+        self._depth_sampler.clear(_UNIT_B)
+        copy.color.build_mipmaps()
+        return copy
+
     def _draw_drops(self, rc, frame, view_key: tuple, view_values, moving: dict) -> None:
         """The drops as lenses over the glass (premultiplied, blending and depth test as the glass pass set), with
         the glass pass's view (its key and values) and the car's uniforms (``moving``)."""
@@ -418,6 +442,8 @@ class WindshieldEffect(WaterPass, Effect):
             *self._splat_vaos,
             self._film_vao,
             self._normals_vao,
+            self._copy_vao,
+            self._depth_sampler,
         ]
         for obj in gl_objects:
             obj.release()
