@@ -28,6 +28,12 @@ class RenderTarget:
                 obj.release()
 
 
+def depth_value_sampler(ctx: moderngl.Context) -> moderngl.Sampler:
+    """A sampler that reads a depth texture's values (a depth texture compares by default), texel by texel and
+    clamped: for passes that read the scene's depth (soft particles, fog, the windshield's copy of the frame)."""
+    return ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST), repeat_x=False, repeat_y=False)
+
+
 def float_target(ctx: moderngl.Context, size: tuple[int, int], components: int = 4, dtype: str = "f2",
                  depth: bool = False, filter_linear: bool = True) -> RenderTarget:
     """A float colour target (``f2`` half or ``f4`` full precision), clamped at the edges."""

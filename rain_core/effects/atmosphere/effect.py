@@ -30,7 +30,7 @@ from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.targets import ColorView, RenderTarget, float_target
+from rain_core.gfx.targets import ColorView, RenderTarget, depth_value_sampler, float_target
 from rain_core.gfx.uniforms import OwnedUniforms, mat4_bytes, owned_uniforms
 from rain_core.settings import AtmosphereSection
 
@@ -64,8 +64,7 @@ class AtmosphereEffect(Effect):
         self._entries: dict = {}  # key → (program, vertex array, OwnedUniforms): _program
         self._targets: tuple[int, tuple[int, int], list[RenderTarget]] | None = None  # (factor, size, [a, b])
         self._hdr_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
-        self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
-                                          repeat_x=False, repeat_y=False)
+        self._depth_sampler = depth_value_sampler(ctx)
 
     # --- per frame ------------------------------------------------------------------------------------------
     def _section(self, frame) -> AtmosphereSection:

@@ -21,7 +21,7 @@ from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.targets import ColorView
+from rain_core.gfx.targets import ColorView, depth_value_sampler
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms
 from rain_core.settings import AtmosphereSection, RainbowSection
 
@@ -65,8 +65,7 @@ class RainbowEffect(Effect):
         self._prog: moderngl.Program | None = None
         self._vao: moderngl.VertexArray | None = None
         self._hdr_fbo = ColorView(ctx)
-        self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
-                                          repeat_x=False, repeat_y=False)
+        self._depth_sampler = depth_value_sampler(ctx)
 
     def _section(self, frame) -> RainbowSection:
         settings = getattr(frame, "settings", None) or self.settings

@@ -15,7 +15,7 @@ from rain_core.effects.spray.parcels import PARTICLE_ATTRIBUTES, PARTICLE_DTYPE,
 from rain_core.effects.spray.wheels import WheelWater
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
-from rain_core.gfx.targets import ColorView
+from rain_core.gfx.targets import ColorView, depth_value_sampler
 from rain_core.gfx.uniforms import owned_uniforms
 
 
@@ -46,8 +46,7 @@ class SprayEffect(Effect):
         self._program = None
         self._motion = None  # (frame, camera, velocity, forward) made by update for the frame's draw
         self._color_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
-        self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
-                                          repeat_x=False, repeat_y=False)
+        self._depth_sampler = depth_value_sampler(ctx)
 
     # --- queries for the app ------------------------------------------------------------------------------
     @property

@@ -33,7 +33,7 @@ from rain_core.effects.windshield.water_pass import (  # noqa: F401 - the water 
 )
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.shaders import ShaderLibrary
-from rain_core.gfx.targets import float_target, fullscreen_triangle
+from rain_core.gfx.targets import depth_value_sampler, float_target, fullscreen_triangle
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform, set_uniforms
 from rain_core.vehicles import CAR_SPEC, VehicleSpec
 
@@ -118,8 +118,7 @@ class WindshieldEffect(WaterPass, Effect):
         self._film_vao = fullscreen_triangle(ctx, self.film_prog)
         self._copy_vao = fullscreen_triangle(ctx, self.copy_prog)
         # The frame's depth read as values (its texture compares by default), by the frame copy.
-        self._depth_sampler = ctx.sampler(compare_func="", filter=(moderngl.NEAREST, moderngl.NEAREST),
-                                          repeat_x=False, repeat_y=False)
+        self._depth_sampler = depth_value_sampler(ctx)
         self._normals_vao = fullscreen_triangle(ctx, self.normals_prog)
         pos, nrm, uv, tris = windshield_surface(spec, 48, 24)
         verts = np.hstack([pos, nrm, uv]).astype(np.float32)
