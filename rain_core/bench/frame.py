@@ -51,6 +51,12 @@ Method (also printed in the header):
   the calls that must wait for that thread wait for (e.g. reads, a texture written from memory, a buffer write
   over 8 KiB, object creation, a query read, ``finish``); such a call also runs, on this thread, the calls not
   yet handed to the driver thread. Run with ``mesa_glthread=false`` for the driver on this thread.
+* Python lines (``--py-frames``, default 2): after the timed frames, a few more frames run under ``sys.settrace``
+  and every Python line executed is counted in the bucket of the pass running it (the bench's own wrappers are
+  left out), as are the Python calls (in the JSON). NumPy's and the compiled kernels' work is not counted: it runs
+  in C. Unlike a time, the count is the same from run to run: a change to the frame's Python glue shows as an
+  exact difference, while this machine's noise hides most of what a few hundred lines cost (~0.1–0.25 µs each
+  here, more for code that has not run for a while).
 * Every figure is the median over the measured frames after a warm-up (shader compiles, the ripples' backend
   choice and the rain's first fill happen there). ``--rounds N`` measures every case N times, one case after
   the other in each round, and reports the median of the rounds' medians, with the whole frame's lowest and
@@ -86,6 +92,8 @@ SPEEDS_KMH = (0.0, 100.0)
 # atmosphere are drawn without rain too and keep rows of their own.
 RAIN_EFFECTS = ("rainfall", "spray", "drips", "windshield", "ripples")
 RAIN_MM_H = 8.0
+# The wrappers below are the bench's, not the frame's: their lines are not counted (trace_python).
+_OWN_FILE = os.path.abspath(__file__)
 STEP_BUCKET = "sim: scene.step"
 BETWEEN_BUCKET = "renderer (between passes)"
 # CPU time of the main thread (not counting time the process waited for a core: this machine is shared, and
@@ -283,6 +291,35 @@ class GLCounter:
         return max(best, 0.0)
 
 
+def trace_python(counter: GLCounter, run_frame, frames: int) -> tuple[dict[str, float], dict[str, float]]:
+    """(Python lines, Python calls) executed per frame by bucket, means over ``frames`` calls of ``run_frame()``
+    under ``sys.settrace``: each line and call counts in ``counter.bucket`` as it is when it runs. Lines of this
+    file (the GL counter's wrappers, the pass timer) are not counted, nor what runs in C (NumPy, the kernels, the
+    driver). Tracing slows Python ~10×: run it after the timed frames."""
+    lines: dict[str, int] = defaultdict(int)
+    calls: dict[str, int] = defaultdict(int)
+
+    def on_line(frame, event, arg):
+        if event == "line":
+            lines[counter.bucket] += 1
+        return on_line
+
+    def on_call(frame, event, arg):
+        if frame.f_code.co_filename == _OWN_FILE:
+            return None  # no line events in the bench's own frames
+        calls[counter.bucket] += 1
+        return on_line
+
+    previous = sys.gettrace()
+    sys.settrace(on_call)
+    try:
+        for _ in range(frames):
+            run_frame()
+    finally:
+        sys.settrace(previous)
+    return ({k: v / frames for k, v in lines.items()}, {k: v / frames for k, v in calls.items()})
+
+
 def heavy_rain_settings(budget: int, rate_mm_h: float = RAIN_MM_H, camera: str = "driver"):
     """Settings of the benchmark: rate mm/h, wetness/cracks/puddles pinned at 1, the camera, the streak budget."""
     from rain_core.settings import Settings, set_value
@@ -333,10 +370,12 @@ def _effect_of(pass_name: str) -> str:
 
 def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 0.0, frames: int = 30,
                  warmup: int = 8, gpu_timing: bool = True, dt_s: float = 1.0 / 30.0, seed: int = 1,
-                 counter: GLCounter | None = None, ripples_backend: str = "auto", overrides=()) -> dict:
+                 counter: GLCounter | None = None, ripples_backend: str = "auto", overrides=(),
+                 py_frames: int = 2) -> dict:
     """Render ``warmup + frames`` frames of one case; medians over the last ``frames``. ``ripples_backend``:
     the ripples effect's solver ("auto" times the paths on this machine; on llvmpipe it picks numpy32).
-    ``overrides``: (settings path, value) pairs set on top of the heavy-rain settings (``--set``).
+    ``overrides``: (settings path, value) pairs set on top of the heavy-rain settings (``--set``). ``py_frames``:
+    frames traced after the timed ones for the Python lines and calls (``trace_python``; 0: none).
 
     Returns {"rows": {name: {cpu_ms, gl_ms, gl_calls, queries, upload_kb, uniform_kb, read_kb, gpu_ms, gpu_share}},
     "frame": {…the same for the whole frame…, wall_ms}, "passes": [pass names in order], …}. Rows are the
@@ -396,6 +435,17 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
                 continue
             _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6, (t2 - t1) * 1e-6, wall,
                      process)
+        def run_frame() -> None:
+            counter.reset()
+            counter.bucket = STEP_BUCKET
+            scene.step(dt_s, drive)
+            counter.bucket = BETWEEN_BUCKET
+            scene.render()
+            counter.bucket = "finish"
+            ctx.finish()
+            counter.bucket = BETWEEN_BUCKET
+
+        py_lines, py_calls = trace_python(counter, run_frame, py_frames) if py_frames > 0 else (None, None)
         field = next((getattr(e, "field", None) for e in scene.effects if e.name == "ripples"), None)
         solver = getattr(field, "backend", None) or "not built"  # what "auto" chose
     finally:
@@ -406,6 +456,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             counter.__exit__(None, None, None)
     rows = {name: {key: statistics.median(values) for key, values in cols.items()} for name, cols in samples.items()}
     frame = rows.pop("frame")
+    if py_lines is not None:
+        _add_python(rows, frame, py_lines, py_calls)
     return {"size": tuple(size), "budget": int(budget), "speed_kmh": float(speed_kmh), "frames": frames,
             "ripples_backend": ripples_backend, "ripples_solver": solver, "skip_draws": counter.skip_draws,
             "warmup": warmup, "gpu_timing": gpu_timing, "overhead_ns": counter.overhead_ns, "clock": counter.clock,
@@ -473,6 +525,32 @@ def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_m
                   "rain_gpu_ms": rain_gpu, "wall_ms": wall_ms, "process_cpu_ms": process_ms})
 
 
+def _add_python(rows: dict, frame: dict, lines: dict, calls: dict) -> None:
+    """``py_lines`` and ``py_calls`` (per frame, ``trace_python``'s) into each pass's row, the effects' totals and
+    the whole frame (every bucket but the wait at ``finish``, as for the CPU). A pass without a row (an idle
+    effect's observe: the renderer keeps no stat of it) counts between the passes, as its CPU time does."""
+    lines, calls = dict(lines), dict(calls)
+    for bucket in [b for b in lines.keys() | calls.keys() if b not in rows and b != "finish"]:
+        if BETWEEN_BUCKET in rows:
+            lines[BETWEEN_BUCKET] = lines.get(BETWEEN_BUCKET, 0.0) + lines.pop(bucket, 0.0)
+            calls[BETWEEN_BUCKET] = calls.get(BETWEEN_BUCKET, 0.0) + calls.pop(bucket, 0.0)
+    effects: dict[str, list[float]] = defaultdict(lambda: [0.0, 0.0])
+    for name, row in rows.items():
+        if name.startswith("effect: "):
+            continue
+        row["py_lines"], row["py_calls"] = lines.get(name, 0.0), calls.get(name, 0.0)
+        effect = _effect_of(name)
+        if effect != name:
+            effects[effect][0] += row["py_lines"]
+            effects[effect][1] += row["py_calls"]
+    for effect, (n_lines, n_calls) in effects.items():
+        row = rows.get(f"effect: {effect}")
+        if row is not None:
+            row["py_lines"], row["py_calls"] = n_lines, n_calls
+    frame["py_lines"] = sum(v for k, v in lines.items() if k != "finish")
+    frame["py_calls"] = sum(v for k, v in calls.items() if k != "finish")
+
+
 def combine_rounds(rounds: list[dict]) -> dict:
     """One case measured ``len(rounds)`` times (``--rounds``) as one result: every figure is the median over the
     rounds of the rounds' medians, and ``cpu_ms_range`` the lowest and highest whole-frame CPU ms outside GL of
@@ -495,7 +573,8 @@ def combine_rounds(rounds: list[dict]) -> dict:
 
 # --- report ------------------------------------------------------------------------------------------------
 
-_COLUMNS = (("CPU ms outside GL", "cpu_ms", "{:.2f}"), ("GL calls", "gl_calls", "{:.0f}"),
+_COLUMNS = (("CPU ms outside GL", "cpu_ms", "{:.2f}"), ("Python lines", "py_lines", "{:.0f}"),
+            ("GL calls", "gl_calls", "{:.0f}"),
             ("uniform writes", "uniform_writes", "{:.0f}"),
             ("upload KB", "upload_kb", "{:.1f}"), ("uniform KB", "uniform_kb", "{:.1f}"),
             ("ms inside GL", "gl_ms", "{:.2f}"), ("GPU ms", "gpu_ms", "{:.3f}"), ("GPU %", "gpu_share", "{:.0f}"))
@@ -518,14 +597,12 @@ def case_table(result: dict) -> str:
     """One case: a row per pass, the step, the renderer between passes, the effect totals, the whole frame."""
     names = [n for n in result["passes"] if not n.startswith("effect: ")]
     names += [n for n in result["passes"] if n.startswith("effect: ")]
-    body = []
-    for name in names:
-        r = result["rows"][name]
-        body.append([name] + [fmt.format(r[key]) if key not in _GPU_KEYS or result["gpu_timing"] else "-"
-                              for _, key, fmt in _COLUMNS])
-    f = result["frame"]
-    body.append(["**whole frame**"] + [fmt.format(f[key]) if key not in _GPU_KEYS or result["gpu_timing"] else "-"
-                                       for _, key, fmt in _COLUMNS])
+    def cells(r: dict) -> list[str]:  # "-": GPU columns without timer queries, Python lines not traced
+        return [fmt.format(r[key]) if key in r and (key not in _GPU_KEYS or result["gpu_timing"]) else "-"
+                for _, key, fmt in _COLUMNS]
+
+    body = [[name] + cells(result["rows"][name]) for name in names]
+    body.append(["**whole frame**"] + cells(result["frame"]))
     return _table(["pass"] + [c[0] for c in _COLUMNS], body)
 
 
@@ -539,15 +616,21 @@ def _cpu_with_range(result: dict) -> str:
 
 
 def summary_table(results: list[dict]) -> str:
-    body = [[f"{r['speed_kmh']:g}", f"{r['budget']:,}", _cpu_with_range(r),
+    body = [[f"{r['speed_kmh']:g}", f"{r['budget']:,}", _cpu_with_range(r), _py(r),
              f"{r['frame']['gl_calls']:.0f}", f"{r['frame'].get('uniform_writes', 0):.0f}",
              f"{r['frame']['upload_kb']:.1f}", f"{r['frame']['uniform_kb']:.1f}",
              f"{r['frame']['gl_ms']:.1f}", f"{r['frame']['wall_ms']:.1f}",
              f"{r['frame'].get('process_cpu_ms', math.nan):.1f}", _gpu(r, "gpu_ms"), _gpu(r, "rain_gpu_ms")]
             for r in results]
-    return _table(["km/h", "streak budget", "CPU ms outside GL", "GL calls", "uniform writes", "upload KB",
+    return _table(["km/h", "streak budget", "CPU ms outside GL", "Python lines / calls", "GL calls",
+                   "uniform writes", "upload KB",
                    "uniform KB", "ms inside GL", "frame wall ms", "CPU ms, all threads", "GPU ms", "rain GPU ms"],
                   body)
+
+
+def _py(result: dict) -> str:
+    frame = result["frame"]
+    return f"{frame['py_lines']:.0f} / {frame['py_calls']:.0f}" if "py_lines" in frame else "-"
 
 
 def _gpu(result: dict, key: str) -> str:
@@ -606,6 +689,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
             f"{args.warmup} warm-up frames"
             + (f"; {args.rounds} rounds, the cases alternated: the median of the rounds' medians, the summary's "
                "range the rounds' lowest and highest" if getattr(args, "rounds", 1) > 1 else "")
+            + (f"; Python lines and calls: {args.py_frames} more frames traced (sys.settrace), the bench's own "
+               "wrappers left out" if getattr(args, "py_frames", 0) else "")
             + ". GL calls exclude timer queries; GPU ms = the pass's timer-query time, "
             "GPU % its share of the frame's (on llvmpipe, which emulates the GPU on the CPU and defers draws, "
             "compare ratios only); rain GPU ms = " + " + ".join(RAIN_EFFECTS) + ".\n")
@@ -656,6 +741,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                                               "atmosphere.scatter_lights=2 (repeatable)")
     p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
                    help="leave the renderer's timer queries off (no GPU columns)")
+    p.add_argument("--py-frames", type=int, default=2,
+                   help="frames traced after the timed ones for the Python lines and calls per pass (default 2; 0: "
+                        "none)")
     p.add_argument("--skip-draws", action="store_true",
                    help="count the draws without making them: the CPU figures without llvmpipe's vertex work on "
                         "this thread (pixels meaningless; see the module docstring)")
@@ -673,6 +761,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.warmup = args.warmup or (4 if args.quick else 8)
     if args.frames < 1 or args.warmup < 0:
         p.error("--frames must be >= 1 and --warmup >= 0")
+    if not 0 <= args.py_frames <= 100:
+        p.error(f"--py-frames must be in [0, 100], got {args.py_frames}")
     if not 1 <= args.rounds <= 100:
         p.error(f"--rounds must be in [1, 100], got {args.rounds}")
     if args.overrides:  # validated here, before any frame is drawn
@@ -705,7 +795,7 @@ def main(argv=None) -> int:
             for speed, budget in cases:
                 result = measure_case(ctx, args.size, budget, speed, args.frames, args.warmup, args.gpu_timing,
                                       counter=counter, ripples_backend=args.ripples_backend,
-                                      overrides=args.overrides)
+                                      overrides=args.overrides, py_frames=args.py_frames)
                 rounds[(speed, budget)].append(result)
                 if args.rounds > 1:
                     print(f"round {index + 1}/{args.rounds}, {case_label(result)}: "

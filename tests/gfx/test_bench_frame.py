@@ -8,7 +8,14 @@ import math
 import moderngl
 import pytest
 
-from rain_core.bench.frame import GLCounter, heavy_rain_settings, measure_case, parse_args, with_overrides
+from rain_core.bench.frame import (
+    GLCounter,
+    case_table,
+    heavy_rain_settings,
+    measure_case,
+    parse_args,
+    with_overrides,
+)
 
 
 def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
@@ -32,6 +39,54 @@ def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
     # the rain's own GPU time is part of the frame's (one frame late: finite once a second frame was timed)
     assert 0.0 <= frame["rain_gpu_ms"] <= frame["gpu_ms"]
     assert math.isfinite(counter.overhead_ns) and counter.overhead_ns >= 0.0
+
+
+def _three_lines():
+    a = 1
+    b = a + 1
+    return b
+
+
+def test_trace_python_counts_each_line_and_call_in_the_bucket_running_it():
+    """Per frame: run's own lines and calls land in the bucket set when they run (a line event comes before its
+    line runs); the bench's own functions (here _effect_of) are not counted."""
+    from rain_core.bench.frame import _effect_of, trace_python
+
+    counter = GLCounter()  # not entered: only its bucket is used
+
+    def run():
+        counter.bucket = "x"  # (counted in "y": the bucket before this line)
+        _three_lines()
+        counter.bucket = "y"
+        _three_lines()
+        _effect_of("spray.update")  # the bench's: neither its call nor its line counts
+        _three_lines()
+
+    counter.bucket = "y"
+    lines, calls = trace_python(counter, run, frames=2)
+    assert lines == {"y": 1 + 1 + 3 + 1 + 1 + 3, "x": 1 + 3 + 1}
+    assert calls == {"y": 1 + 2, "x": 1}
+    assert counter.bucket == "y"
+
+
+def test_measure_case_counts_python_lines_by_pass(gl_ctx):
+    """One traced frame: the whole frame's lines are its passes', the step's and the renderer's between them; an
+    effect's total is its passes'; the update of the windshield (a Python simulation) runs some."""
+    with GLCounter() as counter:
+        result = measure_case(gl_ctx, (48, 27), budget=2000, speed_kmh=100.0, frames=1, warmup=1, counter=counter,
+                              ripples_backend="numpy32", py_frames=1)
+    rows, frame = result["rows"], result["frame"]
+    own = [r for name, r in rows.items() if not name.startswith("effect: ")]
+    assert frame["py_lines"] == sum(r["py_lines"] for r in own) > 0
+    assert frame["py_calls"] == sum(r["py_calls"] for r in own) > 0
+    assert rows["sim: scene.step"]["py_lines"] > 0 and rows["windshield.update"]["py_lines"] > 0
+    passes = [n for n in rows if n.startswith("windshield.")]
+    assert rows["effect: windshield"]["py_lines"] == sum(rows[n]["py_lines"] for n in passes)
+    with GLCounter() as counter:
+        untraced = measure_case(gl_ctx, (48, 27), budget=2000, speed_kmh=0.0, frames=1, warmup=0, counter=counter,
+                                ripples_backend="numpy32", py_frames=0)
+    assert "py_lines" not in untraced["frame"] and "py_lines" not in untraced["rows"]["scene"]
+    assert "| - |" in case_table(untraced)  # the column without a count
 
 
 def test_skip_draws_counts_draws_without_making_them(gl_ctx):
