@@ -22,6 +22,7 @@ from rain_core import layout
 
 WALL_X_M = layout.ROAD_HALF_WIDTH_M + layout.KERB_WIDTH_M + layout.SIDEWALK_WIDTH_M  # 10.3 m: the sidewalk ends
 FORECOURT_BACK_X_M = 33.5  # m: the fuel station's forecourt opens the +x wall this far
+_NEAREST_WALL_X_M = min(WALL_X_M, FORECOURT_BACK_X_M)  # no wall lies nearer the centre line than this
 RESTITUTION = 0.1
 FRICTION = 0.4  # Coulomb: tangential speed lost per unit of normal speed removed
 GLANCE_TURN = 0.5  # share of the angle to the new velocity the heading turns by on a glancing hit
@@ -148,6 +149,10 @@ class StreetCollider:
 
     def _wall_contact(self, car, half_l: float, half_w: float):
         """(depth m, normal) of the footprint's deepest corner beyond a wall, or None."""
+        # Every corner lies within the footprint's half-diagonal of the centre (and a µm of rounding): a car that
+        # far inside the nearer wall touches none (a car on the road: every sub-step), without its four corners.
+        if abs(float(car.position[0])) + math.hypot(half_l, half_w) + 1e-6 < _NEAREST_WALL_X_M:
+            return None
         fx, fz = -math.sin(car.yaw), -math.cos(car.yaw)
         rx, rz = math.cos(car.yaw), -math.sin(car.yaw)
         px, pz = float(car.position[0]), float(car.position[2])
