@@ -44,6 +44,12 @@ class Frame:
     def rain_rate_mm_h(self) -> float:
         return float(getattr(self.weather, "rate_mm_h", 0.0)) if self.weather is not None else 0.0
 
+    def with_camera(self, camera: Camera) -> Frame:
+        """This frame seen by ``camera`` (a mirror view's): ``dataclasses.replace(self, camera=camera)`` without its
+        walk over the fields, which cost ~6 Python lines a field every frame."""
+        return Frame(self.time_s, self.dt_s, camera, self.lighting, self.world, self.ego, self.vehicles, self.weather,
+                     self.settings, self.headlights_on, self.flash, self.storm)
+
 
 @dataclass
 class PassStat:

@@ -11,7 +11,6 @@ then ``tonemap`` to the display image.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import moderngl
@@ -197,7 +196,7 @@ class Renderer:
         for planned, mrc in self._mirror_plans:
             if all(a is b for a, b in zip(planned, key, strict=True)):
                 return mrc
-        mrc = self.render_context(dataclasses.replace(rc.frame, camera=camera), target, view=rc.view @ mirror,
+        mrc = self.render_context(rc.frame.with_camera(camera), target, view=rc.view @ mirror,
                                   projection=rc.projection, shared=rc.shared, uniforms=rc.uniforms, active=rc.active)
         if self.scene.in_frame:  # kept for this frame alone (holding the key's objects keeps them from being reused)
             self._mirror_plans.append((key, mrc))
