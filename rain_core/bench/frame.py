@@ -435,7 +435,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
                 continue
             _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6, (t2 - t1) * 1e-6, wall,
                      process)
-        def run_frame() -> None:
+
+        def run_frame() -> None:  # one more frame of the case, its calls and lines sorted as the timed ones'
             counter.reset()
             counter.bucket = STEP_BUCKET
             scene.step(dt_s, drive)
