@@ -234,11 +234,24 @@ class SceneDrawer:
         return data
 
     def _tiles_in_view(self, view_proj) -> tuple[bool, bool, bool]:
-        """Whether each world tile (one period behind, here, ahead) may touch the view of ``view_proj``."""
-        planes = frustum_planes(view_proj)
+        """Whether each world tile (one period behind, here, ahead) may touch the view of ``view_proj``:
+        ``not box_outside`` of the three boxes in one pass over the planes (the tiles differ only along z: the
+        x and y terms are shared), the same sums in the same order, so the same answers."""
         (lx, ly, lz), (hx, hy, hz) = self._world_box
-        return tuple(not box_outside(planes, (lx, ly, lz + k * layout.PERIOD_M), (hx, hy, hz + k * layout.PERIOD_M))
-                     for k in (-1, 0, 1))
+        period = layout.PERIOD_M
+        lows = (lz + -1 * period, lz + 0 * period, lz + 1 * period)  # lo and hi + k periods, k = −1, 0, 1
+        highs = (hz + -1 * period, hz + 0 * period, hz + 1 * period)
+        behind = here = ahead = True
+        for a, b, c, d, margin in frustum_planes(view_proj):
+            xy = (a * (hx if a >= 0.0 else lx)) + (b * (hy if b >= 0.0 else ly))
+            z_behind, z_here, z_ahead = highs if c >= 0.0 else lows
+            if xy + c * z_behind + d < -margin:
+                behind = False
+            if xy + c * z_here + d < -margin:
+                here = False
+            if xy + c * z_ahead + d < -margin:
+                ahead = False
+        return behind, here, ahead
 
     def draw_items(self, rc: RenderContext, include_cabin: bool, cull=False) -> list:
         """``draw_list`` with each model matrix as the bytes ``u_model`` takes; between ``begin_frame`` and

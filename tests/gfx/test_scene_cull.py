@@ -5,12 +5,15 @@ without culling."""
 
 from __future__ import annotations
 
+import types
+
 import numpy as np
 import pytest
 
+from rain_core import layout
 from rain_core.bench.frame import heavy_rain_settings
 from rain_core.camera import Camera
-from rain_core.gfx.scene_draw import SceneDrawer, box_outside_frustum
+from rain_core.gfx.scene_draw import SceneDrawer, box_outside, box_outside_frustum, frustum_planes
 from rain_core.scene import Scene
 
 SIZE = (96, 54)
@@ -40,6 +43,28 @@ def test_box_exactly_on_a_side_plane_is_kept():
     half_w = np.tan(np.radians(30.0)) * 16 / 9 * 10.0
     assert not box_outside_frustum(vp, (-half_w - 1.0, 1.0, 10.0), (-half_w, 2.0, 10.0))
     assert box_outside_frustum(vp, (-half_w - 1.0, 1.0, 10.0), (-half_w - 0.01, 2.0, 10.0))
+
+
+def test_tiles_in_view_is_box_outside_of_each_tile():
+    """The three tiles in one pass over the planes: for cameras along and around a period (tile seams included),
+    looking every way, each tile's answer is box_outside's of its own box."""
+    rng = np.random.default_rng(7)
+    (lx, ly, lz), (hx, hy, hz) = box = ([-60.0, -2.0, 0.0], [60.0, 45.0, layout.PERIOD_M])
+    stub = types.SimpleNamespace(_world_box=box)
+    seen = np.zeros((3, 2), int)
+    for i in range(3000):
+        z = rng.choice((0.0, layout.PERIOD_M)) + rng.uniform(-30.0, 30.0) if i % 3 == 0 else rng.uniform(-100.0, 1300.0)
+        camera = Camera(position=np.array([rng.uniform(-8.0, 8.0), rng.uniform(0.5, 3.0), z]),
+                        forward=rng.normal(size=3), fov_y_deg=rng.uniform(20.0, 100.0),
+                        far_m=rng.choice((200.0, 2000.0)))
+        vp = camera.projection_matrix(rng.uniform(0.5, 2.5)) @ camera.view_matrix()
+        planes = frustum_planes(vp)
+        want = tuple(not box_outside(planes, (lx, ly, lz + k * layout.PERIOD_M), (hx, hy, hz + k * layout.PERIOD_M))
+                     for k in (-1, 0, 1))
+        assert SceneDrawer._tiles_in_view(stub, vp) == want
+        for tile, on in enumerate(want):
+            seen[tile, int(on)] += 1
+    assert (seen > 100).all()  # every tile both kept and culled
 
 
 def _frame(gl_ctx, monkeypatch, cull: bool, camera: str = "driver"):
