@@ -153,6 +153,10 @@ class StreetCollider:
         # far inside the nearer wall touches none (a car on the road: every sub-step), without its four corners.
         if abs(float(car.position[0])) + math.hypot(half_l, half_w) + 1e-6 < _NEAREST_WALL_X_M:
             return None
+        return self._wall_corners(car, half_l, half_w)
+
+    def _wall_corners(self, car, half_l: float, half_w: float):
+        """``_wall_contact`` by testing each of the footprint's four corners."""
         fx, fz = -math.sin(car.yaw), -math.cos(car.yaw)
         rx, rz = math.cos(car.yaw), -math.sin(car.yaw)
         px, pz = float(car.position[0]), float(car.position[2])

@@ -249,25 +249,10 @@ def test_contacts_with_the_across_x_early_out_are_the_full_tests(collider):
     assert taken > 300 and not_taken > 300
 
 
-def _wall_contact_by_corners(collider, car, half_l, half_w):
-    """The deepest corner beyond a wall, every corner tested (no early-out): the twin of _wall_contact."""
-    fx, fz = -math.sin(car.yaw), -math.cos(car.yaw)
-    rx, rz = math.cos(car.yaw), -math.sin(car.yaw)
-    px, pz = float(car.position[0]), float(car.position[2])
-    best = None
-    for sl, sw in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
-        cx = px + fx * half_l * sl + rx * half_w * sw
-        cz = pz + fz * half_l * sl + rz * half_w * sw
-        over = abs(cx) - collider.wall_x(cx, cz)
-        if over > 0.0 and (best is None or over > best[0]):
-            best = (over, (-(1.0 if cx > 0.0 else -1.0), 0.0))
-    return best
-
-
 def test_wall_contacts_with_the_half_diagonal_early_out_are_the_corner_tests(collider):
-    """_wall_contact skips the corners of a car further inside the nearer wall than its half-diagonal: over poses
-    across the street and the forecourt (far inside, grazing within a mm of the bound, and beyond), the same
-    contacts as testing every corner, with the early-out taken and not taken."""
+    """_wall_contact skips the corners (_wall_corners) of a car further inside the nearer wall than its
+    half-diagonal: over poses across the street and the forecourt (far inside, grazing within a mm of the bound,
+    and beyond), the same contacts as testing every corner, with the early-out taken and not taken."""
     rng = np.random.default_rng(5)
     car = EgoCar()
     half_l, half_w = car.spec.length_m / 2.0, car.spec.width_m / 2.0
@@ -277,7 +262,7 @@ def test_wall_contacts_with_the_half_diagonal_early_out_are_the_corner_tests(col
         x = edge + rng.uniform(-2e-3, 2e-3) if i % 2 else rng.uniform(-12.0, 12.0)
         car.position = np.array([x * rng.choice((-1.0, 1.0)), 0.0, rng.uniform(-50.0, 2500.0)])
         car.yaw = rng.choice((0.0, math.pi / 2, math.atan2(half_w, half_l), rng.uniform(-math.pi, math.pi)))
-        want = _wall_contact_by_corners(collider, car, half_l, half_w)
+        want = collider._wall_corners(car, half_l, half_w)
         assert collider._wall_contact(car, half_l, half_w) == want
         taken += abs(car.position[0]) < edge - 1e-6
         touching += want is not None
