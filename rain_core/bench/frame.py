@@ -51,9 +51,10 @@ Method (also printed in the header):
   the calls that must wait for that thread wait for (e.g. reads, a texture written from memory, a buffer write
   over 8 KiB, object creation, a query read, ``finish``); such a call also runs, on this thread, the calls not
   yet handed to the driver thread. Run with ``mesa_glthread=false`` for the driver on this thread.
-* Python lines (``--py-frames``, default 2): after the timed frames, a few more frames run under ``sys.settrace``
+* Python lines (``--py-frames``, default 3): after the timed frames, a few more frames run under ``sys.settrace``
   and every Python line executed is counted in the bucket of the pass running it (the bench's own wrappers are
-  left out), as are the Python calls (in the JSON). NumPy's and the compiled kernels' work is not counted: it runs
+  left out), as are the Python calls (in the JSON); each bucket's median over those frames (a one-off, such as a
+  kernel's first call, is left out). NumPy's and the compiled kernels' work is not counted: it runs
   in C. Unlike a time, the count is the same from run to run: a change to the frame's Python glue shows as an
   exact difference, while this machine's noise hides most of what a few hundred lines cost (~0.1–0.25 µs each
   here, more for code that has not run for a while).
@@ -292,10 +293,11 @@ class GLCounter:
 
 
 def trace_python(counter: GLCounter, run_frame, frames: int) -> tuple[dict[str, float], dict[str, float]]:
-    """(Python lines, Python calls) executed per frame by bucket, means over ``frames`` calls of ``run_frame()``
-    under ``sys.settrace``: each line and call counts in ``counter.bucket`` as it is when it runs. Lines of this
-    file (the GL counter's wrappers, the pass timer) are not counted, nor what runs in C (NumPy, the kernels, the
-    driver). Tracing slows Python ~10×: run it after the timed frames."""
+    """(Python lines, Python calls) executed per frame by bucket, each bucket's median over ``frames`` calls of
+    ``run_frame()`` under ``sys.settrace`` (a one-off in one frame, such as a kernel's first call loading it from
+    the disk cache, is left out from three frames on): each line and call counts in ``counter.bucket`` as it is
+    when it runs. Lines of this file (the GL counter's wrappers, the pass timer) are not counted, nor what runs
+    in C (NumPy, the kernels, the driver). Tracing slows Python ~10×: run it after the timed frames."""
     lines: dict[str, int] = defaultdict(int)
     calls: dict[str, int] = defaultdict(int)
 
@@ -310,14 +312,26 @@ def trace_python(counter: GLCounter, run_frame, frames: int) -> tuple[dict[str, 
         calls[counter.bucket] += 1
         return on_line
 
+    per_frame = []
     previous = sys.gettrace()
-    sys.settrace(on_call)
     try:
         for _ in range(frames):
-            run_frame()
+            lines.clear()
+            calls.clear()
+            sys.settrace(on_call)
+            try:
+                run_frame()
+            finally:
+                sys.settrace(previous)
+            per_frame.append((dict(lines), dict(calls)))
     finally:
         sys.settrace(previous)
-    return ({k: v / frames for k, v in lines.items()}, {k: v / frames for k, v in calls.items()})
+
+    def medians(which: int) -> dict[str, float]:
+        buckets = set().union(*(counts[which] for counts in per_frame))
+        return {b: float(statistics.median(counts[which].get(b, 0) for counts in per_frame)) for b in buckets}
+
+    return medians(0), medians(1)
 
 
 def heavy_rain_settings(budget: int, rate_mm_h: float = RAIN_MM_H, camera: str = "driver"):
@@ -371,7 +385,7 @@ def _effect_of(pass_name: str) -> str:
 def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 0.0, frames: int = 30,
                  warmup: int = 8, gpu_timing: bool = True, dt_s: float = 1.0 / 30.0, seed: int = 1,
                  counter: GLCounter | None = None, ripples_backend: str = "auto", overrides=(),
-                 py_frames: int = 2) -> dict:
+                 py_frames: int = 3) -> dict:
     """Render ``warmup + frames`` frames of one case; medians over the last ``frames``. ``ripples_backend``:
     the ripples effect's solver ("auto" times the paths on this machine; on llvmpipe it picks numpy32).
     ``overrides``: (settings path, value) pairs set on top of the heavy-rain settings (``--set``). ``py_frames``:
@@ -527,9 +541,10 @@ def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_m
 
 
 def _add_python(rows: dict, frame: dict, lines: dict, calls: dict) -> None:
-    """``py_lines`` and ``py_calls`` (per frame, ``trace_python``'s) into each pass's row, the effects' totals and
-    the whole frame (every bucket but the wait at ``finish``, as for the CPU). A pass without a row (an idle
-    effect's observe: the renderer keeps no stat of it) counts between the passes, as its CPU time does."""
+    """``py_lines`` and ``py_calls`` (per frame, ``trace_python``'s medians) into each pass's row, the effects'
+    totals and the whole frame (the sum over every bucket but the wait at ``finish``, as for the CPU). A pass
+    without a row (an idle effect's observe: the renderer keeps no stat of it) counts between the passes, as its
+    CPU time does."""
     lines, calls = dict(lines), dict(calls)
     for bucket in [b for b in lines.keys() | calls.keys() if b not in rows and b != "finish"]:
         if BETWEEN_BUCKET in rows:
@@ -690,8 +705,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
             f"{args.warmup} warm-up frames"
             + (f"; {args.rounds} rounds, the cases alternated: the median of the rounds' medians, the summary's "
                "range the rounds' lowest and highest" if getattr(args, "rounds", 1) > 1 else "")
-            + (f"; Python lines and calls: {args.py_frames} more frames traced (sys.settrace), the bench's own "
-               "wrappers left out" if getattr(args, "py_frames", 0) else "")
+            + (f"; Python lines and calls: {args.py_frames} more frames traced (sys.settrace), each pass's median, "
+               "the bench's own wrappers left out" if getattr(args, "py_frames", 0) else "")
             + ". GL calls exclude timer queries; GPU ms = the pass's timer-query time, "
             "GPU % its share of the frame's (on llvmpipe, which emulates the GPU on the CPU and defers draws, "
             "compare ratios only); rain GPU ms = " + " + ".join(RAIN_EFFECTS) + ".\n")
@@ -742,9 +757,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                                               "atmosphere.scatter_lights=2 (repeatable)")
     p.add_argument("--no-gpu-timing", dest="gpu_timing", action="store_false",
                    help="leave the renderer's timer queries off (no GPU columns)")
-    p.add_argument("--py-frames", type=int, default=2,
-                   help="frames traced after the timed ones for the Python lines and calls per pass (default 2; 0: "
-                        "none)")
+    p.add_argument("--py-frames", type=int, default=3,
+                   help="frames traced after the timed ones for the Python lines and calls per pass, their median "
+                        "(default 3; 0: none)")
     p.add_argument("--skip-draws", action="store_true",
                    help="count the draws without making them: the CPU figures without llvmpipe's vertex work on "
                         "this thread (pixels meaningless; see the module docstring)")

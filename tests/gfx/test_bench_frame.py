@@ -4,6 +4,7 @@ positive, finite counters for the frame and its passes (no timing asserts: timin
 from __future__ import annotations
 
 import math
+import sys
 
 import moderngl
 import pytest
@@ -67,6 +68,20 @@ def test_trace_python_counts_each_line_and_call_in_the_bucket_running_it():
     assert lines == {"y": 1 + 1 + 3 + 1 + 1 + 3, "x": 1 + 3 + 1}
     assert calls == {"y": 1 + 2, "x": 1}
     assert counter.bucket == "y"
+
+    # Each bucket's median over the frames: a one-off in one frame of three (a bucket of its own) is left out.
+    frames = iter(range(3))
+
+    def run_once_odd():
+        counter.bucket = "x"
+        _three_lines()
+        if next(frames) == 1:
+            counter.bucket = "once"
+            _three_lines()
+        counter.bucket = "y"
+
+    lines, calls = trace_python(counter, run_once_odd, frames=3)
+    assert lines == {"y": 1, "x": 1 + 3 + 1 + 1, "once": 0} and calls["once"] == 0 and sys.gettrace() is None
 
 
 def test_measure_case_counts_python_lines_by_pass(gl_ctx):
