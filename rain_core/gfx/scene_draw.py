@@ -33,6 +33,7 @@ def _tile_model(k: int) -> np.ndarray:
 
 _TILE_MODELS = tuple(_tile_model(k) for k in (-1, 0, 1))  # the world tile one period behind, here, ahead
 _TILE_BYTES = {k: mat4_bytes(m) for k, m in zip((-1, 0, 1), _TILE_MODELS, strict=True)}
+_TILE_SHIFTS = tuple(k * layout.PERIOD_M for k in (-1, 0, 1))  # m along z, the tiles' boxes
 
 
 def frustum_planes(view_proj) -> list[tuple[float, float, float, float, float]]:
@@ -53,13 +54,22 @@ def box_outside(planes, lo, hi) -> bool:
     """Whether the axis-aligned box [lo, hi] (world m) lies wholly outside one of ``planes`` (``frustum_planes``).
     Conservative: a box that touches or straddles a plane is kept, so a skipped draw is one that had no
     fragments."""
+    return boxes_outside(planes, lo, hi, (0.0,))[0]
+
+
+def boxes_outside(planes, lo, hi, z_shifts) -> list[bool]:
+    """``box_outside`` of the box [lo, hi] moved by each of ``z_shifts`` (m) along z, in one pass over the planes
+    (the boxes share their x and y terms): the world tile's copies one period behind and ahead."""
+    lows = [lo[2] + s for s in z_shifts]
+    highs = [hi[2] + s for s in z_shifts]
+    outside = [False] * len(z_shifts)
     for a, b, c, d, margin in planes:
         # the box's corner farthest along the plane's normal: if even it is outside, the whole box is
-        reach = ((a * (hi[0] if a >= 0.0 else lo[0])) + (b * (hi[1] if b >= 0.0 else lo[1]))
-                 + (c * (hi[2] if c >= 0.0 else lo[2])) + d)
-        if reach < -margin:
-            return True
-    return False
+        xy = (a * (hi[0] if a >= 0.0 else lo[0])) + (b * (hi[1] if b >= 0.0 else lo[1]))
+        for i, z in enumerate(highs if c >= 0.0 else lows):
+            if xy + c * z + d < -margin:
+                outside[i] = True
+    return outside
 
 
 def box_outside_frustum(view_proj, lo, hi) -> bool:
@@ -234,24 +244,9 @@ class SceneDrawer:
         return data
 
     def _tiles_in_view(self, view_proj) -> tuple[bool, bool, bool]:
-        """Whether each world tile (one period behind, here, ahead) may touch the view of ``view_proj``:
-        ``not box_outside`` of the three boxes in one pass over the planes (the tiles differ only along z: the
-        x and y terms are shared), the same sums in the same order, so the same answers."""
-        (lx, ly, lz), (hx, hy, hz) = self._world_box
-        period = layout.PERIOD_M
-        lows = (lz + -1 * period, lz + 0 * period, lz + 1 * period)  # lo and hi + k periods, k = −1, 0, 1
-        highs = (hz + -1 * period, hz + 0 * period, hz + 1 * period)
-        behind = here = ahead = True
-        for a, b, c, d, margin in frustum_planes(view_proj):
-            xy = (a * (hx if a >= 0.0 else lx)) + (b * (hy if b >= 0.0 else ly))
-            z_behind, z_here, z_ahead = highs if c >= 0.0 else lows
-            if xy + c * z_behind + d < -margin:
-                behind = False
-            if xy + c * z_here + d < -margin:
-                here = False
-            if xy + c * z_ahead + d < -margin:
-                ahead = False
-        return behind, here, ahead
+        """Whether each world tile (one period behind, here, ahead) may touch the view of ``view_proj``."""
+        lo, hi = self._world_box
+        return tuple(not out for out in boxes_outside(frustum_planes(view_proj), lo, hi, _TILE_SHIFTS))
 
     def draw_items(self, rc: RenderContext, include_cabin: bool, cull=False) -> list:
         """``draw_list`` with each model matrix as the bytes ``u_model`` takes; between ``begin_frame`` and

@@ -45,9 +45,17 @@ def test_box_exactly_on_a_side_plane_is_kept():
     assert box_outside_frustum(vp, (-half_w - 1.0, 1.0, 10.0), (-half_w - 0.01, 2.0, 10.0))
 
 
+def _outside_by_corners(planes, lo, hi) -> bool:
+    """The box test's oracle: every one of the box's eight corners beyond one plane (the farthest corner's sum
+    is the largest of the eight, rounding being monotonic, so the answers agree exactly)."""
+    corners = [(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    return any(max(a * x + b * y + c * z + d for x, y, z in corners) < -margin for a, b, c, d, margin in planes)
+
+
 def test_tiles_in_view_is_box_outside_of_each_tile():
-    """The three tiles in one pass over the planes: for cameras along and around a period (tile seams included),
-    looking every way, each tile's answer is box_outside's of its own box."""
+    """The three tiles in one pass over the planes (boxes_outside): for cameras along and around a period (tile
+    seams included), looking every way, each tile's answer is the corner test's of its own box, as is
+    box_outside's for each box alone."""
     rng = np.random.default_rng(7)
     (lx, ly, lz), (hx, hy, hz) = box = ([-60.0, -2.0, 0.0], [60.0, 45.0, layout.PERIOD_M])
     stub = types.SimpleNamespace(_world_box=box)
@@ -59,9 +67,10 @@ def test_tiles_in_view_is_box_outside_of_each_tile():
                         far_m=rng.choice((200.0, 2000.0)))
         vp = camera.projection_matrix(rng.uniform(0.5, 2.5)) @ camera.view_matrix()
         planes = frustum_planes(vp)
-        want = tuple(not box_outside(planes, (lx, ly, lz + k * layout.PERIOD_M), (hx, hy, hz + k * layout.PERIOD_M))
-                     for k in (-1, 0, 1))
+        tiles = [((lx, ly, lz + k * layout.PERIOD_M), (hx, hy, hz + k * layout.PERIOD_M)) for k in (-1, 0, 1)]
+        want = tuple(not _outside_by_corners(planes, lo, hi) for lo, hi in tiles)
         assert SceneDrawer._tiles_in_view(stub, vp) == want
+        assert tuple(not box_outside(planes, lo, hi) for lo, hi in tiles) == want
         for tile, on in enumerate(want):
             seen[tile, int(on)] += 1
     assert (seen > 100).all()  # every tile both kept and culled
