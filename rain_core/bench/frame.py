@@ -314,18 +314,15 @@ def trace_python(counter: GLCounter, run_frame, frames: int) -> tuple[dict[str, 
 
     per_frame = []
     previous = sys.gettrace()
-    try:
-        for _ in range(frames):
-            lines.clear()
-            calls.clear()
-            sys.settrace(on_call)
-            try:
-                run_frame()
-            finally:
-                sys.settrace(previous)
-            per_frame.append((dict(lines), dict(calls)))
-    finally:
-        sys.settrace(previous)
+    for _ in range(frames):
+        lines.clear()
+        calls.clear()
+        sys.settrace(on_call)
+        try:
+            run_frame()
+        finally:
+            sys.settrace(previous)
+        per_frame.append((dict(lines), dict(calls)))
 
     def medians(which: int) -> dict[str, float]:
         buckets = set().union(*(counts[which] for counts in per_frame))
@@ -546,8 +543,8 @@ def _add_python(rows: dict, frame: dict, lines: dict, calls: dict) -> None:
     without a row (an idle effect's observe: the renderer keeps no stat of it) counts between the passes, as its
     CPU time does."""
     lines, calls = dict(lines), dict(calls)
-    for bucket in [b for b in lines.keys() | calls.keys() if b not in rows and b != "finish"]:
-        if BETWEEN_BUCKET in rows:
+    if BETWEEN_BUCKET in rows:
+        for bucket in [b for b in lines.keys() | calls.keys() if b not in rows and b != "finish"]:
             lines[BETWEEN_BUCKET] = lines.get(BETWEEN_BUCKET, 0.0) + lines.pop(bucket, 0.0)
             calls[BETWEEN_BUCKET] = calls.get(BETWEEN_BUCKET, 0.0) + calls.pop(bucket, 0.0)
     effects: dict[str, list[float]] = defaultdict(lambda: [0.0, 0.0])
