@@ -69,6 +69,8 @@ class RainroadApp:
         self.scene = Scene(self.ctx, self.render_size(settings), settings=settings, seed=seed, gpu_timing=False)
         # A cold start compiles the CPU kernels in a child process while the NumPy twins run (no frozen window).
         self.warmup = jit.WarmUp.start()
+        if self.warmup is None:  # warm: every kernel loads now, not in the frame that first calls it
+            jit.preload()
         self.driver = KeyboardDriver()
         self.cameras = CameraModes(settings.camera.mode)
         self.panel = RainManagerPanel(self.ctx, wnd.size, self.scene, framebuffer_size=wnd.buffer_size)

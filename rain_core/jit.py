@@ -8,10 +8,10 @@ compare against; ``active()`` says which one runs.
 
 ``RAINROAD_JIT=0`` turns the kernels off for a process (A/B benchmarks, bisecting a difference); ``forced`` does
 it for a block (tests). Kernels compile on their first call (about a second each) and are cached on disk beside
-their module, so later processes load them. Numba keys a cached kernel to its own file's contents alone, but a
-kernel carries its callees' code and the values of the constants it imports: ``kernel`` adds those files' hashes
-to its key, so an edit of a callee's file alone (a ``git pull``), or of a module whose constants a kernel imports,
-recompiles it instead of running stale code.
+their module, so later processes load them (each on its first call, or all at once: ``preload``). Numba keys a
+cached kernel to its own file's contents alone, but a kernel carries its callees' code and the values of the
+constants it imports: ``kernel`` adds those files' hashes to its key, so an edit of a callee's file alone (a ``git
+pull``), or of a module whose constants a kernel imports, recompiles it instead of running stale code.
 """
 
 from __future__ import annotations
@@ -216,6 +216,35 @@ def _stamp_dependencies(dispatcher, fn) -> None:
         return
 
 
+def preload() -> int:
+    """Load into this process every compilation of the kernels defined so far that Numba's disk cache holds for
+    this machine and these sources. A kernel otherwise loads on its first call with new argument types, ~5–25 ms
+    each (~0.3 s for the ~40 of a first frame), and a path first taken mid-drive (the glass full, the first wipe, a
+    lane change) stalls that frame. Returns the compilations loaded: 0 while the kernels are off, without Numba, or
+    when everything cached is loaded already."""
+    if not _active:
+        return 0
+    loaded = 0
+    for dispatcher in _KERNELS:
+        for signature in _cached_signatures(dispatcher):
+            if signature not in dispatcher.overloads:
+                dispatcher.compile(signature)  # found in the cache under the same key: a load, not a compile
+                loaded += 1
+    return loaded
+
+
+def _cached_signatures(dispatcher) -> list[tuple]:
+    """The argument types of ``dispatcher``'s current disk-cache entries: those under this machine's code
+    generator and this function's bytecode (Numba's index key; an entry left by another CPU or an older source
+    would compile instead of load). Numba's cache internals; any surprise reads as none."""
+    try:
+        cache = dispatcher._cache
+        codegen = dispatcher.targetctx.codegen()
+        return [tuple(key[0]) for key in cache._cache_file._load_index() if key == cache._index_key(key[0], codegen)]
+    except Exception:  # noqa: BLE001 - a Numba without these internals: the kernels load on their first calls
+        return []
+
+
 def describe() -> str:
     """One line for benchmark headers and the Rain Manager: which path runs and why."""
     if _active:
@@ -306,4 +335,5 @@ class WarmUp:
         if _warming is self:
             _warming = None
             set_active(True)
+            preload()  # one pause now (the first frame with the kernels would load most of them anyway)
         return True

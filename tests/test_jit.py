@@ -70,8 +70,11 @@ def test_a_cold_start_runs_the_twins_until_the_warm_up_ends(monkeypatch):
         assert warm is not None and warm.process.args[0][1:] == ["-m", "rain_core.warmup"]
         assert not jit.active() and "compile" in jit.describe()
         assert not warm.poll() and not jit.active()
+        loads = []
+        monkeypatch.setattr(jit, "preload", lambda: loads.append(jit.active()))
         warm.process.done = True
         assert warm.poll() and jit.active()
+        assert loads == [True]  # the kernels it compiled are loaded at once, not frame by frame
     finally:
         jit._warming = None
 
@@ -165,3 +168,121 @@ def test_a_kernel_depends_on_the_files_of_the_kernels_it_calls():
     assert {"common.py", "motion.py", "constants.py", "drop_rows.py"} <= {
         Path(p).name for p in jit.dependency_files(rows.sort_rows.py_func)}
     assert jit.dependency_files(_dot.py_func) == frozenset()  # NumPy's functions are not followed
+
+
+class _FakeCacheFile:
+    def __init__(self, keys):
+        self.keys = keys
+
+    def _load_index(self):
+        return dict.fromkeys(self.keys, "file.nbc")
+
+
+class _FakeCache:
+    def __init__(self, keys, current):
+        self._cache_file = _FakeCacheFile(keys)
+        self.current = current
+
+    def _index_key(self, signature, codegen):
+        return (signature, codegen, self.current)
+
+
+class _FakeDispatcher:
+    def __init__(self, keys, current="code v2"):
+        self._cache = _FakeCache(keys, current)
+        self.targetctx = type("Ctx", (), {"codegen": lambda self: "this cpu"})()
+        self.overloads = {}
+        self.compiled = []
+
+    def compile(self, signature):
+        self.compiled.append(signature)
+        self.overloads[signature] = object()
+
+
+def test_preload_loads_only_entries_for_this_machine_and_source(monkeypatch):
+    """An index entry made on another CPU or for an older bytecode would compile (seconds) instead of load."""
+    mine = (("float64",), "this cpu", "code v2")
+    other_cpu = (("int64",), "another cpu", "code v2")
+    old_code = (("float32",), "this cpu", "code v1")
+    kernel = _FakeDispatcher([mine, other_cpu, old_code])
+    monkeypatch.setattr(jit, "_KERNELS", [kernel])
+    monkeypatch.setattr(jit, "_active", True)
+    assert jit.preload() == 1 and kernel.compiled == [("float64",)]
+    assert jit.preload() == 0  # loaded already
+    monkeypatch.setattr(jit, "_active", False)
+    kernel.overloads.clear()
+    assert jit.preload() == 0  # the kernels are off: nothing to load
+
+
+def test_preload_survives_a_cache_it_cannot_read(monkeypatch):
+    broken = _FakeDispatcher([])
+    broken._cache = None  # e.g. a Numba whose cache internals differ
+    monkeypatch.setattr(jit, "_KERNELS", [broken])
+    monkeypatch.setattr(jit, "_active", True)
+    assert jit.preload() == 0
+
+
+_COUNT_LOADS = """
+import sys
+from numba.core import dispatcher
+loads = []
+original = dispatcher.Dispatcher._compile_for_args
+def counted(self, *args, **kwargs):
+    loads.append(self.py_func.__qualname__)
+    return original(self, *args, **kwargs)
+dispatcher.Dispatcher._compile_for_args = counted
+"""
+
+
+@pytest.mark.skipif(not jit.AVAILABLE, reason="Numba's disk cache")
+def test_a_preloaded_kernel_loads_nothing_on_its_first_calls(tmp_path):
+    """After ``preload`` a kernel's first calls with the argument types cached earlier go straight to the code."""
+    import subprocess
+    import sys
+
+    (tmp_path / "k.py").write_text("from rain_core import jit\n\n\n@jit.kernel\ndef f(x):\n    return x * 2\n")
+    code = (f"import sys; sys.path.insert(0, {str(tmp_path)!r})\n" + _COUNT_LOADS
+            + "import k\nfrom rain_core import jit\nn = jit.preload() if sys.argv[1] == 'preload' else 0\n"
+              "k.f(1); k.f(1.5)\nprint(n, len(loads))\n")
+
+    def run(mode: str) -> tuple[int, int]:
+        out = subprocess.run([sys.executable, "-c", code, mode], capture_output=True, text=True, check=True)
+        return tuple(int(v) for v in out.stdout.split())
+
+    assert run("lazy") == (0, 2)  # compiled and cached: one load (here a compile) per argument type
+    assert run("lazy") == (0, 2)  # loaded from the disk cache on each first call
+    assert run("preload") == (2, 0)
+
+
+@pytest.mark.skipif(not jit.AVAILABLE, reason="Numba's disk cache")
+def test_after_the_warm_up_a_preloaded_drive_loads_no_kernel_mid_frame():
+    """The window preloads the kernels; then no frame of a heavy-rain drive (at speed with traffic, the glass
+    filling, then parked) stops to load or compile one: the warm-up scene takes every path the frames take."""
+    import subprocess
+    import sys
+
+    if jit.cold():  # (as the window would start it)
+        subprocess.run([sys.executable, "-m", "rain_core.warmup"], capture_output=True, check=True)
+    code = _COUNT_LOADS + """
+from rain_core import jit
+from rain_core.bench.frame import _Brake, heavy_rain_settings
+from rain_core.gl import create_headless_context
+from rain_core.scene import Scene
+ctx = create_headless_context()
+scene = Scene(ctx, (96, 54), settings=heavy_rain_settings(10_000), seed=3, gpu_timing=False)
+for effect in scene.effects:
+    if effect.name == "ripples":
+        effect.backend = "numpy32"
+before = len(loads)
+preloaded = jit.preload()
+assert len(loads) == before, "preload must load, not dispatch"
+scene.ego.speed_m_s = scene.autopilot.target_speed_m_s = 100.0 / 3.6
+for _ in range(30):
+    scene.step(1.0 / 30.0, None); scene.render()
+for _ in range(8):
+    scene.step(1.0 / 30.0, _Brake()); scene.render()
+print(preloaded, len(loads), sorted(set(loads)))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    preloaded, loads, names = out.stdout.split(maxsplit=2)
+    assert int(preloaded) > 20 and int(loads) == 0, names
