@@ -28,6 +28,7 @@ def test_measure_case_counts_gl_calls_bytes_and_cpu(gl_ctx):
     for key in ("cpu_ms", "gl_ms", "wall_ms", "process_cpu_ms", "gl_calls", "upload_kb", "uniform_kb"):
         assert math.isfinite(frame[key]) and frame[key] >= 0.0, key
     assert frame["cpu_ms"] > 0.0 and frame["wall_ms"] >= frame["cpu_ms"]
+    assert frame["cpu_ms_max"] >= frame["cpu_ms"]  # the worst of the measured frames: at least their median
     # Every thread's CPU holds at least the main thread's outside and inside GL (clock ticks aside).
     assert frame["process_cpu_ms"] >= 0.9 * (frame["cpu_ms"] + frame["gl_ms"])
     assert "scene" in result["rows"] and result["rows"]["scene"]["gl_calls"] > 0
@@ -189,7 +190,7 @@ def _fake_result(speed: float, cpu: float, scene_cpu: float) -> dict:
     """A measure_case result with the figures the report reads (a frame and two rows)."""
     frame = {"cpu_ms": cpu, "gl_ms": 1.0, "gl_calls": 10.0, "uniform_writes": 2.0, "upload_kb": 4.0,
              "uniform_kb": 1.0, "wall_ms": 9.0, "process_cpu_ms": 20.0, "gpu_ms": 0.0, "gpu_share": 100.0,
-             "rain_gpu_ms": 0.0}
+             "rain_gpu_ms": 0.0, "cpu_ms_max": cpu + 1.0}
     row = {"cpu_ms": scene_cpu, "gl_ms": 0.5, "gl_calls": 5.0, "queries": 0.0, "uniform_writes": 1.0,
            "upload_kb": 0.0, "uniform_kb": 0.5, "read_kb": 0.0, "gpu_ms": 0.0, "gpu_share": 0.0}
     return {"size": (48, 27), "budget": 2000, "speed_kmh": speed, "frames": 1, "ripples_backend": "numpy32",
@@ -207,7 +208,8 @@ def test_rounds_report_the_median_of_the_rounds_and_the_frames_range():
     assert both["rounds"] == 3 and both["cpu_ms_range"] == (4.0, 6.0)
     assert both["frame"]["cpu_ms"] == 5.5 and both["rows"]["scene"]["cpu_ms"] == 2.0
     assert both["rows"]["sim: scene.step"]["cpu_ms"] == 0.1 and both["frame"]["gl_calls"] == 10.0
-    assert "5.50 [4.00–6.00]" in summary_table([both])
+    assert both["frame"]["cpu_ms_max"] == 7.0  # the worst frame of all the rounds, not a median
+    assert "| 5.50 [4.00–6.00] | 7.00 |" in summary_table([both])
 
 
 def test_rounds_alternate_the_cases(gl_ctx, monkeypatch, tmp_path, capsys):
