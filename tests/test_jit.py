@@ -214,12 +214,15 @@ def test_preload_loads_only_entries_for_this_machine_and_source(monkeypatch):
     assert jit.preload() == 0  # the kernels are off: nothing to load
 
 
-def test_preload_survives_a_cache_it_cannot_read(monkeypatch):
+def test_preload_survives_a_cache_it_cannot_read_or_load(monkeypatch):
     broken = _FakeDispatcher([])
     broken._cache = None  # e.g. a Numba whose cache internals differ
-    monkeypatch.setattr(jit, "_KERNELS", [broken])
+    failing = _FakeDispatcher([(("float64",), "this cpu", "code v2")])
+    failing.compile = lambda signature: 1 / 0  # e.g. a cache file that cannot be read any more
+    fine = _FakeDispatcher([(("int64",), "this cpu", "code v2")])
+    monkeypatch.setattr(jit, "_KERNELS", [broken, failing, fine])
     monkeypatch.setattr(jit, "_active", True)
-    assert jit.preload() == 0
+    assert jit.preload() == 1 and fine.compiled == [("int64",)]  # the others load on their first calls
 
 
 _COUNT_LOADS = """

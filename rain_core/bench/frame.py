@@ -59,12 +59,12 @@ Method (also printed in the header):
   exact difference, while this machine's noise hides most of what a few hundred lines cost (~0.1–0.25 µs each
   here, more for code that has not run for a while).
 * Every figure is the median over the measured frames after a warm-up (shader compiles, the ripples' backend
-  choice and the rain's first fill happen there), except "worst frame": the whole frame's highest CPU ms outside
-  GL among them (with ``--rounds``, among all rounds'), the stutter a median hides. The kernels cached on disk
-  are loaded before the first frame, as the window does (``jit.preload``). ``--rounds N`` measures every case N
-  times, one case after the other in each round, and reports the median of the rounds' medians, with the whole
-  frame's lowest and highest CPU ms in the summary: on a shared machine one run of a case varies by more than
-  most changes save.
+  choice and the rain's first fill happen there), except "worst frame, CPU ms": the whole frame's highest CPU ms
+  outside GL among them (with ``--rounds``, among all rounds'), the stutter a median hides. The kernels cached
+  on disk are loaded before the first frame, as the window does (``jit.preload``). ``--rounds N`` measures every
+  case N times, one case after the other in each round, and reports the median of the rounds' medians, with the
+  whole frame's lowest and highest CPU ms in the summary: on a shared machine one run of a case varies by more
+  than most changes save.
 
 It uses only APIs older trees have as well (``Scene``, ``set_value``, ``Renderer._timed``, ``PassStat``), so it
 measures another checkout when run as a file from that checkout's root:
@@ -652,8 +652,8 @@ def summary_table(results: list[dict]) -> str:
              f"{r['frame']['gl_ms']:.1f}", f"{r['frame']['wall_ms']:.1f}",
              f"{r['frame'].get('process_cpu_ms', math.nan):.1f}", _gpu(r, "gpu_ms"), _gpu(r, "rain_gpu_ms")]
             for r in results]
-    return _table(["km/h", "streak budget", "CPU ms outside GL", "worst frame", "Python lines / calls", "GL calls",
-                   "uniform writes", "upload KB",
+    return _table(["km/h", "streak budget", "CPU ms outside GL", "worst frame, CPU ms", "Python lines / calls",
+                   "GL calls", "uniform writes", "upload KB",
                    "uniform KB", "ms inside GL", "frame wall ms", "CPU ms, all threads", "GPU ms", "rain GPU ms"],
                   body)
 
