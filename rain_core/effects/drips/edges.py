@@ -47,31 +47,44 @@ class DripSites:
         return len(self.x)
 
 
-def _label(mask: np.ndarray) -> np.ndarray:
-    """4-connected component labels of ``mask`` (−1 outside): minimum-label propagation with pointer jumping."""
-    flat = np.where(mask.ravel(), np.arange(mask.size), -1)
-    labels = flat.reshape(mask.shape).copy()
-    big = mask.size
-    work = np.where(mask, labels, big)
-    while True:
-        before = work.copy()
-        for axis in (0, 1):
-            for step in (1, -1):
-                shifted = np.roll(work, step, axis=axis)
-                edge = np.zeros_like(mask)
-                if axis == 0:
-                    edge[0 if step == 1 else -1, :] = True
-                else:
-                    edge[:, 0 if step == 1 else -1] = True
-                shifted = np.where(edge, big, shifted)
-                work = np.where(mask, np.minimum(work, shifted), big)
-        # Pointer jumping: a cell takes the label of the cell its label names (labels are flat indices).
-        inside = work < big
-        idx = np.where(inside, work, 0)
-        work = np.where(inside, np.minimum(work, work.ravel()[idx.ravel()].reshape(work.shape)), big)
-        if np.array_equal(work, before):
-            break
-    return np.where(mask, work, -1)
+def _roofs(mask: np.ndarray) -> tuple[np.ndarray, int]:
+    """(index of each cell's 4-connected component, −1 outside ``mask``; the number of components), numbered in
+    the order of their first cell (row-major). Union-find over the rows' runs of cells: a run joins the runs of
+    the row above that share a column; a component's first run (its root) holds its first cell."""
+    rows, cols = mask.shape
+    rows_of, cols_of = np.diff(mask, axis=1, prepend=False, append=False).nonzero()  # runs' starts and ends
+    run_row = rows_of[0::2]
+    start, stop = cols_of[0::2], cols_of[1::2]
+    parent = list(range(run_row.size))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = i = parent[parent[i]]
+        return i
+
+    # Two consecutive rows' runs walked together in column order: each overlapping pair joins, under the lower.
+    row_first = np.searchsorted(run_row, np.arange(rows + 1)).tolist()
+    s, e = start.tolist(), stop.tolist()
+    for r in range(1, rows):
+        a, a_end = row_first[r - 1], row_first[r]
+        b, b_end = a_end, row_first[r + 1]
+        while a < a_end and b < b_end:
+            if s[a] < e[b] and s[b] < e[a]:
+                ra, rb = root(a), root(b)
+                if ra < rb:
+                    parent[rb] = ra
+                elif rb < ra:
+                    parent[ra] = rb
+            if e[a] <= e[b]:
+                a += 1
+            else:
+                b += 1
+    roots = np.array([root(i) for i in range(run_row.size)], dtype=np.int64)
+    is_root = roots == np.arange(run_row.size)
+    rank = np.cumsum(is_root) - 1  # roots in run order are components in the order of their first cells
+    index = np.full(mask.shape, -1, dtype=np.int64)
+    index[mask] = np.repeat(rank[roots], stop - start)  # the mask's cells in row-major order are the runs'
+    return index, int(is_root.sum())
 
 
 def find_drip_sites(grid: np.ndarray, x0_m: float, cell_m: float, seed: int = 0,
@@ -81,23 +94,12 @@ def find_drip_sites(grid: np.ndarray, x0_m: float, cell_m: float, seed: int = 0,
     edges; only the sites over the street (|x| < street_half_x_m, m: the road and the sidewalks) are kept."""
     h = np.asarray(grid, dtype=np.float64)
     low = np.isfinite(h) & (h >= MIN_ROOF_M) & (h <= MAX_ROOF_M)
-    rows = np.flatnonzero(low.any(axis=1))
     empty = np.zeros(0)
-    if rows.size == 0:
+    if not low.any():
         return DripSites(empty, empty, empty, empty, np.zeros(0, np.int64), empty, empty, np.zeros(0, np.int64),
                          empty)
-    labels = np.full(h.shape, -1, dtype=np.int64)
-    # Label in bands of consecutive rows (plus a margin), so the work scales with the roofs, not the tile.
-    breaks = np.flatnonzero(np.diff(rows) > 1)
-    starts = np.concatenate([[rows[0]], rows[breaks + 1]])
-    ends = np.concatenate([rows[breaks], [rows[-1]]]) + 1
-    for a, b in zip(starts, ends, strict=True):
-        band = _label(low[a:b])
-        labels[a:b] = np.where(band >= 0, band + a * h.shape[1], -1)
-    ids, roof_of = np.unique(labels[labels >= 0], return_inverse=True)
-    roof_index = np.full(h.shape, -1, dtype=np.int64)
-    roof_index[labels >= 0] = roof_of
-    area = np.bincount(roof_of, minlength=len(ids)) * cell_m * cell_m
+    roof_index, roofs = _roofs(low)
+    area = np.bincount(roof_index[low], minlength=roofs) * cell_m * cell_m
 
     nz, nx = h.shape
     sites = []
@@ -119,12 +121,12 @@ def find_drip_sites(grid: np.ndarray, x0_m: float, cell_m: float, seed: int = 0,
     s[:, 1] %= nz * cell_m
     s = s[np.argsort(s[:, 1], kind="stable")]
     # Mean path to an edge ≈ area / perimeter (m); over the sheet-flow speed: the drainage time constant.
-    perimeter = np.maximum(np.bincount(s[:, 4].astype(np.int64), minlength=len(ids)), 1) * cell_m
+    perimeter = np.maximum(np.bincount(s[:, 4].astype(np.int64), minlength=roofs), 1) * cell_m
     drain = area / perimeter / FILM_SPEED_M_S
     # Water leaves an edge where it gathers, at low points about every metre, not evenly along it.
     rng = np.random.default_rng([seed, 0xD41B])
     s = s[rng.random(len(s)) < cell_m / SITE_SPACING_M]
-    edges = np.bincount(s[:, 4].astype(np.int64), minlength=len(ids))
+    edges = np.bincount(s[:, 4].astype(np.int64), minlength=roofs)
     s = s[np.abs(s[:, 0]) < street_half_x_m]
     roof = s[:, 4].astype(np.int64)
     phase = rng.random(len(s))
