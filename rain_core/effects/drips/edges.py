@@ -51,7 +51,7 @@ def _roofs(mask: np.ndarray) -> tuple[np.ndarray, int]:
     """(index of each cell's 4-connected component, −1 outside ``mask``; the number of components), numbered in
     the order of their first cell (row-major). Union-find over the rows' runs of cells: a run joins the runs of
     the row above that share a column; a component's first run (its root) holds its first cell."""
-    rows, cols = mask.shape
+    rows = mask.shape[0]
     rows_of, cols_of = np.diff(mask, axis=1, prepend=False, append=False).nonzero()  # runs' starts and ends
     run_row = rows_of[0::2]
     start, stop = cols_of[0::2], cols_of[1::2]
