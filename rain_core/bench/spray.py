@@ -96,6 +96,7 @@ def heavy_rain_run(ctx, reference: bool | None = None, frames: int = 120, warmup
     from rain_core.effects.spray import SprayEffect
     from rain_core.effects.spray.parcels import PARTICLE_DTYPE
     from rain_core.gfx.frame import SharedResources
+    from rain_core.gfx.shaders import ShaderLibrary
 
     settings, step = _heavy_rain_world(seed)
     effect = SprayEffect(ctx, settings, seed=seed)
@@ -110,7 +111,8 @@ def heavy_rain_run(ctx, reference: bool | None = None, frames: int = 120, warmup
         return dirty
 
     effect.emitter.take_dirty = counting_take_dirty
-    rc = SimpleNamespace(shared=SharedResources())
+    shaders = ShaderLibrary(ctx)  # the upload makes the rings' VAOs with the pass's program
+    rc = SimpleNamespace(shared=SharedResources(), shaders=shaders)
     wall, cpu, nbytes, spawned = [], [], [], []
     for i in range(warmup + frames):
         frame = step(1.0 / 30.0)
@@ -127,6 +129,7 @@ def heavy_rain_run(ctx, reference: bool | None = None, frames: int = 120, warmup
             nbytes.append(uploaded[0])
             spawned.append(effect.emitter.stats.last_parcels + effect.emitter.stats.last_mist)
     effect.release()
+    shaders.release()
     return (np.array(wall), np.array(cpu), np.array(nbytes), np.array(spawned), effect.emitter, step)
 
 

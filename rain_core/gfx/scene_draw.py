@@ -79,19 +79,19 @@ def box_outside_frustum(view_proj, lo, hi) -> bool:
 
 @dataclass
 class GpuMesh:
-    """A VERTEX_DTYPE mesh on the GPU: one VAO for the lit scene shader, one for the shadow depth pass."""
+    """A VERTEX_DTYPE mesh on the GPU with a VAO for each program that draws it: the lit scene shader, the shadow
+    depth pass, the mirror views' scene shader and the depth pre-passes (positions only)."""
 
     vao: moderngl.VertexArray
     depth_vao: moderngl.VertexArray
     count: int
     vbo: moderngl.Buffer
-    mirror_vao: moderngl.VertexArray | None = None  # for SceneDrawer's mirror-view program
-    prepass_vaos: dict | None = None  # depth pre-pass program → its VAO (positions only)
+    mirror_vao: moderngl.VertexArray  # for SceneDrawer's mirror-view program
+    prepass_vaos: dict  # depth pre-pass program's glo → its VAO
 
     def release(self) -> None:
-        for obj in (self.vao, self.depth_vao, self.vbo, self.mirror_vao, *(self.prepass_vaos or {}).values()):
-            if obj is not None:
-                obj.release()
+        for obj in (self.vao, self.depth_vao, self.vbo, self.mirror_vao, *self.prepass_vaos.values()):
+            obj.release()
 
 
 class SceneDrawer:
@@ -127,23 +127,16 @@ class SceneDrawer:
 
     # --- geometry -------------------------------------------------------------------------------------------
     def _mesh(self, vertices: np.ndarray) -> GpuMesh:
-        vbo = self.ctx.buffer(np.ascontiguousarray(vertices).tobytes())
-        vao = self.ctx.vertex_array(self.scene_prog, [(vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
-        depth_vao = self.ctx.vertex_array(self._shadow_prog, [(vbo, "3f 36x", "in_position")])
-        return GpuMesh(vao, depth_vao, len(vertices), vbo)
-
-    def _mirror_vao(self, mesh: GpuMesh) -> moderngl.VertexArray:
-        if mesh.mirror_vao is None:
-            mesh.mirror_vao = self.ctx.vertex_array(self.mirror_prog, [(mesh.vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)])
-        return mesh.mirror_vao
-
-    def _prepass_vao(self, mesh: GpuMesh, prog: moderngl.Program) -> moderngl.VertexArray:
-        if mesh.prepass_vaos is None:
-            mesh.prepass_vaos = {}
-        vao = mesh.prepass_vaos.get(prog.glo)
-        if vao is None:
-            vao = mesh.prepass_vaos[prog.glo] = self.ctx.vertex_array(prog, [(mesh.vbo, "3f 36x", "in_position")])
-        return vao
+        """The mesh with all its VAOs made now: a mesh is made in the frame's plan, before its first draw, and a VAO
+        made once draws are queued waits for llvmpipe's driver thread (4-25 ms each, ~0.16 s of the first frame
+        when the mirror and pre-pass VAOs were made at their first draw; ~10 µs each here)."""
+        ctx = self.ctx
+        vbo = ctx.buffer(np.ascontiguousarray(vertices).tobytes())
+        lit = [(vbo, VERTEX_FORMAT, *VERTEX_ATTRIBUTES)]
+        positions = [(vbo, "3f 36x", "in_position")]
+        return GpuMesh(ctx.vertex_array(self.scene_prog, lit), ctx.vertex_array(self._shadow_prog, positions),
+                       len(vertices), vbo, ctx.vertex_array(self.mirror_prog, lit),
+                       {prog.glo: ctx.vertex_array(prog, positions) for prog in self._prepass_progs.values()})
 
     def _depth_prepass(self, rc: RenderContext, items, prog: moderngl.Program, plane) -> None:
         """Depths of the large occluders, the world tiles and the cabin (from the driver's seat the hood and the
@@ -157,7 +150,7 @@ class SceneDrawer:
         for mesh, model, _share in items:
             if mesh is self._world or any(mesh is part for part, _ in cabin):
                 model_u.write(model)
-                self._prepass_vao(mesh, prog).render(moderngl.TRIANGLES, vertices=mesh.count)
+                mesh.prepass_vaos[prog.glo].render(moderngl.TRIANGLES, vertices=mesh.count)
 
     def _vehicle_mesh(self, vehicle) -> GpuMesh:
         key = id(vehicle)
@@ -342,7 +335,7 @@ class SceneDrawer:
             if live is not last_live:
                 set_owned("u_mirror_live", live)
                 last_live = live
-            (self._mirror_vao(mesh) if mirrored else mesh.vao).render(moderngl.TRIANGLES, vertices=mesh.count)
+            (mesh.mirror_vao if mirrored else mesh.vao).render(moderngl.TRIANGLES, vertices=mesh.count)
         ctx.depth_func = "<"
         if clip_plane is not None:
             ctx.disable_direct(GL_CLIP_DISTANCE0)

@@ -108,7 +108,7 @@ class SprayEffect(Effect):
         # scene's draws, the same few NumPy calls ran cold (~50 us instead of ~5, measured in-frame).
         self._motion = (frame, frame.camera, *self._camera_motion(frame, frame.camera))
 
-    def _upload(self) -> None:
+    def _upload(self, rc) -> None:
         dirty = self.emitter.take_dirty()
         rings = self.emitter.rings
         for ring in range(2):
@@ -121,6 +121,10 @@ class SprayEffect(Effect):
                 self._vaos[ring] = self._buffers[ring] = None
                 if cap:
                     self._buffers[ring] = self.ctx.buffer(data.tobytes())
+                    # Its VAO now, before the frame's draws: made at the first draw it waited ~18 ms for llvmpipe's
+                    # driver thread to finish the draws queued before it.
+                    self._vaos[ring] = self.ctx.vertex_array(
+                        self._prog(rc), [(self._buffers[ring], PARTICLE_FORMAT, *PARTICLE_ATTRIBUTES)])
                 self._capacity[ring] = cap
                 continue
             buf = self._buffers[ring]
@@ -134,12 +138,6 @@ class SprayEffect(Effect):
             lib = self._shaders or rc.shaders
             self._program = lib.program("spray/spray.vert", "spray/spray.frag", defines=shader_defines())
         return self._program
-
-    def _vao(self, ring: int, prog) -> moderngl.VertexArray | None:
-        if self._vaos[ring] is None and self._buffers[ring] is not None:
-            self._vaos[ring] = self.ctx.vertex_array(
-                prog, [(self._buffers[ring], PARTICLE_FORMAT, *PARTICLE_ATTRIBUTES)])
-        return self._vaos[ring]
 
     def _hdr_color_fbo(self, rc) -> moderngl.Framebuffer:
         # The pass reads the scene's depth, so it writes through a framebuffer without that depth attached.
@@ -185,7 +183,7 @@ class SprayEffect(Effect):
 
     def render(self, stage: str, rc) -> None:
         if stage == "upload":
-            self._upload()
+            self._upload(rc)
             return
         if stage != "transparent":
             return
@@ -204,7 +202,7 @@ class SprayEffect(Effect):
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = (moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA, moderngl.ZERO, moderngl.ONE)
         for ring in (1, 0):  # mist behind, droplets over it (no sorting: both are soft and mostly thin)
-            vao = self._vao(ring, prog)
+            vao = self._vaos[ring]  # (made with its buffer, in _upload)
             if vao is not None and self.emitter.rings[ring].last_death() > now:
                 vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.emitter.rings[ring].capacity)
         ctx.blend_func = moderngl.DEFAULT_BLENDING
@@ -247,7 +245,7 @@ class SprayEffect(Effect):
         rc.ctx.disable(moderngl.DEPTH_TEST)
         try:
             for ring in (1, 0):
-                vao = self._vao(ring, prog)
+                vao = self._vaos[ring]  # (made with its buffer, in _upload)
                 if vao is not None and self.emitter.rings[ring].last_death() > now:
                     vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.emitter.rings[ring].capacity)
         finally:
