@@ -477,7 +477,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
         _add_python(rows, frame, py_lines, py_calls)
     return {"size": tuple(size), "budget": int(budget), "speed_kmh": float(speed_kmh), "frames": frames,
             "ripples_backend": ripples_backend, "ripples_solver": solver, "skip_draws": counter.skip_draws,
-            "warmup": warmup, "gpu_timing": gpu_timing, "overhead_ns": counter.overhead_ns, "clock": counter.clock,
+            "warmup": warmup, "dt_s": float(dt_s), "gpu_timing": gpu_timing, "overhead_ns": counter.overhead_ns,
+            "clock": counter.clock,
             "passes": order,
             "rows": rows, "frame": frame}
 
@@ -702,7 +703,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
         path = "NumPy (no rain_core.jit in this tree)"
 
     return (f"# Whole frames at heavy rain ({RAIN_MM_H:g} mm/h, wetness/cracks/puddles 1, driver camera, noon), "
-            f"{args.size[0]}x{args.size[1]}, ripples backend {args.ripples_backend}"
+            f"{args.size[0]}x{args.size[1]}, {getattr(args, 'fps', 30.0):g} frames/s, ripples backend "
+            f"{args.ripples_backend}"
             + (", draws skipped (--skip-draws; the solver as auto picks it with draws)"
                if getattr(args, "skip_draws", False) else "")
             + "".join(f", {path} = {value!r}" for path, value in getattr(args, "overrides", ())) + "\n\n"
@@ -755,6 +757,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--speeds", default=None, help="ego speeds in km/h, e.g. 0,100 (default both)")
     p.add_argument("--frames", type=int, default=None, help="measured frames per case (default 30)")
     p.add_argument("--warmup", type=int, default=None, help="warm-up frames per case (default 8)")
+    p.add_argument("--fps", type=float, default=30.0,
+                   help="frames per simulated second: each frame steps the scene 1/FPS s (default 30, the headless "
+                        "recording's rate; a window follows its display, 60 on most)")
     p.add_argument("--rounds", type=int, default=1,
                    help="measure every case this many times, the cases alternated; report the median of the rounds "
                         "and the whole frame's CPU range (default 1)")
@@ -791,6 +796,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.warmup = args.warmup or (4 if args.quick else 8)
     if args.frames < 1 or args.warmup < 0:
         p.error("--frames must be >= 1 and --warmup >= 0")
+    if not 1.0 <= args.fps <= 240.0:  # (also rejects NaN)
+        p.error(f"--fps must be in [1, 240] frames/s, got {args.fps}")
     if not 0 <= args.py_frames <= 100:
         p.error(f"--py-frames must be in [0, 100], got {args.py_frames}")
     if not 1 <= args.rounds <= 100:
@@ -825,7 +832,7 @@ def main(argv=None) -> int:
             for speed, budget in cases:
                 result = measure_case(ctx, args.size, budget, speed, args.frames, args.warmup, args.gpu_timing,
                                       counter=counter, ripples_backend=args.ripples_backend,
-                                      overrides=args.overrides, py_frames=args.py_frames)
+                                      overrides=args.overrides, py_frames=args.py_frames, dt_s=1.0 / args.fps)
                 rounds[(speed, budget)].append(result)
                 if args.rounds > 1:
                     print(f"round {index + 1}/{args.rounds}, {case_label(result)}: "

@@ -232,3 +232,43 @@ def test_rounds_alternate_the_cases(gl_ctx, monkeypatch, tmp_path, capsys):
     assert "2 rounds" in report and "6.00 [5.00–7.00]" in report and "7.00 [6.00–8.00]" in report
     with pytest.raises(SystemExit):
         parse_args(["--rounds", "0"])
+
+
+def test_fps_sets_each_frames_step_and_rejects_rates_outside_1_to_240(gl_ctx, monkeypatch, tmp_path):
+    """--fps 60: each frame steps the scene 1/60 s (a window at its display's rate), and the header says so."""
+    from rain_core.bench import frame as bench_frame
+
+    steps = []
+
+    def measure(ctx, size, budget, speed, *args, dt_s=None, **kwargs):
+        steps.append(dt_s)
+        return _fake_result(speed, 4.0, 1.0)
+
+    monkeypatch.setattr(bench_frame, "measure_case", measure)
+    monkeypatch.setattr("rain_core.gl.create_headless_context", lambda: gl_ctx)
+    monkeypatch.setattr(gl_ctx, "release", lambda: None)
+    assert bench_frame.main(["--fps", "60", "--budgets", "2000", "--speeds", "0", "--ripples-backend", "numpy32",
+                             "--out", str(tmp_path)]) == 0
+    assert steps == [1.0 / 60.0]
+    assert "60 frames/s" in (tmp_path / "frame.md").read_text()
+    assert parse_args([]).fps == 30.0  # the default: the tables of earlier notes
+    for bad in ("0.5", "241", "nan"):
+        with pytest.raises(SystemExit):
+            parse_args(["--fps", bad])
+
+
+def test_a_case_steps_the_scene_by_its_dt(gl_ctx, monkeypatch):
+    """measure_case steps the scene by dt_s each frame (and records it)."""
+    from rain_core.scene import Scene
+
+    seen = []
+    step = Scene.step
+
+    def recording(self, dt_s, *args, **kwargs):
+        seen.append(dt_s)
+        return step(self, dt_s, *args, **kwargs)
+
+    monkeypatch.setattr(Scene, "step", recording)
+    result = measure_case(gl_ctx, (48, 27), 2000, 0.0, frames=1, warmup=0, gpu_timing=False, dt_s=1.0 / 60.0,
+                          ripples_backend="numpy32", py_frames=0)
+    assert seen and set(seen) == {1.0 / 60.0} and result["dt_s"] == 1.0 / 60.0
