@@ -90,6 +90,8 @@ if __name__ == "__main__":  # run as a file: measure the rain_core of the curren
 
 import moderngl
 
+from rain_core.checks import MAX_FRAME_DT_S
+
 BUDGETS = (10_000, 50_000, 200_000, 1_000_000)
 SPEEDS_KMH = (0.0, 100.0)
 # The rain's own effects, whose GPU time the summary adds up ("all rain" in issue 13); the wet road and the
@@ -758,8 +760,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--frames", type=int, default=None, help="measured frames per case (default 30)")
     p.add_argument("--warmup", type=int, default=None, help="warm-up frames per case (default 8)")
     p.add_argument("--fps", type=float, default=30.0,
-                   help="frames per simulated second: each frame steps the scene 1/FPS s (default 30, the headless "
-                        "recording's rate; a window follows its display, 60 on most)")
+                   help="frames per simulated second, 4-240: each frame steps the scene 1/FPS s (default 30, the "
+                        "headless recording's rate; a window follows its display, 60 on most)")
     p.add_argument("--rounds", type=int, default=1,
                    help="measure every case this many times, the cases alternated; report the median of the rounds "
                         "and the whole frame's CPU range (default 1)")
@@ -796,8 +798,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.warmup = args.warmup or (4 if args.quick else 8)
     if args.frames < 1 or args.warmup < 0:
         p.error("--frames must be >= 1 and --warmup >= 0")
-    if not 1.0 <= args.fps <= 240.0:  # (also rejects NaN)
-        p.error(f"--fps must be in [1, 240] frames/s, got {args.fps}")
+    lowest = 1.0 / MAX_FRAME_DT_S  # a longer step is clamped by the scene: not the rate the header would name
+    if not lowest <= args.fps <= 240.0:  # (also rejects NaN)
+        p.error(f"--fps must be in [{lowest:g}, 240] frames/s, got {args.fps}")
     if not 0 <= args.py_frames <= 100:
         p.error(f"--py-frames must be in [0, 100], got {args.py_frames}")
     if not 1 <= args.rounds <= 100:
