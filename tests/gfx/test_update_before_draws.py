@@ -37,3 +37,48 @@ def test_no_effect_update_makes_a_gl_call_and_the_uploads_precede_every_draw(gl_
     # After it, no pass writes more than the few KiB a driver thread takes without waiting (uniform-sized data).
     late = {name: rows[name]["upload_kb"] for name in passes[first_draw:] if name in tallies}  # (passes, not totals)
     assert late and max(late.values()) < 8.0, late
+
+
+def test_no_vao_reading_a_buffer_is_made_after_a_frames_first_draw(gl_ctx, monkeypatch):
+    """A VAO that reads a buffer, made once draws are queued, waits for the driver thread to run them (4-25 ms
+    each on llvmpipe): the scene's meshes make all theirs (lit, shadow, mirror view, pre-passes) when they are
+    made, in the frame's plan, and the spray its rings' with their buffers, in its upload. The first frames of a
+    drive make every mesh, the door mirrors' and the road's mirror views and the spray's rings."""
+    import moderngl
+
+    from rain_core.bench.frame import heavy_rain_settings
+    from rain_core.scene import Scene
+
+    drawn, late = [False], []
+    make, render = moderngl.Context.vertex_array, moderngl.VertexArray.render
+
+    def vertex_array(self, program, *args, **kwargs):
+        content = args[0] if args else kwargs.get("content", [])
+        if drawn[0] and content:  # (a fullscreen triangle reads no buffer)
+            late.append(program)
+        return make(self, program, *args, **kwargs)
+
+    def draw(self, *args, **kwargs):
+        drawn[0] = True
+        return render(self, *args, **kwargs)
+
+    monkeypatch.setattr(moderngl.Context, "vertex_array", vertex_array)
+    monkeypatch.setattr(moderngl.VertexArray, "render", draw)
+    scene = Scene(gl_ctx, (48, 27), settings=heavy_rain_settings(2000), seed=1, gpu_timing=False)
+    try:
+        for effect in scene.effects:
+            if effect.name == "ripples":
+                effect.backend = "numpy32"
+        scene.ego.speed_m_s = scene.autopilot.target_speed_m_s = 100 / 3.6
+        made = []
+        for _ in range(6):
+            drawn[0] = False
+            scene.step(1 / 30, None)
+            frame = scene.render()
+            made.append(len(late))
+        spray = next(e for e in scene.effects if e.name == "spray")
+        assert spray.active(frame) and all(vao is not None for vao in spray._vaos)  # the rings were made
+        assert frame.camera.inside_car and scene.settings.camera.mirrors  # the mirror views were drawn
+    finally:
+        scene.release()
+    assert made == [0] * 6, made
