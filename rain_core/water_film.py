@@ -199,7 +199,7 @@ class _PackedGrids:
         self.kernel_constants = np.ascontiguousarray(np.concatenate(
             [self.half_x, self.ext_x, self.ext_z, self.nx, self.nz, self.top_col, self.offset], axis=1))
         self.kernel_ints = np.ascontiguousarray(np.concatenate([self.nz_int, self.row_len_int], axis=1))
-        self._kernel_scratch = (np.empty(0), np.empty((2, 0), np.int64))
+        self._kernel_scratch = (np.zeros(0), np.empty((2, 0), np.int64))
         self._maps = (*grids[0], grids[1][0], extents[0])  # for dry_floors, built on first use
         self._floors = None
 
@@ -231,7 +231,7 @@ class _PackedGrids:
         ripples ask for strips of ~10⁴ points every frame: no fresh pages each time)."""
         if self._kernel_scratch[0].size < size:
             size = max(size, 2 * self._kernel_scratch[0].size)
-            self._kernel_scratch = (np.empty(size), np.empty((2, size), np.int64))
+            self._kernel_scratch = (np.zeros(size), np.empty((2, size), np.int64))
         return self._kernel_scratch
 
     def dry_floors(self) -> np.ndarray | None:

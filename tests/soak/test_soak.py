@@ -7,13 +7,19 @@ seconds, watching memory and every state for NaN/inf. Deselected by default; run
 growth per 1,000 frames and any non-finite state it met: NaN, inf or a
 negative value in the HDR target after every frame; NaN or inf in the weather and the vehicles every frame; NaN
 in any float array the effects hold every CHECK_EVERY frames (there inf is left alone: effects use it on purpose
-as a sentinel, e.g. "no occluder above this cell", "empty slot"). It fails on any of those, or on memory growing
-faster than GROWTH_LIMIT_MB_PER_1000.
+as a sentinel, e.g. "no occluder above this cell", "empty slot"; the kernels' scratch arrays are made zeroed, so
+one holds NaN only where a kernel wrote it). It fails on any of those, or on memory growing faster than
+GROWTH_LIMIT_MB_PER_1000. On the 2-core VM with llvmpipe a frame takes ~115 ms (the city's vertices drawn for the
+shadow, the reflection and the view): the default run is ~3 hours there.
 
 The changes repeat with a period of CYCLE_CHANGES changes (the generator is reseeded at the start of every
 cycle), so memory is compared at the same point of the same sequence: a pool that grows to the largest state the
-sequence reaches levels off after the first cycle, a leak keeps growing by the same amount every cycle. The first
-cycle is the warm-up; growth is the least-squares slope over the cycle boundaries after it.
+sequence reaches levels off, a leak keeps growing by the same amount every cycle. The first cycle is the warm-up;
+growth is the least-squares slope over the later half of the cycle boundaries after it (at least three). The later
+half: the scene's state carries over from cycle to cycle (the weather's levels, the glass, the traffic), so the
+first cycles still reach new extremes, and the allocators keep their high-water marks (resident memory rose in
+steps of 3-25 MB at 1,350-1,620 and 2,970 frames and stayed flat between them, while Python's own heap stayed at
+55 MB): such steps settle, a leak grows all the way.
 
 Quality is turned down (QUALITY): at 64×36 the frame is the simulations' CPU work and llvmpipe's fixed costs,
 and the soak is about leaks and stability over many frames, not about the picture.
@@ -119,8 +125,10 @@ def test_soak(gl_ctx, capsys):
     drive = None
     start = time.perf_counter()
     rss_start = rss_end = math.nan
+    ran = 0
     try:
         for i in range(FRAMES):
+            ran = i + 1
             if i % CYCLE_FRAMES == 0:
                 rng = np.random.default_rng(18)  # the same sequence every cycle
             if i % CHANGE_EVERY == 0:
@@ -145,11 +153,12 @@ def test_soak(gl_ctx, capsys):
     finally:
         scene.release()
     wall = time.perf_counter() - start
-    frames, mem = np.array(samples, dtype=float).T if samples else (np.zeros(0), np.zeros(0))
-    slope = float(np.polyfit(frames, mem, 1)[0] * 1000.0) if len(samples) >= 3 else math.nan
-    report = (f"soak: {FRAMES} frames at {SIZE[0]}x{SIZE[1]} in {wall:.0f} s ({1000 * wall / FRAMES:.1f} ms a frame); "
+    later = np.array(samples[len(samples) // 2:], dtype=float).reshape(-1, 2)  # (frame, MB) at the cycles' starts
+    growth = float(np.polyfit(later[:, 0], later[:, 1], 1)[0] * 1000.0) if len(later) >= 3 else math.nan
+    report = (f"soak: {ran} of {FRAMES} frames at {SIZE[0]}x{SIZE[1]} in {wall:.0f} s "
+              f"({1000 * wall / max(ran, 1):.1f} ms a frame); "
               f"RSS {rss_start:.1f} MB after the first cycle ({WARMUP_FRAMES} frames), {rss_end:.1f} MB at the end "
-              f"({rss_end - rss_start:+.1f} MB), growth {slope:+.3f} MB per 1,000 frames; "
+              f"({rss_end - rss_start:+.1f} MB), growth {growth:+.3f} MB per 1,000 frames over the later half; "
               f"non-finite or negative states: {len(problems)}; RSS (MB) at each cycle's start: "
               + ", ".join(f"{int(f)}: {m:.0f}" for f, m in samples[::max(1, len(samples) // 12)]))
     with capsys.disabled():
@@ -157,5 +166,5 @@ def test_soak(gl_ctx, capsys):
         for p in problems[:20]:
             print("  " + p)
     assert not problems, report
-    if len(samples) >= 3:
-        assert slope < GROWTH_LIMIT_MB_PER_1000, report
+    if len(later) >= 3:
+        assert growth < GROWTH_LIMIT_MB_PER_1000, report

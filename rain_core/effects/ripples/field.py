@@ -113,7 +113,7 @@ class RippleField(WaterFollowing):
         self._refresh_row = 0.0  # where the rolling re-evaluation of the film depth has got to (rows)
         self._batch: list | None = None  # the frame's bumps while ``update`` gathers them
         self._law: DropLaw | None = None  # the arriving drops' law at the last rain rate (see _drop_law)
-        self._rain_out, self._rain_wet = np.empty((4, 0)), np.empty(0, bool)  # the raindrop kernel's output
+        self._rain_out, self._rain_wet = np.zeros((4, 0)), np.empty(0, bool)  # the raindrop kernel's output
         self.version = 0
 
     # -- geometry --
@@ -262,7 +262,7 @@ class RippleField(WaterFollowing):
         water = self.solver.water_mask
         if jit.active() and isinstance(self.solver, WaveSolverF32):  # the float32 solver: one loop
             if self._rain_out.shape[1] < batch.count:  # the candidates are capped: this grows a few times at most
-                self._rain_out, self._rain_wet = np.empty((4, batch.count)), np.empty(batch.count, bool)
+                self._rain_out, self._rain_wet = np.zeros((4, batch.count)), np.empty(batch.count, bool)
             law = batch.law
             count = kernels.raindrop_bumps(
                 batch.key, batch.count, self.n, self.cell_m, _NO_WATER if water is None else water, water is not None,

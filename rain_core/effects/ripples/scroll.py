@@ -80,7 +80,7 @@ class RowWindow:
     def __init__(self, a: np.ndarray, spare: int):
         n_z, n_x = a.shape
         self.spare = max(1, int(spare))
-        self._buffer = np.empty((n_z + 2 * self.spare, n_x), a.dtype)
+        self._buffer = np.zeros((n_z + 2 * self.spare, n_x), a.dtype)
         self.adopt(a)
 
     def fits(self, a: np.ndarray) -> bool:

@@ -32,7 +32,7 @@ class WaveSolverF32(WaveSolver):
         self._scratch = np.zeros(self.n * (self.n - 2), np.float32)
         self._scratch4 = np.zeros(self.n * (self.n - 2), np.float32)
         # The deposit kernel's per-bump scratch (grown as batches grow) and its reach histogram (reach ≤ n + 1).
-        self._bump_scratch = np.empty((2, 1024))
+        self._bump_scratch = np.zeros((2, 1024))
         self._bump_order = np.empty((2, 1024), np.int64)
         self._reach_starts = np.empty(self.n + 3, np.int64)
         self._row_windows: list[RowWindow | None] = [None, None, None]  # where the mask and the levels scroll
@@ -121,7 +121,7 @@ class WaveSolverF32(WaveSolver):
         mask, use_mask = self._kernel_mask()
         if self._bump_scratch.shape[1] < xs.size:  # grown by doubling: a frame's batch reallocates rarely
             size = max(xs.size, 2 * self._bump_scratch.shape[1])
-            self._bump_scratch, self._bump_order = np.empty((2, size)), np.empty((2, size), np.int64)
+            self._bump_scratch, self._bump_order = np.zeros((2, size)), np.empty((2, size), np.int64)
         cells = kernels.deposit_bumps(self._z, self._zp, mask, use_mask, np.ascontiguousarray(xs, f64),
                                       np.ascontiguousarray(zs, f64), np.ascontiguousarray(radii, f64),
                                       np.ascontiguousarray(amounts, f64), self.cell_m,

@@ -78,7 +78,8 @@ def quantile_90(x: np.ndarray) -> float:
 
 class SpawnBuffers:
     """Arrays reused from frame to frame (grown when a frame spawns more, never shrunk): the launches' outputs
-    and the records of both rings, so a frame allocates no parcel-sized arrays of its own for them."""
+    and the records of both rings, so a frame allocates no parcel-sized arrays of its own for them. Made zeroed:
+    reused memory may hold NaN, which the soak (tests/soak) would report as the effect's state."""
 
     def __init__(self):
         self.size = 0
@@ -86,22 +87,22 @@ class SpawnBuffers:
 
     def _grow(self, n: int) -> None:
         self.size = n
-        self.launch = (np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3)),
-                       np.empty(n))
+        self.launch = (np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros((n, 3)),
+                       np.zeros(n))
         self.records = np.zeros(n, PARTICLE_DTYPE)
         # The compiled path's flight outputs: u, speed, τ, ground and body ages.
-        self.flight = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
-        self.draws = np.empty(draws_needed(n))  # the compiled launches' random draws, and their offsets
+        self.flight = (np.zeros((n, 3)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n))
+        self.draws = np.zeros(draws_needed(n))  # the compiled launches' random draws, and their offsets
         self.offs = np.zeros(7, dtype=np.int64)
         self.q90 = np.zeros(2)  # the compiled settle's running percentiles (SprayEmitter._life_q90), in and out
         # The compiled filing's outputs: road landings, the kept records (as floats) and their birth and death.
-        self.landings = np.empty((n, 4))
+        self.landings = np.zeros((n, 4))
         self.record_floats = as_floats(self.records)
-        self.birth = np.empty(n)
-        self.death = np.empty(n)
+        self.birth = np.zeros(n)
+        self.death = np.zeros(n)
         # kernels.launch_to_records' scratch: each parcel's vehicle, life and fate.
         self.vi = np.empty(n, dtype=np.int64)
-        self.life = np.empty(n)
+        self.life = np.zeros(n)
         self.fate = np.empty(n, dtype=np.int64)
 
     def ensure(self, n: int) -> SpawnBuffers:

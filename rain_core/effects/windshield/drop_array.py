@@ -34,23 +34,24 @@ _ALL = np.zeros(0, np.int64)  # DropArray._append_picked: no picks, every point
 
 class KernelScratch:
     """Work arrays of the compiled kernels (``kernels``) for a drop array of capacity ``cap``: made once, kept
-    (not copied with the simulation), so a step allocates nothing large."""
+    (not copied with the simulation), so a step allocates nothing large. The float ones are made zeroed: reused
+    memory may hold NaN, which the soak (tests/soak) would report as the effect's state."""
 
     def __init__(self, cap: int, extra_rows: int = 0):
         self.cap = cap
         self.go = np.empty(cap, np.int64)  # move_drops: the drops that slid, and their motion
-        self.gcol = np.empty((6, cap))
-        self.loss = np.empty(cap)
+        self.gcol = np.zeros((6, cap))
+        self.loss = np.zeros(cap)
         self.ridx = np.empty(cap, np.int64)  # run_drops: the running drops, their trails, the new droplets
-        self.rcol = np.empty((5, cap))
-        self.wcol = np.empty((3, 4 * cap))
+        self.rcol = np.zeros((5, cap))
+        self.wcol = np.zeros((3, 4 * cap))
         self.total = np.zeros(FILM_CELLS * FILM_CELLS)
         self.gidx = np.full(cap, -1, np.int64)  # merge_drops
         self.active = np.empty(cap, bool)
         self.parent = np.full(cap, -1, np.int64)
         self.nodes = np.empty(cap, np.int64)
         self.mark = np.zeros(cap, bool)
-        self.sums = np.empty((7, cap))
+        self.sums = np.zeros((7, cap))
         self.count = np.zeros(kernels.NEAR_CELLS, np.int64)
         self.head = np.full(kernels.NEAR_CELLS, -1, np.int64)
         entries = max(MERGE_CELLS_MAX, cap)
@@ -58,7 +59,7 @@ class KernelScratch:
         self.owner = np.empty(entries, np.int64)
         self.ekey = np.empty(entries, np.int64)
         self.out = np.empty(cap, np.int64)
-        self.mid = np.empty((3, cap))
+        self.mid = np.zeros((3, cap))
         self.gone = np.empty(cap, bool)  # sweep_blades
         self.cell_mark = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)  # drops_in_cells
         self.cell_count = np.zeros(FILM_CELLS * FILM_CELLS, np.int64)
@@ -66,8 +67,8 @@ class KernelScratch:
         self.members = np.empty(cap, np.int64)
         self.hits = np.empty((2, cap), np.int64)
         self.drop = np.empty(cap, bool)  # shed_rows
-        self.shed_m = np.empty(cap)
-        self.sensor_m = np.empty(cap)
+        self.shed_m = np.zeros(cap)
+        self.sensor_m = np.zeros(cap)
         self.hist = np.empty(512, np.int64)  # sort_rows
         self.order = np.empty(4 * cap, np.int64)
         self.tmp = np.zeros((cap, _COLS))  # (the shapes of the drop array: sort_rows may swap them)
@@ -76,7 +77,7 @@ class KernelScratch:
         # after them (splats.DropRows), and the drops' version (DropArray.version) they are of, or -1.
         self.rows32 = np.zeros((cap + extra_rows, 5), np.float32)
         self.rows32_of = -1
-        self.film_loss = np.empty(FILM_CELLS * FILM_CELLS)  # evaporate_film
+        self.film_loss = np.zeros(FILM_CELLS * FILM_CELLS)  # evaporate_film
         self.thick = np.empty(FILM_CELLS * FILM_CELLS, np.int64)
 
 

@@ -69,9 +69,9 @@ class WaterPass:
         sim = self.sim
         shape = sim.film.shape
         if self._coarse_scratch is None or self._coarse_scratch[0].shape != shape:
-            f32 = np.empty(shape, np.float32)
+            f32 = np.zeros(shape, np.float32)
             # + the flat views the kernel writes: f32, its bits, the result's
-            self._coarse_scratch = (np.empty(shape), f32, np.empty(shape, np.uint16), f32.ravel(),
+            self._coarse_scratch = (np.zeros(shape), f32, np.empty(shape, np.uint16), f32.ravel(),
                                     f32.view(np.uint32).ravel())
         f64, f32, bits16, f32_flat, u32_flat = self._coarse_scratch
         if jit.active():  # all of it in one pass
