@@ -1,10 +1,11 @@
 """The soak (issue 18): a long headless run at a tiny size with the weather, camera and speed changing every few
 seconds, watching memory and every state for NaN/inf. Deselected by default; run it with
 
-    RAINROAD_SOAK_FRAMES=5000 python -m pytest -m soak -s
+    RAINROAD_SOAK_FRAMES=14100 python -m pytest -m soak -s
 
-(the default is 100,000 frames). It prints frames, resident memory at the start (after a warm-up) and at the end,
-growth per 1,000 frames and any non-finite state it met: NaN, inf or a
+(the default is 100,000 frames; the memory check needs at least 5,401, five cycles after the warm-up). It prints
+frames, resident memory at the start (after a warm-up), at each cycle's start and at the end, growth per 1,000
+frames and any non-finite state it met: NaN, inf or a
 negative value in the HDR target after every frame; NaN or inf in the weather and the vehicles every frame; NaN
 in any float array the effects hold every CHECK_EVERY frames (there inf is left alone: effects use it on purpose
 as a sentinel, e.g. "no occluder above this cell", "empty slot"; the kernels' scratch arrays are made zeroed, so
