@@ -202,9 +202,9 @@ def frame_case_kernels(repeat: int, clock: str = "thread") -> tuple[list[tuple],
             calls[name] += 1
             if name == "move_drops":  # returns how many drops slid
                 slid.append(result)
-            elif name == "merge_drops":  # its pair search: the near grid unless a drop reaches past NEAR_CELL_M / 2
-                n, mid = args[1], args[-1]
-                boxed.append(bool(n) and float(mid[2, :n].max()) > 0.5 * NEAR_CELL_M)
+            elif name == "merge_drops":  # its pair search: the near grid only if every reach is ≤ NEAR_CELL_M / 2
+                n, mid = args[1], args[-1]  # (mid: the kernel's midpoints and reaches, its own test's operands)
+                boxed.append(n >= 2 and not (mid[2, :n] <= 0.5 * NEAR_CELL_M).all())
             return result
         return call
 
