@@ -14,6 +14,7 @@ uniform int u_scatter_count;       // lights (nearest first) traced per pixel
 uniform int u_scatter_samples;     // quadrature nodes per light
 uniform float u_scatter_per_m;     // σ_s (1/m): scattering coefficient of the rain + haze, × the user's scale
 uniform float u_scatter_max_m;     // where rays into the sky stop (m)
+uniform float u_scatter_skip;      // exposed radiance a pixel's skipped lights may add up to, together
 out vec4 f_color;
 
 // The part [ta, tb] of the ray eye + t·dir inside light i's cone (cos_outer > 0: a convex, single-nappe cone);
@@ -63,7 +64,7 @@ bool cone_interval(int i, vec3 eye, vec3 dir, inout float ta, inout float tb) {
 // (Kulla & Fajardo 2012) turns dt/r² into dθ/h, integrating the 1/r² peak exactly (for β = 0 and a point light
 // this is the classic closed form (atan(b) − atan(a))/h); the smooth rest (phase, spot falloff, attenuation) is
 // taken at the midpoints in θ.
-vec3 light_inscatter(int i, vec3 eye, vec3 dir, float t_max) {
+vec3 light_inscatter(int i, vec3 eye, vec3 dir, float t_max, inout float budget) {
     vec3 lp = u_light_pos[i].xyz;
     float range = abs(u_light_pos[i].w);  // negative marks a low-beam headlight (spot_factor)
     vec3 rel = lp - eye;
@@ -75,7 +76,25 @@ vec3 light_inscatter(int i, vec3 eye, vec3 dir, float t_max) {
     float tb = min(t_max, t0 + half_chord);
     if (tb <= ta || !cone_interval(i, eye, dir, ta, tb)) return vec3(0.0);
     float tha = atan((ta - t0) / h);
-    float dth = (atan((tb - t0) / h) - tha) / float(u_scatter_samples);
+    float thb = atan((tb - t0) / h);
+    // An upper bound of the quadrature below, from its factors' bounds on [ta, tb]: spot and window ≤ 1, the
+    // attenuation ≤ exp(−β(ta + h_ray)) (t ≥ ta, r ≥ h_ray, the ray's true distance from the lamp), the phase at
+    // most its largest at the ends (each lobe is monotonic in μ = −sin θ; any μ where h was raised to 0.15 m).
+    // A light whose bound fits in what is left of the pixel's budget is skipped and its bound spent.
+    float h_ray = length(rel - t0 * dir);
+    bool true_h = h_ray >= 0.15;
+    float mu_lo = true_h ? -sin(thb) : -1.0, mu_hi = true_h ? -sin(tha) : 1.0;
+    float phase_hi = mix(max(atmosphere_phase(mu_lo, u_phase_g), atmosphere_phase(mu_hi, u_phase_g)),
+                         max(atmosphere_phase(mu_lo, u_phase_back_g), atmosphere_phase(mu_hi, u_phase_back_g)),
+                         u_phase_back_weight);
+    vec3 color = u_light_color[i].rgb;
+    float bound = 1.01 * max(color.r, max(color.g, color.b)) * u_scatter_per_m * u_exposure * phase_hi
+                  * exp(-u_extinction_per_m * (ta + h_ray)) * (thb - tha) / h;
+    if (bound <= budget) {
+        budget -= bound;
+        return vec3(0.0);
+    }
+    float dth = (thb - tha) / float(u_scatter_samples);
     float sum = 0.0;
     for (int k = 0; k < u_scatter_samples; ++k) {
         float th = tha + (float(k) + 0.5) * dth;
@@ -88,7 +107,7 @@ vec3 light_inscatter(int i, vec3 eye, vec3 dir, float t_max) {
         sum += atmosphere_phase_medium(dot(L, dir)) * spot_factor(i, L) * window * window
                * exp(-u_extinction_per_m * (t + r));
     }
-    return u_light_color[i].rgb * (u_scatter_per_m * sum * dth / h);
+    return color * (u_scatter_per_m * sum * dth / h);
 }
 
 void main() {
@@ -105,8 +124,9 @@ void main() {
     float k = min(u_glow_strength, 1.0 / max(w, 1e-6));
     vec3 glow = k > 0.0 ? k * texture(u_glow, uv).rgb : vec3(0.0);
     vec3 scatter = vec3(0.0);
+    float budget = u_scatter_skip;
     for (int i = 0; i < min(u_scatter_count, u_light_count); ++i) {
-        scatter += light_inscatter(i, u_camera_pos, dir, dist);
+        scatter += light_inscatter(i, u_camera_pos, dir, dist, budget);
     }
     f_color = vec4(glow + scatter * u_exposure, k * w);
 }

@@ -25,7 +25,7 @@ from rain_core.effects.atmosphere.model import (
     atmosphere_uniforms,
     medium_extinction_per_m,
 )
-from rain_core.effects.atmosphere.scattering import SCATTER_MAX_M, SCATTER_SAMPLES
+from rain_core.effects.atmosphere.scattering import SCATTER_MAX_M, SCATTER_SAMPLES, SCATTER_SKIP
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
@@ -41,7 +41,8 @@ class AtmosphereEffect(Effect):
     ``AtmosphereEffect(ctx, settings=None, *, seed=0, shaders=None)``: the settings are read from
     ``frame.settings.atmosphere`` each frame (``settings`` only stands in for frames without settings; ``seed``
     is unused: nothing here is random); shaders default to the renderer's library. After ``update`` the frame's
-    model is in ``self.state`` (None while the effect is idle).
+    model is in ``self.state`` (None while the effect is idle). ``scatter_skip``: the exposed radiance a pixel's
+    skipped lights may add up to (``scattering.SCATTER_SKIP``; 0: every light traced).
     """
 
     name = "atmosphere"
@@ -65,6 +66,7 @@ class AtmosphereEffect(Effect):
         self._targets: tuple[int, tuple[int, int], list[RenderTarget]] | None = None  # (factor, size, [a, b])
         self._hdr_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = depth_value_sampler(ctx)
+        self.scatter_skip = SCATTER_SKIP
 
     # --- per frame ------------------------------------------------------------------------------------------
     def _section(self, frame) -> AtmosphereSection:
@@ -174,11 +176,12 @@ class AtmosphereEffect(Effect):
         a.color.use(units.ATMOSPHERE_GLOW)
         # Only this effect writes these names in its programs: made and compared only when what they are made of
         # changes (the key holds every value that is not a constant).
-        key = (self._glow_factor, self.state.glow_strength, self._scatter_count, self.state.scatter_per_m)
+        key = (self._glow_factor, self.state.glow_strength, self._scatter_count, self.state.scatter_per_m,
+               self.scatter_skip)
         owned.update_for("composite", key, lambda: {
             "u_glow": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH, "u_glow_factor": key[0],
             "u_glow_strength": key[1], "u_scatter_count": key[2], "u_scatter_samples": SCATTER_SAMPLES,
-            "u_scatter_per_m": key[3], "u_scatter_max_m": SCATTER_MAX_M})
+            "u_scatter_per_m": key[3], "u_scatter_max_m": SCATTER_MAX_M, "u_scatter_skip": key[4]})
         # The composite reads the scene's depth, so it writes through a framebuffer without that depth attached.
         self._hdr_fbo.fbo(rc.hdr.color).use()
         ctx.enable(moderngl.BLEND)

@@ -17,6 +17,12 @@ from rain_core.effects.atmosphere.model import phase_rain
 
 SCATTER_SAMPLES = 8  # quadrature nodes per light and pixel
 SCATTER_MAX_M = 300.0  # m, where rays into the sky stop gathering light
+# Exposed radiance (the tone map's input) that the lights a pixel skips may add up to, together: the composite
+# pass skips a light whose bound on its quadrature fits in what is left. The display value (ACES fit, then sRGB)
+# moves at most 6.4 per unit of exposed radiance (its steepest, near black), times 2^4 for the largest stops the
+# tone map applies (the exposure's correction: ±3 EV automatic, ±4 EV compensation by hand): a quarter of an
+# 8-bit step at most, so a skipped light changes no displayed pixel by more than rounding does.
+SCATTER_SKIP = 0.25 / 255.0 / (6.4 * 2.0**4)
 
 
 def _spot(light, to_light) -> np.ndarray:

@@ -60,3 +60,48 @@ def test_light_scattering_matches_single_scattering_reference(gl_ctx, shaders, k
     rel = np.abs(y_gl[lit] - y_ref[lit]) / y_ref[lit]
     assert np.median(rel) < 0.04 and np.percentile(rel, 98) < 0.10
     assert np.abs(y_gl[~lit]).max() < 0.02 * y_ref.max()
+
+
+
+def test_skipped_lights_change_no_pixel_by_more_than_the_skip_budget(gl_ctx, shaders, kit, monkeypatch):
+    """The composite skips a light whose bound on its quadrature fits in what is left of the pixel's budget
+    (``scatter_skip``, SCATTER_SKIP of exposed radiance): at noon, away from the beams, lights are skipped (pixels
+    change), and none changes by more than the budget. A float32 target, so that changes this small show."""
+    from rain_core.effects.atmosphere.scattering import SCATTER_SKIP
+    from rain_core.gfx import renderer as renderer_module
+
+    half = renderer_module.float_target
+    monkeypatch.setattr(renderer_module, "float_target",
+                        lambda ctx, size, components=4, dtype="f2", **kw: half(ctx, size, components, "f4", **kw))
+    size = (96, 64)
+    world = kit.world([kit.box((0.0, -50.0, -3000.0), (1.0, 1.0, 1.0), (0.1, 0.1, 0.1))])
+    lights = [
+        Light(np.array([2.0, 6.0, 580.0]), np.array([0.0, -1.0, 0.0]), 6000.0, np.ones(3),
+              math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0),
+        Light(np.array([1.0, 0.7, 590.0]), np.array([0.0, -0.026, -1.0]) / np.linalg.norm([0.0, -0.026, -1.0]),
+              20000.0, np.array([1.0, 0.96, 0.88]), math.cos(math.radians(30)), math.cos(math.radians(12)),
+              150.0, low_beam=True),
+    ]
+    camera = look_at((-3.0, 2.0, 604.0), (1.0, 2.5, 570.0), fov_y_deg=60.0)
+    images = []
+    for skip in (0.0, SCATTER_SKIP, 0.0):
+        settings = Settings()
+        settings.atmosphere.glow = 0.0
+        r = kit.renderer(gl_ctx, shaders, world, size)
+        r.effects[0].scatter_skip = skip
+        original = r.render_context
+
+        def with_lights(frame, *args, _original=original, **kwargs):
+            rc = _original(frame, *args, **kwargs)
+            rc.lights = pack_lights(lights)
+            return rc
+
+        r.render_context = with_lights
+        r.render(kit.frame(camera, world, settings, 20.0, 12.0))
+        images.append(kit.bottom_first(r)[0])
+        kit.release(r)
+    exact, skipped, exact_again = images
+    np.testing.assert_array_equal(exact_again, exact)  # the budget is the effect's: set back, nothing skipped
+    change = np.abs(skipped - exact)
+    assert (change > 0).mean() > 0.05  # lights were skipped
+    assert change.max() <= SCATTER_SKIP
