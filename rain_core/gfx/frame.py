@@ -15,7 +15,7 @@ import moderngl
 import numpy as np
 
 from rain_core.camera import Camera
-from rain_core.gfx import frame_block
+from rain_core.gfx import frame_block, units
 from rain_core.gfx.linalg import inverse
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import RenderTarget
@@ -193,6 +193,9 @@ class RenderContext:
     active: tuple = ()  # the effects that run this frame
     # The renderer's uniform buffers for the frame block (rain_core.gfx.frame_block): set_frame_uniforms binds one.
     frame_blocks: frame_block.FrameBlocks | None = None
+    # The tile size (pixels) of the light grid the renderer builds for this view before its scene pass
+    # (gfx/light_grid.py); 0: no grid, every light is visited everywhere (mirror views, contexts made elsewhere).
+    light_grid_px: int = 0
 
     @property
     def view_proj(self) -> np.ndarray:
@@ -251,6 +254,8 @@ class RenderContext:
             "u_time": self.frame.time_s,
             **_lighting_values(self.frame.lighting),
             "u_light_count": self.lights[3],
+            "u_light_grid_px": self.light_grid_px,
+            "u_light_grid": units.LIGHT_GRID,
             "u_light_pos": self.lights[0],
             "u_light_dir": self.lights[1],
             "u_light_color": self.lights[2],

@@ -32,7 +32,7 @@ FRAME_BLOCK_LAYOUT: dict[str, tuple[int, int, str]] = {
     "u_airlight_sun_dir": (60, 3, "f"), "u_phase_back_g": (63, 1, "f"),
     "u_shadow_params": (64, 3, "f"), "u_phase_back_weight": (67, 1, "f"),
     # without FRAME_OWN_LIGHTS (a program with its own light list stops here: 272 bytes)
-    "u_light_count": (68, 1, "i"),
+    "u_light_count": (68, 1, "i"), "u_light_grid_px": (69, 1, "i"),
     "u_light_pos": (72, 4 * MAX_LIGHTS, "b"),
     "u_light_dir": (72 + 4 * MAX_LIGHTS, 4 * MAX_LIGHTS, "b"),
     "u_light_color": (72 + 8 * MAX_LIGHTS, 4 * MAX_LIGHTS, "b"),

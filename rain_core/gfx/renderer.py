@@ -22,6 +22,7 @@ from rain_core.gfx.effect import DRAW_STAGES, Effect
 from rain_core.gfx.exposure import AutoExposure
 from rain_core.gfx.frame import Frame, FrameUniforms, PassStat, RenderContext, SharedResources
 from rain_core.gfx.frame_block import FrameBlocks
+from rain_core.gfx.light_grid import TILE_PX, LightGrid
 from rain_core.gfx.mirrors import DoorMirrors
 from rain_core.gfx.scene_draw import SceneDrawer
 from rain_core.gfx.shaders import ShaderLibrary
@@ -80,6 +81,8 @@ class Renderer:
         self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
         self.exposure = AutoExposure(ctx, self.shaders)
         self.mirrors = DoorMirrors(ctx)
+        self.light_grid = LightGrid(ctx, self.shaders)
+        self.light_grid_px = TILE_PX  # the main view's light tiles (pixels); 0: no grid, every light everywhere
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._timers: dict[str, PassTimer] = {}
         self.frame_blocks = FrameBlocks(ctx)
@@ -186,7 +189,8 @@ class Renderer:
 
     def _draw_scene(self, rc: RenderContext, include_sky: bool = True, clip_plane=None, mirror_view=None) -> None:
         self.shadow.bind()  # re-bound per draw: a GPU simulation may have used the unit
-        self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane, mirror_view=mirror_view)
+        self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane, mirror_view=mirror_view,
+                        light_grid=self.light_grid if rc.light_grid_px else None)
 
     def mirror_context(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray) -> RenderContext:
         """The context ``draw_mirror_view`` draws ``rc``'s view reflected by ``mirror`` with (same arguments), made
@@ -267,7 +271,7 @@ class Renderer:
         self.stats.extend(PassStat(e.name, False) for e in self.effects if e not in active)
         added = [lights for e in active if (lights := e.frame_lights(frame)) is not None and len(lights)]
         self._effect_lights = concat_lights(added) if added else None
-        rc = self.render_context(frame)
+        rc = self.render_context(frame, light_grid_px=self.light_grid_px)  # its grid: built in the scene pass
         # projection @ view now, just after the view's own BLAS product: first asked after the shadow's and the
         # reflection's draws (the door mirrors' plan), it ran cold.
         rc.view_proj  # noqa: B018 - made and kept by the context
@@ -395,6 +399,7 @@ class Renderer:
         self.shadow.release()
         self.exposure.release()
         self.mirrors.release()
+        self.light_grid.release()
         self.scene.release()
         for obj in (self._tonemap_vao, self._blit_vao):
             obj.release()

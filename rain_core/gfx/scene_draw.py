@@ -285,10 +285,12 @@ class SceneDrawer:
     # --- drawing --------------------------------------------------------------------------------------------
     def draw(self, rc: RenderContext, effects, include_sky: bool = True,
              clip_plane: tuple[float, float, float, float] | None = None,
-             mirror_view: moderngl.Texture | None = None) -> None:
+             mirror_view: moderngl.Texture | None = None, light_grid=None) -> None:
         """Sky, world tiles, vehicles and (inside the car) the cabin, into the bound framebuffer. ``effects``: all
         of the renderer's; the active ones (``rc.active``) bind their scene inputs, the rest their neutral ones.
-        ``mirror_view``: the door mirrors' view of this frame (rain_core.gfx.mirrors), shown on their glass."""
+        ``mirror_view``: the door mirrors' view of this frame (rain_core.gfx.mirrors), shown on their glass.
+        ``light_grid``: a ``gfx.light_grid.LightGrid`` built for ``rc`` after the depth pre-pass (into
+        ``rc.hdr``: the main view)."""
         ctx = self.ctx
         ctx.disable(moderngl.BLEND)
         if include_sky:
@@ -306,6 +308,9 @@ class SceneDrawer:
         # The pre-pass leaves an undefined colour where its meshes are; the lit pass overwrites every such pixel
         # (the same meshes at the same depths pass "<=").
         self._depth_prepass(rc, items, self._prepass_progs[mirrored], plane)
+        if light_grid is not None:
+            light_grid.build(rc, rc.hdr.depth)
+            rc.hdr.fbo.use()
         ctx.depth_func = "<="  # the pre-pass's own depths pass: each pixel is lit once, by what is in front
         prog = self.mirror_prog if mirrored else self.scene_prog
         rc.set_frame_uniforms(prog)

@@ -42,9 +42,13 @@ RAINBOW_DEPTH = 21
 # Drips (vertex-shader inputs: the sites' two tables and the roofs' outflow).
 DRIPS = (22, 23, 24)
 
+# The renderer's light grid (gfx/light_grid.py): sampled by the scene, glass and drop shaders of the main view.
+LIGHT_GRID = 25
+
 # The door mirrors' view, sampled by the scene shader on the mirror glass: a scratch unit, bound right before the
-# scene draw that shows it (GL 3.3 promises a fragment shader only 16 units, all taken).
+# scene draw that shows it. (GL 3.3 lets a sampler name any unit below 48 and a fragment shader sample 16 at once.)
 DOOR_MIRROR = 1
 
 # What the scene shader samples in one draw: these must all differ (tests/gfx/test_units.py).
-SCENE_SHADER = (SHADOW_MAP, ROAD_RAIN_RINGS, ROAD_HEIGHT, ROAD_MAPS, ROAD_REFLECTION, ROAD_RIPPLES, DOOR_MIRROR)
+SCENE_SHADER = (SHADOW_MAP, ROAD_RAIN_RINGS, ROAD_HEIGHT, ROAD_MAPS, ROAD_REFLECTION, ROAD_RIPPLES, DOOR_MIRROR,
+                LIGHT_GRID)

@@ -29,6 +29,7 @@ layout(std140) uniform FrameBlock {
     float u_phase_back_weight; // its weight (0: a single forward lobe)
 #ifndef FRAME_OWN_LIGHTS
     int u_light_count;
+    int u_light_grid_px;             // this view's light grid: tile size in pixels (0: none, every light everywhere)
     vec4 u_light_pos[MAX_LIGHTS];    // xyz m, w range m (negative: a low-beam headlight, see lighting.glsl)
     vec4 u_light_dir[MAX_LIGHTS];    // xyz unit, w cos(outer cone) (-1 = point light)
     vec4 u_light_color[MAX_LIGHTS];  // rgb = colour × intensity (cd), w cos(inner cone)

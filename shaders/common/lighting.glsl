@@ -49,6 +49,20 @@ float spot_factor(int i, vec3 L) {
     return f;
 }
 
+// The lights a loop visits (bit i: light i): all of them, unless a fragment shader took its tile's from the light
+// grid (common/light_grid.glsl). Loops take them lowest first, as a loop over i would, so the sums are the same.
+uint g_light_mask = 0xFFFFFFFFu;
+uint light_mask() {
+    return u_light_count >= 32 ? g_light_mask : g_light_mask & ((1u << uint(u_light_count)) - 1u);
+}
+
+// The lowest light of mask, taken out of it (GLSL 3.30 has no findLSB: a power of two's float exponent is exact).
+int pop_light(inout uint mask) {
+    uint low = mask & (~mask + 1u);
+    mask ^= low;
+    return int(floatBitsToUint(float(low)) >> 23u) - 127;
+}
+
 // Light i at p: false beyond its range; else L, the unit direction from p to it, and E, the illuminance (lux,
 // RGB) it gives there, on a surface facing it — spot cone and low-beam pattern included, smoothly windowed to 0
 // at the range. Every lit thing (surfaces, road water, drops, spray, glass glints) reads the lights through this.
@@ -70,7 +84,8 @@ vec3 shade_surface(Surface s, vec3 V) {
     vec3 diffuse_color = s.albedo * (1.0 - s.metallic);
     vec3 color = brdf_direct(N, V, u_sun_dir, diffuse_color, f0, s.roughness) * u_sun_illum
                  * sun_visibility(s.position, N);
-    for (int i = 0; i < u_light_count; ++i) {
+    for (uint m = light_mask(); m != 0u;) {
+        int i = pop_light(m);
         vec3 L, E;
         if (light_at(i, s.position, L, E)) color += brdf_direct(N, V, L, diffuse_color, f0, s.roughness) * E;
     }

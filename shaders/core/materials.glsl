@@ -30,7 +30,8 @@ void apply_surface_effects(inout Surface s, int material) {
 vec3 sign_retroreflection(Surface s, vec3 V) {
     if (g_material != MAT_PAINT || s.position.y < 0.5) return vec3(0.0);
     vec3 sum = vec3(0.0);
-    for (int i = 0; i < u_light_count; ++i) {
+    for (uint m = light_mask(); m != 0u;) {
+        int i = pop_light(m);
         vec3 L, E;
         if (!light_at(i, s.position, L, E)) continue;
         float alpha = degrees(acos(clamp(dot(L, V), -1.0, 1.0)));

@@ -2,6 +2,7 @@
 // Opaque scene: world tile, vehicles, cabin. Output is pre-exposed HDR luminance.
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
+#include "common/light_grid.glsl"
 #include "common/atmosphere.glsl"
 #include "core/materials.glsl"
 in vec3 v_world;
@@ -18,6 +19,7 @@ void main() {
         f_color = vec4(MIRROR_REFLECTANCE * texture(u_mirror_view, gl_FragCoord.xy * u_mirror_uv_scale).rgb, 1.0);
         return;
     }
+    use_light_grid();
     int material = int(v_params.z + 0.5);
     vec3 V = normalize(u_camera_pos - v_world);
     float dist = length(u_camera_pos - v_world);

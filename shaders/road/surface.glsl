@@ -159,8 +159,8 @@ float road_water_spec(vec3 N, vec3 V, vec3 L, float alpha) {
 vec3 road_light_highlights(vec3 P, vec3 N, vec3 V, float roughness, float cover) {
     float alpha = max(roughness * roughness, 0.002);
     vec3 color = road_water_spec(N, V, u_sun_dir, alpha) * u_sun_illum;
-    int count = cover < 0.25 ? 0 : u_light_count;
-    for (int i = 0; i < count; ++i) {
+    for (uint m = cover < 0.25 ? 0u : light_mask(); m != 0u;) {
+        int i = pop_light(m);
         vec3 L, E;
         if (light_at(i, P, L, E)) color += road_water_spec(N, V, L, alpha) * E;
     }

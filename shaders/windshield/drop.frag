@@ -8,6 +8,7 @@
 // the glass. Premultiplied.
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
+#include "common/light_grid.glsl"
 #include "common/atmosphere.glsl"
 #include "windshield/glass_common.glsl"
 #include "windshield/optics.glsl"
@@ -25,6 +26,7 @@ flat in vec3 v_nrm;
 out vec4 f_color;
 
 void main() {
+    use_light_grid();
     float a = v_shape.x, len = v_shape.y, blur = v_shape.z;
     int kind = int(v_shape.w + 0.5);
     vec3 V = normalize(v_pos - u_camera_pos);

@@ -10,6 +10,7 @@
 // the film. Output is premultiplied over the HDR frame.
 #include "common/frame.glsl"
 #include "common/lighting.glsl"
+#include "common/light_grid.glsl"
 #include "common/atmosphere.glsl"
 #include "windshield/glass_common.glsl"
 #include "windshield/optics.glsl"
@@ -56,6 +57,7 @@ vec3 bead_at(vec2 st, float density, float foot) {
 }
 
 void main() {
+    use_light_grid();
     vec2 st = glass_st(v_uv);
     // Wiper blades and arms, opaque, on the outside of the glass.
     float blade = 0.0;

@@ -41,7 +41,8 @@ vec3 behind_glass(vec3 origin, vec3 dir, float lod) {
 // Glints: lights seen through the water along the refracted ray (a narrow lobe around each light's direction).
 vec3 glints(vec3 origin, vec3 dir) {
     vec3 sum = u_sun_illum * 0.3 * pow(max(dot(dir, u_sun_dir), 0.0), 3000.0) * 3001.0 / 6.2832;
-    for (int i = 0; i < u_light_count; ++i) {
+    for (uint m = light_mask(); m != 0u;) {
+        int i = pop_light(m);
         vec3 L, E;
         if (!light_at(i, origin, L, E)) continue;
         float c = dot(dir, L);

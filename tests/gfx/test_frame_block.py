@@ -139,8 +139,9 @@ def test_python_layout_is_the_std140_layout_gl_reads(gl_ctx, shaders, tmp_path):
         for obj in (vao, fbo, target, buffer, prog):
             obj.release()
     expected = np.frombuffer(data, np.float32).copy()
-    count_at = FRAME_BLOCK_LAYOUT["u_light_count"][0]
-    expected[count_at] = float(values["u_light_count"])  # an int member: the shader wrote float(int)
+    for name, (offset, _count, kind) in FRAME_BLOCK_LAYOUT.items():
+        if kind == "i":  # an int member: the shader wrote float(int)
+            expected[offset] = float(values[name])
     members = np.zeros(BLOCK_WORDS, bool)  # std140 padding words are not members
     for offset, count, _ in FRAME_BLOCK_LAYOUT.values():
         members[offset:offset + count] = True
