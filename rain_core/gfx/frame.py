@@ -193,8 +193,8 @@ class RenderContext:
     active: tuple = ()  # the effects that run this frame
     # The renderer's uniform buffers for the frame block (rain_core.gfx.frame_block): set_frame_uniforms binds one.
     frame_blocks: frame_block.FrameBlocks | None = None
-    # The tile size (pixels) of the light grid the renderer builds for this view before its scene pass
-    # (gfx/light_grid.py); 0: no grid, every light is visited everywhere (mirror views, contexts made elsewhere).
+    # The tile size (pixels) of the light grid the renderer builds for this view after its depth pre-pass
+    # (gfx/light_grid.py); 0: no grid, every light is visited everywhere (contexts made outside the renderer).
     light_grid_px: int = 0
 
     @property

@@ -201,7 +201,8 @@ class Renderer:
             if all(a is b for a, b in zip(planned, key, strict=True)):
                 return mrc
         mrc = self.render_context(rc.frame.with_camera(camera), target, view=rc.view @ mirror,
-                                  projection=rc.projection, shared=rc.shared, uniforms=rc.uniforms, active=rc.active)
+                                  projection=rc.projection, shared=rc.shared, uniforms=rc.uniforms, active=rc.active,
+                                  light_grid_px=self.light_grid_px)
         if self.scene.in_frame:  # kept for this frame alone (holding the key's objects keeps them from being reused)
             self._mirror_plans.append((key, mrc))
             self.scene.draw_items(mrc, True, cull=True)

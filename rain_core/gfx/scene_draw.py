@@ -289,8 +289,8 @@ class SceneDrawer:
         """Sky, world tiles, vehicles and (inside the car) the cabin, into the bound framebuffer. ``effects``: all
         of the renderer's; the active ones (``rc.active``) bind their scene inputs, the rest their neutral ones.
         ``mirror_view``: the door mirrors' view of this frame (rain_core.gfx.mirrors), shown on their glass.
-        ``light_grid``: a ``gfx.light_grid.LightGrid`` built for ``rc`` after the depth pre-pass (into
-        ``rc.hdr``: the main view)."""
+        ``light_grid``: a ``gfx.light_grid.LightGrid`` built for ``rc`` after the depth pre-pass (from
+        ``rc.hdr``'s depth: the target being drawn)."""
         ctx = self.ctx
         ctx.disable(moderngl.BLEND)
         if include_sky:

@@ -42,7 +42,7 @@ RAINBOW_DEPTH = 21
 # Drips (vertex-shader inputs: the sites' two tables and the roofs' outflow).
 DRIPS = (22, 23, 24)
 
-# The renderer's light grid (gfx/light_grid.py): sampled by the scene, glass and drop shaders of the main view.
+# The renderer's light grid (gfx/light_grid.py) of the view being drawn: sampled by the scene, glass and drop shaders.
 LIGHT_GRID = 25
 
 # The door mirrors' view, sampled by the scene shader on the mirror glass: a scratch unit, bound right before the

@@ -39,7 +39,9 @@ def night(gl_ctx):
 
 def test_the_grid_gives_the_pixels_of_every_light(gl_ctx, night):
     """The loops visit a tile's lights lowest first, as the loop over all of them did, and a light left out gives
-    nothing there: the images are the same to the bit."""
+    nothing there: the images are the same to the bit, the mirror views' grids included."""
+    views = {size for size, _ in night.renderer.light_grid._grids}
+    assert (SIZE in views) and len(views) >= 2  # the main view's grid and a mirror view's (the road's reflection)
     without = _night_drive(gl_ctx, 0)
     try:
         assert without.renderer.light_grid.masks() is None  # no grid was built
