@@ -309,7 +309,11 @@ class SceneDrawer:
         # (the same meshes at the same depths pass "<=").
         self._depth_prepass(rc, items, self._prepass_progs[mirrored], plane)
         if light_grid is not None:
+            if clip_plane is not None:  # the grid's full-screen triangle writes no clip distance
+                ctx.disable_direct(GL_CLIP_DISTANCE0)
             light_grid.build(rc, rc.hdr.depth)
+            if clip_plane is not None:
+                ctx.enable_direct(GL_CLIP_DISTANCE0)
             rc.hdr.fbo.use()
         ctx.depth_func = "<="  # the pre-pass's own depths pass: each pixel is lit once, by what is in front
         prog = self.mirror_prog if mirrored else self.scene_prog
