@@ -30,6 +30,7 @@ class LightGrid:
         self.prog = shaders.program("common/fullscreen.vert", "core/light_grid.frag")
         self._vao = ctx.vertex_array(self.prog, [])
         self._owned = owned_uniforms(self.prog)
+        self.prog["u_depth"].value = units.LIGHT_GRID_DEPTH
         self._depth_sampler = depth_value_sampler(ctx)
         self._grids: dict = {}  # (view size, tile px) → (texture, framebuffer)
         self._last: moderngl.Texture | None = None  # the grid built last
@@ -48,18 +49,17 @@ class LightGrid:
 
     def build(self, rc, depth: moderngl.Texture) -> None:
         """Sort ``rc``'s lights into its view's tiles of ``rc.light_grid_px`` pixels, bounded by ``depth`` (the
-        view's depth after the scene's pre-pass; its size is the view's), and bind the grid on
-        ``units.LIGHT_GRID``. Leaves the grid's framebuffer bound: the caller binds its own again."""
+        view's depth after the scene's pre-pass, which bound ``rc``'s frame block; its size is the view's), and
+        bind the grid on ``units.LIGHT_GRID``. Leaves the grid's framebuffer bound: the caller binds its own
+        again."""
         texture, fbo = self._target(depth.size, rc.light_grid_px)
         camera = rc.frame.camera
-        rc.set_frame_uniforms(self.prog)
+        rc.set_frame_uniforms(self.prog, bind=False)  # the pre-pass just bound this view's block
         self._owned.set("u_near_far", (float(camera.near_m), float(camera.far_m)))
-        self._owned.set("u_depth", units.SCRATCH[0])
-        self._depth_sampler.use(units.SCRATCH[0])
-        depth.use(units.SCRATCH[0])
+        self._depth_sampler.use(units.LIGHT_GRID_DEPTH)  # (its own unit: left bound, nothing else reads there)
+        depth.use(units.LIGHT_GRID_DEPTH)
         fbo.use()
         self._vao.render(moderngl.TRIANGLES, vertices=3)
-        self._depth_sampler.clear(units.SCRATCH[0])
         texture.use(units.LIGHT_GRID)
         self._last = texture
 

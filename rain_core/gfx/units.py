@@ -44,6 +44,7 @@ DRIPS = (22, 23, 24)
 
 # The renderer's light grid (gfx/light_grid.py) of the view being drawn: sampled by the scene, glass and drop shaders.
 LIGHT_GRID = 25
+LIGHT_GRID_DEPTH = 26  # the view's depth, read by the pass that builds the grid
 
 # The door mirrors' view, sampled by the scene shader on the mirror glass: a scratch unit, bound right before the
 # scene draw that shows it. (GL 3.3 lets a sampler name any unit below 48 and a fragment shader sample 16 at once.)
