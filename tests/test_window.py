@@ -21,11 +21,15 @@ def display():
     xvfb = shutil.which("Xvfb")
     if xvfb is None:
         pytest.skip("Xvfb is not installed (.ci/run installs it)")
-    number = 90 + os.getpid() % 9
-    proc = subprocess.Popen([xvfb, f":{number}", "-screen", "0", "640x480x24", "-nolisten", "tcp"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    time.sleep(1.0)
-    if proc.poll() is not None:
+    # Another run on this machine may hold a display number: try the next ones.
+    for k in range(9):
+        number = 90 + (os.getpid() + k) % 9
+        proc = subprocess.Popen([xvfb, f":{number}", "-screen", "0", "640x480x24", "-nolisten", "tcp"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(1.0)
+        if proc.poll() is None:
+            break
+    else:
         pytest.skip("Xvfb could not start")
     yield f":{number}"
     proc.terminate()
