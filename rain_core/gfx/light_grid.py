@@ -23,7 +23,8 @@ TILE_PX = 16  # pixels per tile side: 80 × 45 tiles at 1280 × 720
 
 
 class LightGrid:
-    """The grid texture (R32UI, a bit per light) of the view ``build`` was last given."""
+    """The views' grids (R32UI, a bit per light): ``build`` makes one for a view after its pre-pass and binds
+    it; ``masks`` reads the last one back."""
 
     def __init__(self, ctx: moderngl.Context, shaders):
         self.ctx = ctx

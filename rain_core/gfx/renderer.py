@@ -82,7 +82,7 @@ class Renderer:
         self.exposure = AutoExposure(ctx, self.shaders)
         self.mirrors = DoorMirrors(ctx)
         self.light_grid = LightGrid(ctx, self.shaders)
-        self.light_grid_px = TILE_PX  # the main view's light tiles (pixels); 0: no grid, every light everywhere
+        self.light_grid_px = TILE_PX  # the views' light tiles (pixels); 0: no grid, every light everywhere
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._timers: dict[str, PassTimer] = {}
         self.frame_blocks = FrameBlocks(ctx)
