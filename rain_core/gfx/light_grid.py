@@ -20,6 +20,8 @@ from rain_core.gfx.targets import depth_value_sampler
 from rain_core.gfx.uniforms import owned_uniforms
 
 TILE_PX = 16  # pixels per tile side: 80 × 45 tiles at 1280 × 720
+KEPT_GRIDS = 4  # grids kept, one per view size (the main view, the road's reflection, the door mirrors): a
+# window being resized makes a new size every frame, and the one used longest ago goes
 
 
 class LightGrid:
@@ -37,15 +39,20 @@ class LightGrid:
         self._last: moderngl.Texture | None = None  # the grid built last
 
     def _target(self, size: tuple[int, int], tile_px: int) -> tuple:
-        """(texture, framebuffer) of the grid of a view ``size`` pixels large (kept per size: the main view and
-        the mirror views alternate)."""
+        """(texture, framebuffer) of the grid of a view ``size`` pixels large (kept per size, the last
+        ``KEPT_GRIDS`` used: the main view and the mirror views alternate)."""
         key = (size, tile_px)
-        grid = self._grids.get(key)
+        grid = self._grids.pop(key, None)
         if grid is None:
+            if len(self._grids) >= KEPT_GRIDS:  # the one used longest ago (the dict is in order of use)
+                texture, fbo = self._grids.pop(next(iter(self._grids)))
+                fbo.release()
+                texture.release()
             tiles = (-(-size[0] // tile_px), -(-size[1] // tile_px))
             texture = self.ctx.texture(tiles, 1, dtype="u4")
             texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            grid = self._grids[key] = (texture, self.ctx.framebuffer(color_attachments=[texture]))
+            grid = (texture, self.ctx.framebuffer(color_attachments=[texture]))
+        self._grids[key] = grid  # last: the most recently used
         return grid
 
     def build(self, rc, depth: moderngl.Texture) -> None:

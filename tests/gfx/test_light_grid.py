@@ -83,3 +83,21 @@ def test_the_grid_leaves_out_lights_that_cannot_reach(night):
     assert counts.max() <= 32
     assert counts.mean() < 28
     assert counts[0].mean() < counts[-1].mean()  # bottom row (the hood, near) against the top (sky: no depth bound)
+
+
+
+def test_a_window_being_resized_keeps_a_few_grids(gl_ctx):
+    """A new view size makes a grid; past KEPT_GRIDS the one used longest ago goes, and the newest is the view's."""
+    from rain_core.gfx.light_grid import KEPT_GRIDS
+
+    scene = _night_drive(gl_ctx, TILE_PX, frames=1)
+    try:
+        renderer = scene.renderer
+        for width in range(200, 200 + 8 * 16, 16):
+            renderer.resize((width, 108))
+            scene.step(1 / 30, None)
+            scene.render()
+            assert len(renderer.light_grid._grids) <= KEPT_GRIDS
+        assert renderer.light_grid.masks().shape == (-(-108 // TILE_PX), -(-(200 + 7 * 16) // TILE_PX))
+    finally:
+        scene.release()
