@@ -15,7 +15,7 @@ import moderngl
 import numpy as np
 
 from rain_core.camera import Camera
-from rain_core.gfx import frame_block, units
+from rain_core.gfx import frame_block
 from rain_core.gfx.linalg import inverse
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import RenderTarget
@@ -255,7 +255,6 @@ class RenderContext:
             **_lighting_values(self.frame.lighting),
             "u_light_count": self.lights[3],
             "u_light_grid_px": self.light_grid_px,
-            "u_light_grid": units.LIGHT_GRID,
             "u_light_pos": self.lights[0],
             "u_light_dir": self.lights[1],
             "u_light_color": self.lights[2],

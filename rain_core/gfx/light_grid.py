@@ -38,6 +38,12 @@ class LightGrid:
         self._grids: dict = {}  # (view size, tile px) → (texture, framebuffer)
         self._last: moderngl.Texture | None = None  # the grid built last
 
+    @staticmethod
+    def read_by(*programs: moderngl.Program) -> None:
+        """Point the programs' ``u_light_grid`` (common/light_grid.glsl) at the grid's unit, once when made."""
+        for prog in programs:
+            prog["u_light_grid"].value = units.LIGHT_GRID
+
     def _target(self, size: tuple[int, int], tile_px: int) -> tuple:
         """(texture, framebuffer) of the grid of a view ``size`` pixels large (kept per size, the last
         ``KEPT_GRIDS`` used: the main view and the mirror views alternate)."""

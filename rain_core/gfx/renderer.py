@@ -81,7 +81,6 @@ class Renderer:
         self._tonemap_vao = ctx.vertex_array(self.tonemap_prog, [])
         self.exposure = AutoExposure(ctx, self.shaders)
         self.mirrors = DoorMirrors(ctx)
-        self.light_grid = LightGrid(ctx, self.shaders)
         self.light_grid_px = TILE_PX  # the views' light tiles (pixels); 0: no grid, every light everywhere
         self._blit_vao = ctx.vertex_array(self.blit_prog, [])
         self._timers: dict[str, PassTimer] = {}
@@ -95,6 +94,11 @@ class Renderer:
     @property
     def scene_prog(self) -> moderngl.Program:
         return self.scene.scene_prog
+
+    @property
+    def light_grid(self) -> LightGrid:
+        """The views' light grids (the scene drawer builds them after each view's depth pre-pass)."""
+        return self.scene.light_grid
 
     @property
     def gpu_timing(self) -> bool:
@@ -189,8 +193,7 @@ class Renderer:
 
     def _draw_scene(self, rc: RenderContext, include_sky: bool = True, clip_plane=None, mirror_view=None) -> None:
         self.shadow.bind()  # re-bound per draw: a GPU simulation may have used the unit
-        self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane, mirror_view=mirror_view,
-                        light_grid=self.light_grid if rc.light_grid_px else None)
+        self.scene.draw(rc, self.effects, include_sky=include_sky, clip_plane=clip_plane, mirror_view=mirror_view)
 
     def mirror_context(self, rc: RenderContext, target: RenderTarget, camera, mirror: np.ndarray) -> RenderContext:
         """The context ``draw_mirror_view`` draws ``rc``'s view reflected by ``mirror`` with (same arguments), made
@@ -400,7 +403,6 @@ class Renderer:
         self.shadow.release()
         self.exposure.release()
         self.mirrors.release()
-        self.light_grid.release()
         self.scene.release()
         for obj in (self._tonemap_vao, self._blit_vao):
             obj.release()

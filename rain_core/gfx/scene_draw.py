@@ -14,6 +14,7 @@ import numpy as np
 from rain_core import layout
 from rain_core.gfx import units
 from rain_core.gfx.frame import RenderContext
+from rain_core.gfx.light_grid import LightGrid
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, rows_bytes
 from rain_core.mesh import VERTEX_ATTRIBUTES, VERTEX_FORMAT
@@ -106,6 +107,9 @@ class SceneDrawer:
         # and the mirror view rewriting them in turn.
         self.mirror_prog = shaders.program("core/scene.vert", "core/scene.frag", defines={"SCENE_MIRROR_VIEW": 1})
         self.sky_prog = shaders.program("common/fullscreen.vert", "core/sky.frag")
+        # Which lights reach each tile of a view, built after its pre-pass when its context asks (light_grid_px).
+        self.light_grid = LightGrid(ctx, shaders)
+        self.light_grid.read_by(self.scene_prog, self.mirror_prog)
         # Depth pre-pass: the scene's depths first, so the lit shader runs once per visible pixel instead of once
         # per layer of the city, the cabin and the cars in front of each other (2–4 layers from the driver's seat).
         self._prepass_progs = {False: shaders.program("core/scene.vert", "core/scene_depth.frag"),
@@ -285,12 +289,12 @@ class SceneDrawer:
     # --- drawing --------------------------------------------------------------------------------------------
     def draw(self, rc: RenderContext, effects, include_sky: bool = True,
              clip_plane: tuple[float, float, float, float] | None = None,
-             mirror_view: moderngl.Texture | None = None, light_grid=None) -> None:
+             mirror_view: moderngl.Texture | None = None) -> None:
         """Sky, world tiles, vehicles and (inside the car) the cabin, into the bound framebuffer. ``effects``: all
         of the renderer's; the active ones (``rc.active``) bind their scene inputs, the rest their neutral ones.
         ``mirror_view``: the door mirrors' view of this frame (rain_core.gfx.mirrors), shown on their glass.
-        ``light_grid``: a ``gfx.light_grid.LightGrid`` built for ``rc`` after the depth pre-pass (from
-        ``rc.hdr``'s depth: the target being drawn)."""
+        With ``rc.light_grid_px`` the view's light grid is built after the depth pre-pass, from ``rc.hdr``'s depth
+        (the target being drawn)."""
         ctx = self.ctx
         ctx.disable(moderngl.BLEND)
         if include_sky:
@@ -308,10 +312,10 @@ class SceneDrawer:
         # The pre-pass leaves an undefined colour where its meshes are; the lit pass overwrites every such pixel
         # (the same meshes at the same depths pass "<=").
         self._depth_prepass(rc, items, self._prepass_progs[mirrored], plane)
-        if light_grid is not None:
+        if rc.light_grid_px:
             if clip_plane is not None:  # the grid's full-screen triangle writes no clip distance
                 ctx.disable_direct(GL_CLIP_DISTANCE0)
-            light_grid.build(rc, rc.hdr.depth)
+            self.light_grid.build(rc, rc.hdr.depth)
             if clip_plane is not None:
                 ctx.enable_direct(GL_CLIP_DISTANCE0)
             rc.hdr.fbo.use()
@@ -355,3 +359,4 @@ class SceneDrawer:
         self._vehicles.clear()
         self._cabin = None
         self._sky_vao.release()
+        self.light_grid.release()

@@ -32,6 +32,7 @@ from rain_core.effects.windshield.water_pass import (  # noqa: F401 - the water 
     WaterPass,
 )
 from rain_core.gfx.effect import Effect
+from rain_core.gfx.light_grid import LightGrid
 from rain_core.gfx.shaders import ShaderLibrary
 from rain_core.gfx.targets import depth_value_sampler, float_target, fullscreen_triangle
 from rain_core.gfx.uniforms import mat4_bytes, owned_uniforms, set_uniform, set_uniforms
@@ -92,6 +93,7 @@ class WindshieldEffect(WaterPass, Effect):
         self.drop_prog = self.shaders.program("windshield/drop.vert", "windshield/drop.frag")
         self.copy_prog = self.shaders.program("common/fullscreen.vert", "windshield/frame_copy.frag")
         set_uniforms(self.copy_prog, u_color=_UNIT_A, u_depth=_UNIT_B)
+        LightGrid.read_by(self.glass_prog, self.drop_prog)  # their glints visit the tile's lights
         progs = (self.film_prog, self.normals_prog, self.splat_prog, self.drop_splat_prog, self.glass_prog,
                  self.drop_prog)
         for prog in progs:
