@@ -14,45 +14,55 @@ from rain_core.settings import Settings
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
+SIZE = (96, 64)
+CAMERA = look_at((-3.0, 2.0, 604.0), (1.0, 2.5, 570.0), fov_y_deg=60.0)
+# A down-lit street lamp, a sideways lamp and a low-beam headlight cone.
+LAMP = Light(np.array([2.0, 6.0, 580.0]), np.array([0.0, -1.0, 0.0]), 6000.0, np.ones(3),
+             math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0)
+SIDE_LAMP = Light(np.array([-4.0, 3.0, 575.0]), np.array([1.0, 0.0, 0.0]), 3000.0, np.array([1.0, 0.8, 0.6]),
+                  math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0)
+LOW_BEAM = Light(np.array([1.0, 0.7, 590.0]), np.array([0.0, -0.026, -1.0]) / np.linalg.norm([0.0, -0.026, -1.0]),
+                 20000.0, np.array([1.0, 0.96, 0.88]), math.cos(math.radians(30)), math.cos(math.radians(12)),
+                 150.0, low_beam=True)
+
+
+def _render_lit(gl_ctx, shaders, kit, lights, hour, *, scale=1.0, skip=None):
+    """The pre-exposed HDR image (bottom row first) of a far box under ``lights`` alone, in 20 mm/h rain at
+    ``hour``, no glow, ``scale`` × the light scattering; ``skip``: the effect's scatter_skip (None: its own).
+    Returns (image, the effect's state, the render context)."""
+    world = kit.world([kit.box((0.0, -50.0, -3000.0), (1.0, 1.0, 1.0), (0.1, 0.1, 0.1))])
+    settings = Settings()
+    settings.atmosphere.glow = 0.0
+    settings.atmosphere.light_scattering = scale
+    r = kit.renderer(gl_ctx, shaders, world, SIZE)
+    if skip is not None:
+        r.effects[0].scatter_skip = skip
+    original = r.render_context
+
+    def with_lights(frame, *args, **kwargs):
+        rc = original(frame, *args, **kwargs)
+        rc.lights = pack_lights(lights)  # our lights, no vehicles needed
+        return rc
+
+    r.render_context = with_lights
+    frame = kit.frame(CAMERA, world, settings, 20.0, hour)
+    r.render(frame)
+    image = kit.bottom_first(r)[0]
+    state, rc = r.effects[0].state, r.render_context(frame)
+    kit.release(r)
+    return image, state, rc
+
+
 def test_light_scattering_matches_single_scattering_reference(gl_ctx, shaders, kit):
     """A down-lit street lamp, a sideways lamp and a low-beam headlight cone against the dense quadrature."""
-    size = (96, 64)
-    world = kit.world([kit.box((0.0, -50.0, -3000.0), (1.0, 1.0, 1.0), (0.1, 0.1, 0.1))])
-    lights = [
-        Light(np.array([2.0, 6.0, 580.0]), np.array([0.0, -1.0, 0.0]), 6000.0, np.ones(3),
-              math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0),
-        Light(np.array([-4.0, 3.0, 575.0]), np.array([1.0, 0.0, 0.0]), 3000.0, np.array([1.0, 0.8, 0.6]),
-              math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0),
-        Light(np.array([1.0, 0.7, 590.0]), np.array([0.0, -0.026, -1.0]) / np.linalg.norm([0.0, -0.026, -1.0]),
-              20000.0, np.array([1.0, 0.96, 0.88]), math.cos(math.radians(30)), math.cos(math.radians(12)),
-              150.0, low_beam=True),
-    ]
-    camera = look_at((-3.0, 2.0, 604.0), (1.0, 2.5, 570.0), fov_y_deg=60.0)
-    rate = 20.0
-    images = []
-    for scale in (0.0, 1.0):
-        settings = Settings()
-        settings.atmosphere.glow = 0.0
-        settings.atmosphere.light_scattering = scale
-        r = kit.renderer(gl_ctx, shaders, world, size)
-        original = r.render_context
-
-        def with_lights(frame, *args, _original=original, **kwargs):
-            rc = _original(frame, *args, **kwargs)
-            rc.lights = pack_lights(lights)  # our lights, no vehicles needed
-            return rc
-
-        r.render_context = with_lights
-        frame = kit.frame(camera, world, settings, rate, 22.0)
-        r.render(frame)
-        images.append(kit.bottom_first(r)[0])
-        state, rc = r.effects[0].state, r.render_context(frame)
-        kit.release(r)
-    shader = (images[1] - images[0])[1::3, 1::3]  # every third pixel: the reference is dense and slow
-    _, dirs = atm.pixel_distances(np.ones(size[::-1]), rc.view_proj, rc.camera_position)
+    lights = [LAMP, SIDE_LAMP, LOW_BEAM]
+    dark, _, _ = _render_lit(gl_ctx, shaders, kit, lights, 22.0, scale=0.0)
+    lit_image, state, rc = _render_lit(gl_ctx, shaders, kit, lights, 22.0)
+    shader = (lit_image - dark)[1::3, 1::3]  # every third pixel: the reference is dense and slow
+    _, dirs = atm.pixel_distances(np.ones(SIZE[::-1]), rc.view_proj, rc.camera_position)
     ref = sum(atm.light_inscatter_reference(rc.camera_position, dirs[1::3, 1::3], atm.SCATTER_MAX_M, light,
                                             state.extinction_per_m, state.scatter_per_m, n=4000)
-              for light in lights) * frame.lighting.exposure
+              for light in lights) * rc.frame.lighting.exposure
     y_ref, y_gl = ref @ LUMA, shader @ LUMA
     lit = y_ref > 0.01 * y_ref.max()
     assert lit.mean() > 0.1  # the cones cover a good part of the frame …
@@ -60,7 +70,6 @@ def test_light_scattering_matches_single_scattering_reference(gl_ctx, shaders, k
     rel = np.abs(y_gl[lit] - y_ref[lit]) / y_ref[lit]
     assert np.median(rel) < 0.04 and np.percentile(rel, 98) < 0.10
     assert np.abs(y_gl[~lit]).max() < 0.02 * y_ref.max()
-
 
 
 def test_skipped_lights_change_no_pixel_by_more_than_the_skip_budget(gl_ctx, shaders, kit, monkeypatch):
@@ -73,34 +82,8 @@ def test_skipped_lights_change_no_pixel_by_more_than_the_skip_budget(gl_ctx, sha
     half = renderer_module.float_target
     monkeypatch.setattr(renderer_module, "float_target",
                         lambda ctx, size, components=4, dtype="f2", **kw: half(ctx, size, components, "f4", **kw))
-    size = (96, 64)
-    world = kit.world([kit.box((0.0, -50.0, -3000.0), (1.0, 1.0, 1.0), (0.1, 0.1, 0.1))])
-    lights = [
-        Light(np.array([2.0, 6.0, 580.0]), np.array([0.0, -1.0, 0.0]), 6000.0, np.ones(3),
-              math.cos(math.radians(75)), math.cos(math.radians(55)), 70.0),
-        Light(np.array([1.0, 0.7, 590.0]), np.array([0.0, -0.026, -1.0]) / np.linalg.norm([0.0, -0.026, -1.0]),
-              20000.0, np.array([1.0, 0.96, 0.88]), math.cos(math.radians(30)), math.cos(math.radians(12)),
-              150.0, low_beam=True),
-    ]
-    camera = look_at((-3.0, 2.0, 604.0), (1.0, 2.5, 570.0), fov_y_deg=60.0)
-    images = []
-    for skip in (0.0, SCATTER_SKIP, 0.0):
-        settings = Settings()
-        settings.atmosphere.glow = 0.0
-        r = kit.renderer(gl_ctx, shaders, world, size)
-        r.effects[0].scatter_skip = skip
-        original = r.render_context
-
-        def with_lights(frame, *args, _original=original, **kwargs):
-            rc = _original(frame, *args, **kwargs)
-            rc.lights = pack_lights(lights)
-            return rc
-
-        r.render_context = with_lights
-        r.render(kit.frame(camera, world, settings, 20.0, 12.0))
-        images.append(kit.bottom_first(r)[0])
-        kit.release(r)
-    exact, skipped, exact_again = images
+    exact, skipped, exact_again = (_render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, skip=skip)[0]
+                                   for skip in (0.0, SCATTER_SKIP, 0.0))
     np.testing.assert_array_equal(exact_again, exact)  # the budget is the effect's: set back, nothing skipped
     change = np.abs(skipped - exact)
     assert (change > 0).mean() > 0.05  # lights were skipped
