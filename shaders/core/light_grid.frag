@@ -7,6 +7,7 @@
 // its range there, where light_at gives nothing. The tile is taken a pixel wider on each side, the depth a
 // little farther and the range a little longer, for the rounding of the fragments' interpolated positions.
 #include "common/frame.glsl"
+#include "common/view_distance.glsl"
 uniform sampler2D u_depth;  // the view's depth after the pre-pass (window depth, 1: cleared)
 uniform vec2 u_near_far;    // the camera's near and far planes (m)
 out uint f_lights;
@@ -19,9 +20,8 @@ void main() {
     for (int y = 0; y < px + 2; ++y)
         for (int x = 0; x < px + 2; ++x)
             deepest = max(deepest, texelFetch(u_depth, clamp(first + ivec2(x, y), ivec2(0), size - 1), 0).r);
-    float n = u_near_far.x, f = u_near_far.y;
     // The distance along the view axis (clip w) of that depth, a little farther; none past the cleared depth.
-    float far_w = deepest >= 1.0 ? 3.0e38 : 1.01 * 2.0 * n * f / (f + n - (2.0 * deepest - 1.0) * (f - n)) + 0.1;
+    float far_w = deepest >= 1.0 ? 3.0e38 : 1.01 * view_distance(deepest, u_near_far) + 0.1;
     vec2 lo = vec2(first) / vec2(size) * 2.0 - 1.0;
     vec2 hi = vec2(first + px + 2) / vec2(size) * 2.0 - 1.0;
     mat4 rows = transpose(u_view_proj);  // rows[k]: the world-space plane of clip coordinate k

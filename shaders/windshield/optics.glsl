@@ -3,6 +3,7 @@
 // reflection and the Fresnel reflection at that surface show the dark cabin; glints of the sun and the lights.
 // Shared by the glass pass (film, beads, blades) and the drop pass (each drop an analytic lens).
 // Include after common/frame.glsl, common/lighting.glsl, common/atmosphere.glsl and windshield/glass_common.glsl.
+#include "common/view_distance.glsl"
 uniform sampler2D u_frame;    // the frame without the glass (pre-exposed HDR), mipmapped
 uniform sampler2D u_depth;    // its depth
 uniform vec2 u_near_far;      // camera near, far (m)
@@ -21,9 +22,7 @@ vec2 screen_of(vec3 origin, vec3 dir) {
 }
 
 float view_depth(vec2 uv) {
-    float z = textureLod(u_depth, uv, 0.0).r * 2.0 - 1.0;
-    float n = u_near_far.x, f = u_near_far.y;
-    return 2.0 * n * f / (f + n - z * (f - n));
+    return view_distance(textureLod(u_depth, uv, 0.0).r, u_near_far);
 }
 
 // What a ray leaving the glass at origin along dir sees: the frame where it shows the street, else (off screen,
