@@ -27,13 +27,14 @@ void main() {
     mat4 rows = transpose(u_view_proj);  // rows[k]: the world-space plane of clip coordinate k
     vec4 planes[6] = vec4[6](rows[0] - lo.x * rows[3], hi.x * rows[3] - rows[0], rows[1] - lo.y * rows[3],
                              hi.y * rows[3] - rows[1], rows[3], vec4(-rows[3].xyz, far_w - rows[3].w));
+    for (int k = 0; k < 6; ++k) planes[k] /= length(planes[k].xyz);  // signed distances in m
     uint mask = 0u;
     for (int i = 0; i < u_light_count; ++i) {
         vec3 c = u_light_pos[i].xyz;
         float r = abs(u_light_pos[i].w) * 1.001 + 0.05;
         bool reaches = true;
         for (int k = 0; k < 6; ++k)
-            reaches = reaches && dot(planes[k].xyz, c) + planes[k].w >= -r * length(planes[k].xyz);
+            reaches = reaches && dot(planes[k].xyz, c) + planes[k].w >= -r;
         if (reaches) mask |= 1u << uint(i);
     }
     f_lights = mask;
