@@ -20,6 +20,7 @@ from rain_core.effects.windshield.constants import (
     SPLASH_MAX,
     SPLASH_SPEED_M_S,
     drop_radius,
+    uniform_index,
 )
 from rain_core.effects.windshield.drop_rows import CELL as _CELL
 from rain_core.effects.windshield.drop_rows import DIRTY as _DIRTY
@@ -148,9 +149,9 @@ class FastArrivals:
                                            cells.astype(np.int64, copy=False), ks.cell_mark, ks.cell_count,
                                            ks.cell_start, ks.hits, ks.members, c, first, placed, c_hit)
             if n_hit:
-                # (the same draws as the twin's: the counts of the cells with drops, in order)
+                # (the twin's draws: one uniform per query whose cell has drops, in order)
                 n_p = kernels.give_to_drops(self._buf, self._fresh_buf, ks.members, first, c,
-                                            self.rng.integers(0, c_hit[:n_hit]), mass, picks, pick_m)
+                                            self.rng.random(n_hit), mass, picks, pick_m)
                 self._buf[picks[:n_p], _A] = drop_radius(pick_m[:n_p])
             return placed
         d = self._buf[:n]
@@ -173,7 +174,8 @@ class FastArrivals:
         first -= c
         placed = c > 0
         if np.count_nonzero(placed):
-            pick = idx[order[first[placed] + self.rng.integers(0, c[placed])]]
+            counts = c[placed]
+            pick = idx[order[first[placed] + uniform_index(self.rng.random(len(counts)), counts)]]
             np.add.at(d[:, _M], pick, mass[placed])
             d[pick, _A] = drop_radius(d[pick, _M])
             d[pick, _RB] = np.inf  # grown: tested again

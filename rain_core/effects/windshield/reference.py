@@ -50,6 +50,7 @@ from rain_core.effects.windshield.constants import (
     SPLASH_SPEED_M_S,
     drop_radius,
     norm2,
+    uniform_index,
 )
 from rain_core.effects.windshield.dynamics import DropDynamics
 from rain_core.effects.windshield.film import FilmBeading
@@ -242,7 +243,7 @@ class WindshieldSimReference(DropDynamics, Merging, FilmBeading, Wiping):
         c = counts[cells]
         placed = c > 0
         if placed.any():
-            pick = order[starts[cells[placed]] + self.rng.integers(0, c[placed])]
+            pick = order[starts[cells[placed]] + uniform_index(self.rng.random(int(placed.sum())), c[placed])]
             np.add.at(self.mass, pick, mass[placed])
             self.fresh[pick] = True
         return placed

@@ -141,15 +141,15 @@ def drops_in_cells(buf, n, any_dirty, w0, dw, height, cells, mark, per_cell, sta
 
 
 @jit.kernel
-def give_to_drops(buf, fresh, members, first, c, draw, mass, picks, pick_m):
-    """Add each ``mass`` (kg) whose cell has drops (``c`` > 0) to the drop ``draw`` (its random index among them:
-    ``drops_in_cells``' ``members`` from ``first``), in order; the drop is tested again (RB) and fresh. Writes the
-    rows to ``picks`` and their masses once all are added to ``pick_m``; returns how many. The caller sets their
-    radius from their mass."""
+def give_to_drops(buf, fresh, members, first, c, u, mass, picks, pick_m):
+    """Add each ``mass`` (kg) whose cell has drops (``c`` > 0) to a random one of them (``drops_in_cells``'
+    ``members`` from ``first``; picked by the next uniform of ``u`` as ``constants.uniform_index`` picks), in
+    order; the drop is tested again (RB) and fresh. Writes the rows to ``picks`` and their masses once all are
+    added to ``pick_m``; returns how many. The caller sets their radius from their mass."""
     n_p = 0
     for q in range(len(c)):
         if c[q] > 0:
-            i = members[first[q] + draw[n_p]]
+            i = members[first[q] + min(int(u[n_p] * c[q]), c[q] - 1)]
             buf[i, M] += mass[q]
             buf[i, RB] = _INF
             fresh[i] = True
