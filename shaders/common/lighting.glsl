@@ -1,6 +1,7 @@
 // Surface shading: sun, sky ambient, street lamps and headlights (point / spot lights in candela).
 #include "common/brdf.glsl"
 #include "common/sky.glsl"
+#include "common/bits.glsl"
 
 // The lights (u_light_pos/dir/color[MAX_LIGHTS], u_light_count) are frame-block members (frame.glsl).
 #include "common/frame.glsl"
@@ -57,12 +58,6 @@ uint light_mask() {
     return u_light_count >= 32 ? g_light_mask : g_light_mask & ((1u << uint(u_light_count)) - 1u);
 }
 
-// The lowest light of mask, taken out of it (GLSL 3.30 has no findLSB: a power of two's float exponent is exact).
-int pop_light(inout uint mask) {
-    uint low = mask & (~mask + 1u);
-    mask ^= low;
-    return int(floatBitsToUint(float(low)) >> 23u) - 127;
-}
 
 // Light i at p: false beyond its range; else L, the unit direction from p to it, and E, the illuminance (lux,
 // RGB) it gives there, on a surface facing it — spot cone and low-beam pattern included, smoothly windowed to 0
@@ -86,7 +81,7 @@ vec3 shade_surface(Surface s, vec3 V) {
     vec3 color = brdf_direct(N, V, u_sun_dir, diffuse_color, f0, s.roughness) * u_sun_illum
                  * sun_visibility(s.position, N);
     for (uint m = light_mask(); m != 0u;) {
-        int i = pop_light(m);
+        int i = pop_bit(m);
         vec3 L, E;
         if (light_at(i, s.position, L, E)) color += brdf_direct(N, V, L, diffuse_color, f0, s.roughness) * E;
     }

@@ -31,7 +31,7 @@ vec3 sign_retroreflection(Surface s, vec3 V) {
     if (g_material != MAT_PAINT || s.position.y < 0.5) return vec3(0.0);
     vec3 sum = vec3(0.0);
     for (uint m = light_mask(); m != 0u;) {
-        int i = pop_light(m);
+        int i = pop_bit(m);
         vec3 L, E;
         if (!light_at(i, s.position, L, E)) continue;
         float alpha = degrees(acos(clamp(dot(L, V), -1.0, 1.0)));

@@ -160,7 +160,7 @@ vec3 road_light_highlights(vec3 P, vec3 N, vec3 V, float roughness, float cover)
     float alpha = max(roughness * roughness, 0.002);
     vec3 color = road_water_spec(N, V, u_sun_dir, alpha) * u_sun_illum;
     for (uint m = cover < 0.25 ? 0u : light_mask(); m != 0u;) {
-        int i = pop_light(m);
+        int i = pop_bit(m);
         vec3 L, E;
         if (light_at(i, P, L, E)) color += road_water_spec(N, V, L, alpha) * E;
     }

@@ -88,9 +88,15 @@ void main() {
     float cover = 0.0;
     vec3 wet_col = vec3(0.0);
     vec4 glint_dir = vec4(0.0);
+    // The taps' film first, then the refracted lookups of the wet taps only, lowest first as a loop over all
+    // would take them: where no fragment of a group has a wet tap (a wiped, dry glass) the lookups cost nothing
+    // on llvmpipe, which leaves a loop once no fragment iterates but runs an `if` masked. (The film's texture
+    // reads stay in uniform control flow, as their implicit derivatives need.)
+    vec4 film_k[5];   // per tap: mist (µm), and its cover as a film, a thin film and a bead haze
+    vec2 slope_k[5];  // per tap: the film's slope along s, t
+    uint wet = 0u;
     for (int k = 0; k < 5; ++k) {
-        vec2 st_k = st + DISC_TAPS[k] * film_radius;
-        vec2 uv_k = glass_uv(st_k);
+        vec2 uv_k = glass_uv(st + DISC_TAPS[k] * film_radius);
         vec4 w = texture(u_water, uv_k);
         float trail = clamp(texture(u_beads, uv_k).g, 0.0, 1.0);
         // A drop's trail collected the mist: the film is clearer along it.
@@ -98,8 +104,15 @@ void main() {
         float c_film = 1.0 - exp(-mist / 4.0);
         float c_thin = (1.0 - exp(-mist / 0.25)) * 0.35;  // a thin film (a drying wake): a faint streaky haze
         float c_bead = (1.0 - bead_sharp) * 0.12 * trail;  // beads far smaller than the blur: a dimpled haze
+        film_k[k] = vec4(mist, c_film, c_thin, c_bead);
+        slope_k[k] = w.zw;
+        if (min(max(max(c_film, c_thin), c_bead), 1.0) > 0.002) wet |= 1u << uint(k);
+    }
+    for (uint m = wet; m != 0u;) {
+        int k = pop_bit(m);
+        vec2 st_k = st + DISC_TAPS[k] * film_radius;
+        float mist = film_k[k].x, c_film = film_k[k].y, c_thin = film_k[k].z, c_bead = film_k[k].w;
         float c = min(max(max(c_film, c_thin), c_bead), 1.0);
-        if (c <= 0.002) continue;
         // Smooth (value-noise) tilt over 2 mm cells: the micro-droplets and ripples of the film, small slopes.
         vec2 g = st_k / 0.002;
         ivec2 cell = ivec2(floor(g));
@@ -110,7 +123,7 @@ void main() {
         vec2 j01 = vec2(ws_rand(cell + ivec2(0, 1), 3u), ws_rand(cell + ivec2(0, 1), 7u));
         vec2 j11 = vec2(ws_rand(cell + ivec2(1, 1), 3u), ws_rand(cell + ivec2(1, 1), 7u));
         vec2 jitter = mix(mix(j00, j10, f.x), mix(j01, j11, f.x), f.y) - 0.5;
-        vec2 slope = w.zw + jitter * (0.12 * (1.0 - exp(-mist / 10.0)) + 0.1 * c_thin + 0.2 * c_bead);
+        vec2 slope = slope_k[k] + jitter * (0.12 * (1.0 - exp(-mist / 10.0)) + 0.1 * c_thin + 0.2 * c_bead);
         vec3 out_dir;
         float transmit;
         vec3 col = through_water(v_pos, V, N, Ts, Tt, slope, u_film_lod, out_dir, transmit);

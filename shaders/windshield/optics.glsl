@@ -41,7 +41,7 @@ vec3 behind_glass(vec3 origin, vec3 dir, float lod) {
 vec3 glints(vec3 origin, vec3 dir) {
     vec3 sum = u_sun_illum * 0.3 * pow(max(dot(dir, u_sun_dir), 0.0), 3000.0) * 3001.0 / 6.2832;
     for (uint m = light_mask(); m != 0u;) {
-        int i = pop_light(m);
+        int i = pop_bit(m);
         vec3 L, E;
         if (!light_at(i, origin, L, E)) continue;
         float c = dot(dir, L);
