@@ -58,7 +58,6 @@ uint light_mask() {
     return u_light_count >= 32 ? g_light_mask : g_light_mask & ((1u << uint(u_light_count)) - 1u);
 }
 
-
 // Light i at p: false beyond its range; else L, the unit direction from p to it, and E, the illuminance (lux,
 // RGB) it gives there, on a surface facing it — spot cone and low-beam pattern included, smoothly windowed to 0
 // at the range. Every lit thing (surfaces, road water, drops, spray, glass glints) reads the lights through this.
