@@ -32,6 +32,7 @@ void main() {
     vec3 V = normalize(v_pos - u_camera_pos);
     vec3 N, Ts, Tt;
     glass_frame(V, v_nrm, N, Ts, Tt);
+    vec3 in_water = water_ray(V, N);
     vec2 ay = vec2(-v_axis.y, v_axis.x);
     float foot = max(length(dFdx(v_local)), length(dFdy(v_local)));
     int taps = blur > 0.3 * a ? 5 : 1;
@@ -53,7 +54,8 @@ void main() {
     float lod = u_drop_lod + (taps > 1 ? log2(1.0 + 4.0 * blur / a) : 0.0);
     vec3 sum = vec3(0.0);
     float weight = 0.0;
-    vec3 glint = vec3(0.0);
+    vec4 glint_dir = vec4(0.0);  // tap 0's ray out of the water, and its transmittance
+    vec3 sky_facing = normalize(N + 0.35 * Tt);  // the cap's normal tilted up the glass, towards the sky
     // A blur disc much wider than the drop sees all of it: the taps move from the pupil's disc onto the drop
     // itself, so the colour tends smoothly to the drop's mean instead of switching as taps cross its outline.
     float onto_drop = taps > 1 ? clamp(blur / a - 0.5, 0.0, 1.0) : 0.0;
@@ -73,19 +75,22 @@ void main() {
         vec2 slope = grad.x * v_axis + grad.y * ay;
         vec3 out_dir;
         float transmit;
-        vec3 col = through_water(v_pos, V, N, Ts, Tt, slope, lod, out_dir, transmit);
+        vec3 col = through_water(v_pos, in_water, N, Ts, Tt, slope, lod, out_dir, transmit);
         // Rim: past the Fresnel term, the light near the contact line is bent out of the lens's field (to
         // the car's body and the glass's own reflections): darker towards the outline.
         col *= 1.0 - u_rim * smoothstep(0.55, 1.0, d);
         // The bright sky over the glass in the part of the cap that faces it (its normal tilted up the glass
         // towards the sky): a small highlight. The sun and the lights glint of their own (optics.glsl).
         vec3 Nw = normalize(N - u_refraction * (slope.x * Ts + slope.y * Tt));
-        float h = max(dot(Nw, normalize(N + 0.35 * Tt)), 0.0);
+        float h = max(dot(Nw, sky_facing), 0.0);
         col += u_sky_light * (u_highlight / spread) * pow(h, 300.0 / spread);
-        // The lamps' glint, like the highlight, spread over the blur disc when defocused (its light kept).
-        if (transmit > 0.0 && k == 0) glint = glints(v_pos, out_dir) * u_exposure * transmit * 0.2 / spread;
+        if (k == 0 && transmit > 0.0) glint_dir = vec4(out_dir, transmit);
         sum += col * wk;
         weight += wk;
     }
+    // The lamps' glint along tap 0's ray, after the taps (in the loop llvmpipe ran its light loop masked at each
+    // tap), like the highlight spread over the blur disc when defocused (its light kept).
+    vec3 glint = glint_dir.w > 0.0 ? glints(v_pos, glint_dir.xyz) * u_exposure * glint_dir.w * 0.2 / spread
+                                   : vec3(0.0);
     f_color = vec4((sum / weight + glint) * cover, cover);
 }

@@ -74,6 +74,7 @@ void main() {
     vec3 V = normalize(v_pos - u_camera_pos);
     vec3 N, Ts, Tt;
     glass_frame(V, v_nrm, N, Ts, Tt);
+    vec3 in_water = water_ray(V, N);
     float film = texture(u_water, v_uv).y;
     vec2 here = gl_FragCoord.xy / vec2(textureSize(u_frame, 0));
 
@@ -108,6 +109,7 @@ void main() {
         slope_k[k] = w.zw;
         if (min(max(max(c_film, c_thin), c_bead), 1.0) > 0.002) wet |= 1u << uint(k);
     }
+    vec3 veil = sky_ambient(-N) * u_exposure * 0.9;
     for (uint m = wet; m != 0u;) {
         int k = pop_bit(m);
         vec2 st_k = st + DISC_TAPS[k] * film_radius;
@@ -126,9 +128,9 @@ void main() {
         vec2 slope = slope_k[k] + jitter * (0.12 * (1.0 - exp(-mist / 10.0)) + 0.1 * c_thin + 0.2 * c_bead);
         vec3 out_dir;
         float transmit;
-        vec3 col = through_water(v_pos, V, N, Ts, Tt, slope, u_film_lod, out_dir, transmit);
+        vec3 col = through_water(v_pos, in_water, N, Ts, Tt, slope, u_film_lod, out_dir, transmit);
         // Mist scatters a little of the sky's light towards the eye: the film is a brighter veil.
-        col = mix(col, sky_ambient(-N) * u_exposure * 0.9, 0.1 * c_film);
+        col = mix(col, veil, 0.1 * c_film);
         if (k == 0 && transmit > 0.0) glint_dir = vec4(out_dir, transmit);  // glints from the centre tap only
         wet_col += col * c;
         cover += c;
@@ -145,7 +147,7 @@ void main() {
         if (wb > 0.0) {
             vec3 out_dir;
             float transmit;
-            vec3 col = through_water(v_pos, V, N, Ts, Tt, bead.yz, u_drop_lod, out_dir, transmit);
+            vec3 col = through_water(v_pos, in_water, N, Ts, Tt, bead.yz, u_drop_lod, out_dir, transmit);
             wet_col = mix(wet_col, col, wb / max(max(cover, wb), 1e-6));
             cover = max(cover, wb);
         }

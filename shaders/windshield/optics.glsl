@@ -59,13 +59,19 @@ void glass_frame(vec3 V, vec3 n_geom, out vec3 N, out vec3 Ts, out vec3 Tt) {
     if (dot(Tt, u_axis_t) < 0.0) Tt = -Tt;
 }
 
+// The view ray V in the water on the glass, whose outward normal is N: what through_water takes (made once per
+// fragment: the taps of a fragment share it).
+vec3 water_ray(vec3 V, vec3 N) {
+    return refract(V, -N, 1.0 / N_WATER);
+}
+
 // Through water whose outer surface has slope (d height / ds, d height / dt): the refracted lookup of the frame
 // behind, less the Fresnel reflection at the water–air surface, which shows the cabin instead (all of it past
 // the critical angle). Returns the colour; out_dir is the ray leaving the water (zero where it is reflected) and
 // transmit the Fresnel transmittance.
-vec3 through_water(vec3 origin, vec3 V, vec3 N, vec3 Ts, vec3 Tt, vec2 slope, float lod,
+// ``in_water``: the view ray V refracted into the water through the glass (water_ray).
+vec3 through_water(vec3 origin, vec3 in_water, vec3 N, vec3 Ts, vec3 Tt, vec2 slope, float lod,
                    out vec3 out_dir, out float transmit) {
-    vec3 in_water = refract(V, -N, 1.0 / N_WATER);
     vec3 Nw = normalize(N - u_refraction * (slope.x * Ts + slope.y * Tt));
     out_dir = refract(in_water, -Nw, N_WATER);
     if (dot(out_dir, out_dir) < 0.5) {
