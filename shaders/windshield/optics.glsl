@@ -68,8 +68,8 @@ vec3 water_ray(vec3 V, vec3 N) {
 // Through water whose outer surface has slope (d height / ds, d height / dt): the refracted lookup of the frame
 // behind, less the Fresnel reflection at the water–air surface, which shows the cabin instead (all of it past
 // the critical angle). Returns the colour; out_dir is the ray leaving the water (zero where it is reflected) and
-// transmit the Fresnel transmittance.
-// ``in_water``: the view ray V refracted into the water through the glass (water_ray).
+// transmit the Fresnel transmittance. in_water: the view ray refracted into the water through the glass
+// (water_ray).
 vec3 through_water(vec3 origin, vec3 in_water, vec3 N, vec3 Ts, vec3 Tt, vec2 slope, float lod,
                    out vec3 out_dir, out float transmit) {
     vec3 Nw = normalize(N - u_refraction * (slope.x * Ts + slope.y * Tt));
