@@ -88,9 +88,8 @@ void main() {
         sum += col * wk;
         weight += wk;
     }
-    // The lamps' glint along tap 0's ray, after the taps (in the loop llvmpipe ran its light loop masked at each
-    // tap), like the highlight spread over the blur disc when defocused (its light kept).
-    vec3 glint = glint_dir.w > 0.0 ? glints(v_pos, glint_dir.xyz) * u_exposure * glint_dir.w * 0.2 / spread
-                                   : vec3(0.0);
+    // The lamps' glint along tap 0's ray, like the highlight spread over the blur disc when defocused (its light
+    // kept).
+    vec3 glint = exposed_glints(v_pos, glint_dir) * 0.2 / spread;
     f_color = vec4((sum / weight + glint) * cover, cover);
 }

@@ -137,8 +137,7 @@ void main() {
     }
     wet_col /= max(cover, 1e-6);
     cover *= 0.2;
-    vec3 glint = glint_dir.w > 0.0 ? glints(v_pos, glint_dir.xyz) * u_exposure * glint_dir.w * 0.05 * cover
-                                   : vec3(0.0);
+    vec3 glint = exposed_glints(v_pos, glint_dir) * 0.05 * cover;
     // The beads of drops' trails, each a tiny lens, where the eye resolves them (the glass close-up).
     if (bead_sharp > 0.0) {
         vec2 uv = glass_uv(st);

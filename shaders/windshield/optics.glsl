@@ -50,6 +50,13 @@ vec3 glints(vec3 origin, vec3 dir) {
     return sum;
 }
 
+// The glints along a tap's ray out of the water (ray.xyz), exposed and weighted by its transmittance (ray.w); none
+// where the ray turned back (w = 0). Taken once a fragment, after its taps' loop: in the loop llvmpipe would run the
+// lights' loop masked at every tap.
+vec3 exposed_glints(vec3 origin, vec4 ray) {
+    return ray.w > 0.0 ? glints(origin, ray.xyz) * u_exposure * ray.w : vec3(0.0);
+}
+
 // The glass's tangent frame at a point: outward normal N (away from the eye along V), Ts along +s, Tt along +t.
 void glass_frame(vec3 V, vec3 n_geom, out vec3 N, out vec3 Ts, out vec3 Tt) {
     N = normalize(n_geom);

@@ -85,7 +85,6 @@ def test_the_grid_leaves_out_lights_that_cannot_reach(night):
     assert counts[0].mean() < counts[-1].mean()  # bottom row (the hood, near) against the top (sky: no depth bound)
 
 
-
 def test_a_window_being_resized_keeps_a_few_grids(gl_ctx):
     """A new view size makes a grid; past KEPT_GRIDS the one used longest ago goes, and the newest is the view's."""
     from rain_core.gfx.light_grid import KEPT_GRIDS
