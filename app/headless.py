@@ -5,7 +5,9 @@ terminal a progress line (frames, frames/s, ETA) is rewritten in place, and a lo
 LONG_RUN_FRAMES frames) first says how long it will take from the pace of frames 2–5 (the first one compiles
 shaders); not on a terminal (logs, CI) it stays quiet. Ctrl-C stops it cleanly: the PNGs and label lines written
 so far stay, and a video is finalised with every frame written so far (exit 130). ``--quality offline`` steps
-each frame's shutter in ``--subframes`` slices and records their average (rain_core.session.offline).
+each frame's shutter in ``--subframes`` slices and records their average (rain_core.session.offline). A run that
+keeps only a screenshot draws only its last frame: the frames before advance the simulations undrawn
+(``Session.step(draw=False)``).
 """
 
 from __future__ import annotations
@@ -82,6 +84,7 @@ def _run(args, sim, DatasetWriter) -> int:
         from app.panel import RainManagerPanel
 
         panel = RainManagerPanel(sim.ctx, args.size, sim.scene)
+    every_frame = recorder is not None or writer is not None or panel is not None
     dt = 1.0 / args.fps
     subframes = args.subframes if getattr(args, "quality", "realtime") == "offline" else 1
     frames = frame_count(args.seconds, args.fps)
@@ -94,14 +97,18 @@ def _run(args, sim, DatasetWriter) -> int:
         ctrl_c.__enter__()
         for index in range(frames):
             ctrl_c.check()  # a Ctrl-C a finaliser dropped (while Numba loaded a kernel) stops the run here
-            sim.step(dt, subframes=subframes)
-            if panel is not None:
-                panel.draw(dt, sim.scene.renderer.ldr)
-            cap = sim.capture(labels=labels)
-            if recorder is not None:
-                recorder.add(cap.rgb)
-            if writer is not None:
-                writer.add(cap)
+            # A frame nobody keeps is not drawn (a screenshot alone needs the last): the simulations advance the
+            # same (Session.step's draw).
+            drawn = every_frame or index == frames - 1
+            sim.step(dt, subframes=subframes, draw=drawn)
+            if drawn:
+                if panel is not None:
+                    panel.draw(dt, sim.scene.renderer.ldr)
+                cap = sim.capture(labels=labels)
+                if recorder is not None:
+                    recorder.add(cap.rgb)
+                if writer is not None:
+                    writer.add(cap)
             if index == frames - 1 and args.screenshot:
                 path = save_png(cap.rgb, args.screenshot)
                 print(f"rainroad: wrote {path}")

@@ -30,7 +30,8 @@ class Scene:
 
     ``step(dt_s, drive=None)`` advances time (``drive``: a DriveInput-like object with throttle, brake, steer,
     reverse; None lets the autopilot drive). ``render(camera=None)`` draws a frame (default: the camera mode in
-    settings) and returns it; ``image()`` gives the tone-mapped uint8 picture.
+    settings) and returns it (``render(draw=False)``: the effects' simulations advance, nothing is drawn);
+    ``image()`` gives the tone-mapped uint8 picture of the last frame drawn.
     """
 
     def __init__(self, ctx, size: tuple[int, int], settings: Settings | None = None, seed: int = 1,
@@ -110,9 +111,11 @@ class Scene:
                      world=self.world, ego=self.ego, vehicles=self.vehicles, weather=self.weather_state,
                      settings=self.settings, headlights_on=headlights, flash=flash, storm=self.storm)
 
-    def render(self, camera: Camera | None = None) -> Frame:
+    def render(self, camera: Camera | None = None, draw: bool = True) -> Frame:
+        """The frame of the current state, rendered (``draw=False``: its simulations advance, nothing is drawn;
+        see ``Renderer.render``)."""
         frame = self.frame(camera)
-        self.renderer.render(frame)
+        self.renderer.render(frame, draw)
         return frame
 
     def image(self) -> np.ndarray:

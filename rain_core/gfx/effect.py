@@ -16,6 +16,9 @@
    was ~28 ms of llvmpipe's vertex work a frame on the main thread; before the first draw there is nothing to
    run. An effect whose ``prepare`` is called without its ``upload`` (a benchmark, a test) uploads there.
    Inactive effects get ``unbind_scene`` so the scene shader sees their neutral values.
+4. A frame nobody looks at (``Renderer.render(frame, draw=False)``: a headless run keeps only its last picture)
+   runs 1–3 up to the updates, then only the ``state_stages`` (stages whose GL work the next frames build on);
+   ``rc.drawn`` is False in its updates, which may skip what serves the picture alone.
 
 Effects never assign renderer attributes; they share data only through ``rc.shared`` (``SharedResources``).
 Every effect is built the same way: ``EffectClass(ctx, settings=None, *, seed=0, shaders=None)``.
@@ -36,6 +39,10 @@ class Effect:
 
     name = "effect"
     stages: tuple[str, ...] = ()
+    # The stages whose GL work carries the effect's state from one frame to the next (the spray's upload writes
+    # only the new parcels into its rings; the windshield's prepare relaxes last frame's film texture). A frame
+    # that is not drawn (Renderer.render(frame, draw=False)) runs these after the updates, and no other stage.
+    state_stages: tuple[str, ...] = ()
 
     def observe(self, frame: Frame) -> None:
         """Follow the frame while idle (called for every effect, every frame, before ``active``)."""

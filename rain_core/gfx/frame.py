@@ -196,6 +196,8 @@ class RenderContext:
     # The tile size (pixels) of the light grid the renderer builds for this view after its depth pre-pass
     # (gfx/light_grid.py); 0: no grid, every light is visited everywhere (contexts made outside the renderer).
     light_grid_px: int = 0
+    # Whether the frame's view is drawn (Renderer.render(frame, draw=False): only the simulations advance).
+    drawn: bool = True
 
     @property
     def view_proj(self) -> np.ndarray:

@@ -90,6 +90,7 @@ class Renderer:
         self._effect_lights = None  # LightSet the active effects add this frame (Effect.frame_lights), or None
         self._proj_cache = None  # (lens and size, projection matrix)
         self._clear_air = None  # (lighting, its clear-air and no-shadow uniforms)
+        self._undrawn_s = 0.0  # s stepped in frames not drawn since the eye last metered one (render(draw=False))
 
     @property
     def scene_prog(self) -> moderngl.Program:
@@ -243,18 +244,22 @@ class Renderer:
         self._gpu_source = timer.gpu_source
         self.stats.append(PassStat(name, True, cpu, gpu))
 
-    def render(self, frame: Frame) -> None:
-        """Run every pass of one frame into the HDR target and tone-map it."""
+    def render(self, frame: Frame, draw: bool = True) -> None:
+        """Run every pass of one frame into the HDR target and tone-map it. ``draw=False``: a frame nobody looks
+        at (a headless run that keeps only its last picture): the effects observe and update (their simulations
+        advance the same) and run the stages that carry their state on the GPU from frame to frame
+        (``Effect.state_stages``); nothing of the view is drawn, and ``image()`` still holds the last drawn frame.
+        The next drawn frame's eye adapts over the time since the last one it metered."""
         self.scene.begin_frame()
         try:
-            self._render(frame)
+            self._render(frame, bool(draw))
         finally:
             self.scene.end_frame()
             self._lights_cache = None
             self._mirror_plans = []
             self._effect_lights = None
 
-    def _render(self, frame: Frame) -> None:
+    def _render(self, frame: Frame, draw: bool) -> None:
         ctx = self.ctx
         if self._gpu_timing:  # the timer queries due (two frames old), read before any pass (PassTimer.collect)
             for timer in self._timers.values():
@@ -281,6 +286,10 @@ class Renderer:
         rc.view_proj  # noqa: B018 - made and kept by the context
         rc.active = active
         rc.shared = SharedResources()
+        if not draw:
+            rc.drawn = False
+            self._advance(frame, rc, active)
+            return
         # The frame's plan before its first GL call: on llvmpipe each draw runs the vertex work on this thread and
         # leaves Python's caches cold, and this small work cost 4-10 times as much between the passes (the
         # mirror plan ~70 µs there, ~6 µs here). The draw lists are kept for the frame (SceneDrawer.begin_frame).
@@ -296,22 +305,14 @@ class Renderer:
             rc.uniforms.update(self.shadow.frame_uniforms(rc))
         rc.frame_block_bytes()  # every frame uniform is known now: packed here, once, for all the passes
         rc.inv_view_proj  # noqa: B018 - for the sky and the post passes (a mirror view's is then this one's mirror)
-        for effect in active:
-            self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
-            # Its note is written when the table is asked for (pass_table): a headless frame never reads it.
-            self._to_describe.append((self.stats[-1], effect))
-        for effect in active:  # what the updates made new, written before the first draw (gfx/effect.py)
-            if "upload" in effect.stages:
-                self._timed(f"{effect.name}.upload", lambda e=effect: e.render("upload", rc))
+        self._update_effects(frame, rc, active)
+        self._run_stage("upload", rc, active)  # what the updates made new, written before the first draw
         if sun_up:
             self._timed("shadow", lambda: self.shadow.render(
                 rc, self.scene.draw_items(rc, False, cull=self.shadow.light_view_proj(rc))))
         else:  # the sun is down: nothing casts a sun shadow
             self.stats.append(PassStat("shadow", False))
-        for effect in active:
-            if "prepare" in effect.stages:
-                self._timed(f"{effect.name}.prepare", lambda e=effect: e.render("prepare", rc))
-
+        self._run_stage("prepare", rc, active)
         if mirrors:
             self._timed("mirrors", lambda: self.mirrors.render(rc, mirrors))
         else:  # outside the car, out of view, too small or switched off
@@ -335,9 +336,11 @@ class Renderer:
         auto = bool(view is not None and view.auto_exposure)
         compensation = float(view.exposure_compensation_ev) if view is not None else 0.0
         self._display_ev = (auto, compensation)
+        # The eye adapts over the time since the frame it last metered: this frame's step and any undrawn ones.
+        unmetered_s, self._undrawn_s = self._undrawn_s, 0.0
         if auto:
-            self._timed("exposure", lambda: self.exposure.update(self.hdr.color, frame.dt_s, view.adaptation_s,
-                                                                 compensation))
+            self._timed("exposure", lambda: self.exposure.update(self.hdr.color, frame.dt_s + unmetered_s,
+                                                                 view.adaptation_s, compensation))
         else:
             self.stats.append(PassStat("exposure", False))
             self.exposure.reset()  # switched back on later: adapt from what the eye sees then
@@ -355,6 +358,28 @@ class Renderer:
             self._tonemap_vao.render(moderngl.TRIANGLES, vertices=3)
 
         self._timed("tonemap", tonemap)
+
+    def _update_effects(self, frame: Frame, rc: RenderContext, active: tuple) -> None:
+        for effect in active:
+            self._timed(f"{effect.name}.update", lambda e=effect: e.update(frame, rc))
+            # Its note is written when the table is asked for (pass_table): a headless frame never reads it.
+            self._to_describe.append((self.stats[-1], effect))
+
+    def _run_stage(self, stage: str, rc: RenderContext, active: tuple, state_only: bool = False) -> None:
+        """``stage`` of the active effects that have it (``state_only``: of those that list it in state_stages)."""
+        for effect in active:
+            if stage in effect.stages and (not state_only or stage in effect.state_stages):
+                self._timed(f"{effect.name}.{stage}", lambda e=effect: e.render(stage, rc))
+
+    def _advance(self, frame: Frame, rc: RenderContext, active: tuple) -> None:
+        """An undrawn frame (``render(frame, draw=False)``) after its observes: the active effects' updates and
+        their state stages, in the drawn frame's order (updates, uploads, prepares)."""
+        for effect in active:  # an update may read the medium, as in a drawn frame
+            rc.uniforms.update(effect.frame_uniforms(frame))
+        self._update_effects(frame, rc, active)
+        self._run_stage("upload", rc, active, state_only=True)
+        self._run_stage("prepare", rc, active, state_only=True)
+        self._undrawn_s += frame.dt_s
 
     # --- output ---------------------------------------------------------------------------------------------
     def image(self) -> np.ndarray:

@@ -104,6 +104,7 @@ class Session:
         self.frame_index = 0  # step() calls so far
         self._frame = None  # the Frame last rendered
         self._rgb = None  # the averaged picture of an offline-quality step (None: the last render)
+        self._undrawn = False  # the last step was not drawn (step(draw=False)): nothing to capture
         self._closed = False
 
     # --- context manager ------------------------------------------------------------------------------------
@@ -149,31 +150,39 @@ class Session:
     def _camera(self) -> Camera | None:
         return self._fixed_camera  # None: the scene's camera mode (driver or chase)
 
-    def step(self, dt_s: float, drive=None, subframes: int = 1) -> None:
+    def step(self, dt_s: float, drive=None, subframes: int = 1, draw: bool = True) -> None:
         """Advance by ``dt_s`` seconds in [0, 3600] and render. ``drive``: an object with throttle, brake (0…1),
         steer (−1…1) and reverse (bool), e.g. app.controls.DriveInput; None lets the autopilot drive. A step
         longer than MAX_FRAME_DT_S (0.25 s) is split into equal sub-steps, each rendered.
 
         ``subframes`` N in [1, 256] > 1: offline quality (rain_core.session.offline) — the last
-        min(camera.exposure_s, dt_s) seconds are stepped in N sub-steps whose pictures are averaged."""
+        min(camera.exposure_s, dt_s) seconds are stepped in N sub-steps whose pictures are averaged.
+
+        ``draw=False``: a step nobody looks at (a run that keeps only its last picture). The simulations, and what
+        the GPU holds of them, advance as in a drawn step, in the same sub-steps; no picture is made, and
+        ``capture`` refuses until a drawn step. The next drawn step's automatic exposure adapts over the whole
+        time since the last drawn one, towards what it sees then."""
         self._check_open()
         dt = checks.number("dt_s", dt_s, 0.0, MAX_STEP_S, "s")
         subframes = check_subframes(subframes)
+        if not isinstance(draw, bool):
+            raise ValueError(f"draw must be True or False, got {draw!r}")
         self._rgb = None
         shutter = min(self.scene.settings.camera.exposure_s, dt) if subframes > 1 else 0.0
         if subframes == 1 or dt > shutter:
-            self._advance(dt - shutter, drive)
+            self._advance(dt - shutter, drive, draw)
         if subframes > 1:
-            self._rgb = self._shutter(shutter, subframes, drive)
+            self._rgb = self._shutter(shutter, subframes, drive, draw)
+        self._undrawn = not draw
         self.frame_index += 1
 
-    def _advance(self, dt: float, drive) -> None:
+    def _advance(self, dt: float, drive, draw: bool = True) -> None:
         substeps = max(1, math.ceil(dt / MAX_FRAME_DT_S))
         for _ in range(substeps):
             self.scene.step(dt / substeps, drive)
-            self._frame = self.scene.render(self._camera())
+            self._frame = self.scene.render(self._camera(), draw)
 
-    def _shutter(self, shutter_s: float, subframes: int, drive) -> np.ndarray:
+    def _shutter(self, shutter_s: float, subframes: int, drive, draw: bool = True) -> np.ndarray | None:
         camera = self.scene.settings.camera
         exposure = camera.exposure_s
         lo = field_info("camera.exposure_s").range[0]
@@ -182,11 +191,12 @@ class Session:
             camera.exposure_s = max(exposure / subframes, lo)  # each sub-frame's streaks cover only its slice
             for _ in range(subframes):
                 self.scene.step(shutter_s / subframes, drive)
-                self._frame = self.scene.render(self._camera())
-                acc.add(self.scene.image())
+                self._frame = self.scene.render(self._camera(), draw)
+                if draw:
+                    acc.add(self.scene.image())
         finally:
             camera.exposure_s = exposure
-        return acc.result()
+        return acc.result() if draw else None
 
     @property
     def time_s(self) -> float:
@@ -212,6 +222,9 @@ class Session:
         to the cloud base, cd/m²; 0 between flashes), exposure_ev100 (the exposure the frame was displayed at,
         after the automatic exposure's adaptation)."""
         self._check_open()
+        if self._undrawn:
+            raise ValueError("the last step was not drawn (step(..., draw=False)): capture after a step with "
+                             "draw=True")
         if self._frame is None:
             self._frame = self.scene.render(self._camera())
         rgb = self._rgb if self._rgb is not None else self.scene.image()

@@ -110,11 +110,11 @@ def test_an_error_mid_run_finalises_the_video(tmp_path, monkeypatch, capsys):
     calls = {"n": 0}
     step = Session.step
 
-    def failing_step(self, dt_s, drive=None, subframes=1):
+    def failing_step(self, dt_s, drive=None, subframes=1, draw=True):
         calls["n"] += 1
         if calls["n"] == 4:
             raise KeyboardInterrupt
-        step(self, dt_s, drive, subframes)
+        step(self, dt_s, drive, subframes, draw)
 
     monkeypatch.setattr(Session, "step", failing_step)
     out = tmp_path / "cut.mp4"
@@ -123,7 +123,7 @@ def test_an_error_mid_run_finalises_the_video(tmp_path, monkeypatch, capsys):
     assert len(decoded_frames(out)) == 3
 
     calls["n"] = 0
-    def boom(self, dt_s, drive=None, subframes=1):
+    def boom(self, dt_s, drive=None, subframes=1, draw=True):
         raise RuntimeError("boom")
 
     monkeypatch.setattr(Session, "step", boom)

@@ -171,7 +171,8 @@ def test_offline_quality_averages_sub_frames_across_the_shutter(session):
     calls, shown = [], []
     step, render = sim.scene.step, sim.scene.render
     sim.scene.step = lambda dt, drive=None: (calls.append(dt), step(dt, drive))
-    sim.scene.render = lambda cam=None: (shown.append(sim.settings.camera.exposure_s), render(cam))[1]
+    sim.scene.render = lambda cam=None, draw=True: (shown.append(sim.settings.camera.exposure_s),
+                                                     render(cam, draw))[1]
     sim.step(0.1, subframes=4)
     assert calls == pytest.approx([0.08, 0.005, 0.005, 0.005, 0.005])  # up to the shutter, then 4 slices of it
     assert shown == pytest.approx([0.02, 0.005, 0.005, 0.005, 0.005])  # each slice's streaks cover only it

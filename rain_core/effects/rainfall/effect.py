@@ -261,7 +261,7 @@ class RainfallEffect(Effect):
             self._prev_cam = (np.asarray(frame.camera.position, dtype=np.float64).copy(), frame.time_s)
         self.last_update = upd
         self._prepared = None
-        if upd.rate_mm_h > 0.0 and getattr(rc, "lights", None) is not None:
+        if upd.rate_mm_h > 0.0 and getattr(rc, "lights", None) is not None and getattr(rc, "drawn", True):
             # The transparent pass's lights and uniforms, made now: this context draws it, and here the CPU is
             # not shared with the rasteriser still drawing the passes before (llvmpipe: ~3x the time there).
             self._prepared = (rc, rc.lights, upd, self._frame_values(upd, rc, s, self._lights(rc, upd.boxes)))

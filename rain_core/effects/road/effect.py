@@ -205,6 +205,8 @@ class RoadEffect(Effect):
         standing.cache_key = key
         rc.shared.film_depth_fn = standing
         self._reflection_valid = False
+        if not rc.drawn:  # the rest plans the frame's picture: the cabin, the scene's inputs, the reflection
+            return
         ego = frame.ego
         if frame.camera.inside_car and ego is not None:
             # The main view's u_road_cabin made now, before the frame's draws (LAPACK's code is warm: the renderer

@@ -34,6 +34,9 @@ class SprayEffect(Effect):
 
     name = "spray"
     stages = ("upload", "transparent")  # upload: the new parcels into the GPU rings (update is CPU work alone)
+    # Each frame's new parcels written as they come, drawn or not (left for the next drawn frame, their ranges
+    # would pile up and be written at once there, a slot as often as the ring wrapped over it).
+    state_stages = ("upload",)
 
     def __init__(self, ctx: moderngl.Context, settings=None, *, seed: int = 0, shaders=None):
         self.ctx = ctx

@@ -73,6 +73,9 @@ class WindshieldEffect(WaterPass, Effect):
 
     name = "windshield"
     stages = ("upload", "prepare", "overlay")
+    # The water pass (upload, prepare) relaxes last frame's film texture and adds the step's trails: the glass's
+    # state on the GPU, stepped in every frame, drawn or not.
+    state_stages = ("upload", "prepare")
 
     def __init__(self, ctx, settings=None, *, seed: int = 0, shaders=None, spec: VehicleSpec = CAR_SPEC):
         self.ctx = ctx
