@@ -387,11 +387,12 @@ def _effect_of(pass_name: str) -> str:
 def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 0.0, frames: int = 30,
                  warmup: int = 8, gpu_timing: bool = True, dt_s: float = 1.0 / 30.0, seed: int = 1,
                  counter: GLCounter | None = None, ripples_backend: str = "auto", overrides=(),
-                 py_frames: int = 3) -> dict:
+                 py_frames: int = 3, draw: bool = True) -> dict:
     """Render ``warmup + frames`` frames of one case; medians over the last ``frames``. ``ripples_backend``:
     the ripples effect's solver ("auto" times the paths on this machine; on llvmpipe it picks numpy32).
     ``overrides``: (settings path, value) pairs set on top of the heavy-rain settings (``--set``). ``py_frames``:
-    frames traced after the timed ones for the Python lines and calls (``trace_python``; 0: none).
+    frames traced after the timed ones for the Python lines and calls (``trace_python``; 0: none). ``draw``
+    False: frames nobody looks at (``Renderer.render(frame, draw=False)``: the updates and the state stages).
 
     Returns {"rows": {name: {cpu_ms, gl_ms, gl_calls, queries, upload_kb, uniform_kb, read_kb, gpu_ms, gpu_share}},
     "frame": {…the same for the whole frame…, wall_ms}, "passes": [pass names in order], …}. Rows are the
@@ -418,6 +419,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
 
     Renderer._timed = timed
     scene = None
+    # (a tree before undrawn frames has no draw argument: measured drawn only)
+    render = (lambda: scene.render()) if draw else (lambda: scene.render(draw=False))
     try:
         scene = Scene(ctx, size, settings=with_overrides(heavy_rain_settings(budget), overrides), seed=seed,
                       gpu_timing=gpu_timing)
@@ -441,7 +444,7 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             scene.step(dt_s, drive)
             t1 = clock()
             counter.bucket = BETWEEN_BUCKET
-            scene.render()
+            render()
             t2 = clock()
             counter.bucket = "finish"
             ctx.finish()
@@ -458,7 +461,7 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             counter.bucket = STEP_BUCKET
             scene.step(dt_s, drive)
             counter.bucket = BETWEEN_BUCKET
-            scene.render()
+            render()
             counter.bucket = "finish"
             ctx.finish()
             counter.bucket = BETWEEN_BUCKET
@@ -479,6 +482,7 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
         _add_python(rows, frame, py_lines, py_calls)
     return {"size": tuple(size), "budget": int(budget), "speed_kmh": float(speed_kmh), "frames": frames,
             "ripples_backend": ripples_backend, "ripples_solver": solver, "skip_draws": counter.skip_draws,
+            "drawn": bool(draw),
             "warmup": warmup, "dt_s": float(dt_s), "gpu_timing": gpu_timing, "overhead_ns": counter.overhead_ns,
             "clock": counter.clock,
             "passes": order,
@@ -709,6 +713,8 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
             f"{args.ripples_backend}"
             + (", draws skipped (--skip-draws; the solver as auto picks it with draws)"
                if getattr(args, "skip_draws", False) else "")
+            + (", frames not drawn (--undrawn: the updates and the effects' state stages alone)"
+               if getattr(args, "undrawn", False) else "")
             + "".join(f", {path} = {value!r}" for path, value in getattr(args, "overrides", ())) + "\n\n"
             f"rain_core: {Path(rain_core.__file__).parent}; CPU simulations: {path}; GL: {renderer}\n\n"
             "Method: moderngl's driver-entering methods (draws, buffer/texture writes and reads, texture and "
@@ -784,6 +790,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--skip-draws", action="store_true",
                    help="count the draws without making them: the CPU figures without llvmpipe's vertex work on "
                         "this thread (pixels meaningless; see the module docstring)")
+    p.add_argument("--undrawn", action="store_true",
+                   help="frames nobody looks at (Session.step(draw=False), a headless run's frames before its "
+                        "screenshot): the simulations and their state stages, no view drawn")
     args = p.parse_args(argv)
     if args.jit != "auto":
         try:
@@ -835,7 +844,8 @@ def main(argv=None) -> int:
             for speed, budget in cases:
                 result = measure_case(ctx, args.size, budget, speed, args.frames, args.warmup, args.gpu_timing,
                                       counter=counter, ripples_backend=args.ripples_backend,
-                                      overrides=args.overrides, py_frames=args.py_frames, dt_s=1.0 / args.fps)
+                                      overrides=args.overrides, py_frames=args.py_frames, dt_s=1.0 / args.fps,
+                                      draw=not args.undrawn)
                 rounds[(speed, budget)].append(result)
                 if args.rounds > 1:
                     print(f"round {index + 1}/{args.rounds}, {case_label(result)}: "
