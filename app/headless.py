@@ -59,9 +59,11 @@ def run_headless(args, settings) -> int:
         return 1
     from rain_core import jit
 
-    if jit.active() and jit.cold():  # the scene's effects (and their kernels) exist now
-        _say("rainroad: compiling the CPU kernels on first use (about a minute, once: they are cached; "
-             f"{jit.ENV_VAR}=0 runs without them, python -m rain_core.warmup compiles them ahead)")
+    cold = jit.cold_count() if jit.active() else 0  # the scene's effects (and their kernels) exist now
+    if cold:
+        _say(f"rainroad: compiling {cold} CPU kernel{'s' if cold > 1 else ''} on first use (up to a second each, "
+             f"once: they are cached; {jit.ENV_VAR}=0 runs without them, python -m rain_core.warmup compiles "
+             "them ahead)")
     with sim:
         return _run(args, sim, DatasetWriter)
 

@@ -297,12 +297,18 @@ def _stamp_path() -> Path | None:
 def cold() -> bool:
     """Whether the kernels defined so far would compile on their first call (nothing current on disk and no
     warm-up has finished for these sources)."""
+    return cold_count() > 0
+
+
+def cold_count() -> int:
+    """How many of the kernels defined so far have no current compilation on disk (0 once a warm-up finished for
+    these sources): each compiles on its first call, up to about a second."""
     if not AVAILABLE or not _KERNELS:
-        return False
+        return 0
     stamp = _stamp_path()
     if stamp is not None and stamp.exists():
-        return False
-    return not all(_loads_from_disk(d) for d in _KERNELS)
+        return 0
+    return sum(not _loads_from_disk(d) for d in _KERNELS)
 
 
 def mark_warm() -> None:

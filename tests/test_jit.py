@@ -90,14 +90,16 @@ def test_no_warm_up_when_warm_or_off(monkeypatch):
 
 @pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed")
 def test_cold_reads_the_disk_cache_and_the_stamp(monkeypatch, tmp_path):
-    monkeypatch.setattr(jit, "_KERNELS", [_dot])
+    monkeypatch.setattr(jit, "_KERNELS", [_dot, _dot, _dot])
     _dot(np.ones(2), np.ones(2))  # compiled (or loaded) and saved: current on disk
-    monkeypatch.setattr(jit, "_loads_from_disk", lambda d: False)
+    monkeypatch.setattr(jit, "_loads_from_disk", lambda d: d is not _dot)
     stamp = tmp_path / "k.warm"
     monkeypatch.setattr(jit, "_stamp_path", lambda: stamp)
-    assert jit.cold()
+    assert jit.cold() and jit.cold_count() == 3
+    monkeypatch.setattr(jit, "_KERNELS", [_dot, _dot.py_func])  # one cold, one "on disk"
+    assert jit.cold() and jit.cold_count() == 1
     jit.mark_warm()
-    assert stamp.exists() and not jit.cold()
+    assert stamp.exists() and not jit.cold() and jit.cold_count() == 0
 
 
 @pytest.mark.skipif(not jit.AVAILABLE, reason="Numba not installed")
