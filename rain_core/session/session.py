@@ -11,8 +11,9 @@ with Session(size=(320, 180), seed=1, camera="driver") as sim:
 ```
 
 A thin owner of a ``rain_core.scene.Scene`` (``sim.scene``) and, unless one is given, its headless EGL context.
-Every step renders: the effects (spray, ripples, the water on the glass) advance in their render pass, so a
-frame that was not rendered would leave them behind the simulation.
+Every step runs the renderer: the effects (spray, ripples, the water on the glass) advance in its updates and in
+the GL stages that carry their state. ``step(dt_s, draw=False)`` runs only those, for a step whose picture is
+not kept (``sim.step(1 / 30, draw=i == 29)`` in the loop above keeps the last): the same simulation, no picture.
 """
 
 from __future__ import annotations
