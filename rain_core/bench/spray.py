@@ -238,7 +238,7 @@ def _render_truck(ctx, budget, seconds, frames, size, enabled=True):
     scene.settings.spray.enabled = enabled
     cpu, gpu, scene_gpu = [], [], []
     for _ in range(frames):
-        run(scene, effect, 1.0 / 30.0, after_step=keeper.place)
+        run(scene, 1.0 / 30.0, after_step=keeper.place)
         stats = {s.name: s for s in scene.renderer.stats}
         if enabled:
             cpu.append(stats["spray.update"].cpu_ms + stats["spray.prepare"].cpu_ms)
@@ -318,7 +318,7 @@ def _car_ahead_scene(ctx, gap, quick):
     scene.traffic.vehicles, scene.traffic.lanes, scene.traffic.desired_speeds_m_s = [car], [0], [v]
     keeper = GapKeeper(scene, car, gap)
     keeper.place()
-    run(scene, effect, 2.0 if quick else 3.0, after_step=keeper.place)
+    run(scene, 2.0 if quick else 3.0, after_step=keeper.place)
     return scene, effect, keeper
 
 

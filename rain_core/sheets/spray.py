@@ -111,7 +111,7 @@ def puddle_scene(ctx, kmh: float, size=FRAME_SIZE, hour: float = 12.0, seconds_i
     scene.ego.speed_m_s = v
     scene.ego.previous_wheel_contacts = scene.ego.wheel_contacts()
     scene.autopilot = Autopilot(lane_index=lane, target_speed_m_s=v, seed=seed, wander_m=0.0)
-    run(scene, effect, lead_in_s + seconds_in)
+    run(scene, lead_in_s + seconds_in)
     e = scene.ego
     eye = e.position + e.right() * 3.6 - e.forward() * 4.5 + np.array([0.0, 1.4, 0.0])
     target = e.position + e.forward() * 0.6 + np.array([0.0, 0.45, 0.0])
@@ -131,7 +131,7 @@ def truck_scene(ctx, kmh: float = 100.0, gap_m: float = 22.0, size=FRAME_SIZE, h
     scene.traffic.vehicles, scene.traffic.lanes, scene.traffic.desired_speeds_m_s = [truck], [lane], [v]
     keeper = GapKeeper(scene, truck, gap_m)
     keeper.place()
-    run(scene, effect, seconds, after_step=keeper.place)
+    run(scene, seconds, after_step=keeper.place)
     return scene, effect, keeper
 
 
@@ -149,20 +149,15 @@ class GapKeeper:
         ego.yaw, ego.speed_m_s, ego.steer_rad, ego.yaw_rate_rad_s = lead.yaw, lead.speed_m_s, 0.0, 0.0
 
 
-def run(scene, effect, seconds: float, after_step=None, render_last: int = 1) -> None:
-    """Step ``seconds`` at 30 Hz, feeding the spray every frame but rendering only the last ``render_last``."""
+def run(scene, seconds: float, after_step=None, render_last: int = 1) -> None:
+    """Step ``seconds`` at 30 Hz, drawing only the last ``render_last`` frames: the ones before advance undrawn
+    (``Scene.render(draw=False)``: the spray and every other simulation, as in a drawn frame)."""
     n = max(1, round(seconds / DT_S))
     for i in range(n):
         scene.step(DT_S)
         if after_step is not None:
             after_step()
-        if i >= n - render_last:
-            scene.render()
-        else:
-            sec = scene.settings.spray
-            effect.emitter.set_budget(sec.budget)
-            effect.emitter.strength = sec.strength
-            effect.emitter.emit(scene.frame())
+        scene.render(draw=i >= n - render_last)
 
 
 def main(argv=None) -> int:

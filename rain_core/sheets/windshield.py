@@ -55,17 +55,14 @@ def _scene(
     return scene, effect
 
 
-def _advance(scene, effect, seconds: float, render_last_s: float = 0.5, fps: float = 30.0, camera=None):
-    """Step ``seconds``: the CPU simulation only, then rendering every frame for the last
-    ``render_last_s``."""
+def _advance(scene, seconds: float, render_last_s: float = 0.5, fps: float = 30.0, camera=None):
+    """Step ``seconds``, drawing only the frames of the last ``render_last_s``: the ones before advance undrawn
+    (``Scene.render(draw=False)``: every simulation, and the glass's water texture, as in a drawn frame)."""
     frames = int(round(seconds * fps))
     drawn = int(round(render_last_s * fps))
     for k in range(frames):
         scene.step(1.0 / fps)
-        if k >= frames - drawn:
-            scene.render(camera(scene) if camera else None)
-        else:
-            effect.catch_up(scene.frame(), 1.0 / fps)
+        scene.render(camera(scene) if camera else None, draw=k >= frames - drawn)
     return scene.image()
 
 
@@ -90,29 +87,29 @@ def render_sheet(ctx, out_dir=DEFAULT_OUT) -> Path:
         labels.append(label)
 
     scene, effect = _scene(ctx, 2.0, "off")
-    shot("parked, 2 mm/h, 40 s, wipers off", _advance(scene, effect, 40.0))
+    shot("parked, 2 mm/h, 40 s, wipers off", _advance(scene, 40.0))
     scene.release()
     scene, effect = _scene(ctx, 2.0, "off", speed_kmh=60.0)
-    shot("60 km/h, 2 mm/h, wipers off", _advance(scene, effect, 20.0))
+    shot("60 km/h, 2 mm/h, wipers off", _advance(scene, 20.0))
     scene.release()
     scene, effect = _scene(ctx, 2.0, "off", speed_kmh=120.0)
-    shot("120 km/h: drops stream up", _advance(scene, effect, 20.0))
+    shot("120 km/h: drops stream up", _advance(scene, 20.0))
     scene.release()
     for mode in ("low", "high"):  # both with the blades at the same point of their up-stroke
         scene, effect = _scene(ctx, 8.0, mode, speed_kmh=60.0, seed=2)
-        _advance(scene, effect, 10.0, render_last_s=0.5)
+        _advance(scene, 10.0, render_last_s=0.5)
         _until_stroke(scene, effect, 0.4)
         shot(f"heavy 8 mm/h, 60 km/h, wipers {mode}", scene.image())
         scene.release()
     scene, effect = _scene(ctx, 8.0, "low", speed_kmh=50.0, seed=3)
-    _advance(scene, effect, 6.0, render_last_s=0.3)
+    _advance(scene, 6.0, render_last_s=0.3)
     shot("8 mm/h, a stroke: blade, bead, streaks", _until_stroke(scene, effect, 0.7))
     scene.release()
     scene, effect = _scene(ctx, 4.0, "intermittent", hour=22.0, speed_kmh=40.0, seed=4)
-    shot("night, 4 mm/h: glints and smears", _advance(scene, effect, 10.0))
+    shot("night, 4 mm/h: glints and smears", _advance(scene, 10.0))
     scene.release()
     scene, effect = _scene(ctx, 4.0, "off", hour=22.0, speed_kmh=0.0, seed=4)
-    shot("night, parked: lamps in the drops", _advance(scene, effect, 25.0))
+    shot("night, parked: lamps in the drops", _advance(scene, 25.0))
     scene.release()
     scene, effect = _scene(ctx, 2.0, "off", seed=5)
 
@@ -122,7 +119,7 @@ def render_sheet(ctx, out_dir=DEFAULT_OUT) -> Path:
         return glass_camera(sc.ego, DRIVER_EYE_LOCAL, look)
 
     shot("glass close-up (12° view, focused on the glass), parked 2 mm/h",
-         _advance(scene, effect, 30.0, camera=close_up))
+         _advance(scene, 30.0, camera=close_up))
     scene.release()
     return save_sheet(shots, labels, "windshield", out_dir, columns=3)
 
@@ -158,7 +155,7 @@ def render_sequence(ctx, out_dir=SEQUENCE_OUT, frames: int = 24, seconds: float 
     images, labels = [], []
     for k in range(total):
         scene.step(1.0 / fps, drive.update(1.0 / fps))
-        scene.render()
+        scene.render(draw=k in keep)  # the frames between advance undrawn
         if k in keep:
             images.append(scene.image())
             kmh = scene.ego.speed_m_s * 3.6

@@ -267,15 +267,8 @@ class WindshieldEffect(WaterPass, Effect):
         self._inputs_memo = (key, inputs, types)
         return inputs
 
-    def catch_up(self, frame, dt_s: float) -> None:
-        """Step the simulation alone by ``dt_s`` (s) with the inputs of ``frame`` and count the time up to
-        ``frame.time_s`` as simulated, so the next ``update`` does not step it again (fill the glass fast
-        without drawing every frame)."""
-        self.sim.step(dt_s, self.inputs_for(frame))
-        self._last_time = float(frame.time_s)
-
     def update(self, frame, rc) -> None:
-        # The time since the last update (or catch_up): the scene may step several times between renders.
+        # The time since the last update: the scene may step several times between renders.
         if self._last_time is None or frame.time_s < self._last_time:
             dt = float(frame.dt_s)
         else:
