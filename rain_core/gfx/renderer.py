@@ -280,14 +280,16 @@ class Renderer:
         self.stats.extend(PassStat(e.name, False) for e in self.effects if e not in active)
         added = [lights for e in active if (lights := e.frame_lights(frame)) is not None and len(lights)]
         self._effect_lights = concat_lights(added) if added else None
-        rc = self.render_context(frame, light_grid_px=self.light_grid_px)  # its grid: built in the scene pass
+        # The view's light grid is built in the scene pass.
+        rc = self.render_context(frame, light_grid_px=self.light_grid_px, drawn=draw)
         # projection @ view now, just after the view's own BLAS product: first asked after the shadow's and the
         # reflection's draws (the door mirrors' plan), it ran cold.
         rc.view_proj  # noqa: B018 - made and kept by the context
         rc.active = active
         rc.shared = SharedResources()
+        for effect in active:  # e.g. the rain medium, which every program of the frame sees (and an update reads)
+            rc.uniforms.update(effect.frame_uniforms(frame))
         if not draw:
-            rc.drawn = False
             self._advance(frame, rc, active)
             return
         # The frame's plan before its first GL call: on llvmpipe each draw runs the vertex work on this thread and
@@ -299,8 +301,6 @@ class Renderer:
         if sun_up:
             self.scene.draw_items(rc, False, cull=self.shadow.light_view_proj(rc))
         self.scene.draw_items(rc, True, cull=True)
-        for effect in active:  # e.g. the rain medium, which every program of the frame sees
-            rc.uniforms.update(effect.frame_uniforms(frame))
         if sun_up:
             rc.uniforms.update(self.shadow.frame_uniforms(rc))
         rc.frame_block_bytes()  # every frame uniform is known now: packed here, once, for all the passes
@@ -372,10 +372,8 @@ class Renderer:
                 self._timed(f"{effect.name}.{stage}", lambda e=effect: e.render(stage, rc))
 
     def _advance(self, frame: Frame, rc: RenderContext, active: tuple) -> None:
-        """An undrawn frame (``render(frame, draw=False)``) after its observes: the active effects' updates and
-        their state stages, in the drawn frame's order (updates, uploads, prepares)."""
-        for effect in active:  # an update may read the medium, as in a drawn frame
-            rc.uniforms.update(effect.frame_uniforms(frame))
+        """An undrawn frame (``render(frame, draw=False)``) after its observes and frame uniforms: the active
+        effects' updates and their state stages, in the drawn frame's order (updates, uploads, prepares)."""
         self._update_effects(frame, rc, active)
         self._run_stage("upload", rc, active, state_only=True)
         self._run_stage("prepare", rc, active, state_only=True)
