@@ -162,19 +162,20 @@ def gpu_costs(budgets, size, frames: int) -> list[dict]:
 
 
 class _no_draws:
-    """Within it, ``VertexArray.render`` does nothing: llvmpipe shades vertices inside the draw call, on the
-    calling thread, so timing a pass with its draws would time the emulated GPU."""
+    """Within it, ``VertexArray.render`` and ``transform`` (the streak records' pass) do nothing: llvmpipe shades
+    vertices inside the draw call, on the calling thread, so timing a pass with its draws would time the emulated
+    GPU."""
 
     def __enter__(self):
         import moderngl
 
-        self._orig = moderngl.VertexArray.render
-        moderngl.VertexArray.render = lambda *args, **kwargs: None
+        self._orig = (moderngl.VertexArray.render, moderngl.VertexArray.transform)
+        moderngl.VertexArray.render = moderngl.VertexArray.transform = lambda *args, **kwargs: None
 
     def __exit__(self, *exc):
         import moderngl
 
-        moderngl.VertexArray.render = self._orig
+        moderngl.VertexArray.render, moderngl.VertexArray.transform = self._orig
 
 
 def cpu_costs(budgets, frames: int, repeats: int) -> list[dict]:
@@ -317,10 +318,10 @@ def main(argv: list[str] | None = None) -> int:
         "# Rainfall",
         cpu_md,
         f"## Streak pass against the particle budget (heavy rain 8 mm/h, driver view, {size[0]}×{size[1]})",
-        "Wall time to `ctx.finish()` of the streak pass (one instanced draw; every instance's state computed in "
-        "the vertex shader) and of the whole frame. `R = 0`: the effect is inactive — no update, no pass (the "
-        "car's headlights also stay off then, so the dry frame's scene pass is cheaper). On llvmpipe only the "
-        "ratios mean something.",
+        "Wall time to `ctx.finish()` of the streak pass (a transform-feedback pass computes each instance's "
+        "streak once, then one instanced draw of their quads) and of the whole frame. `R = 0`: the effect is "
+        "inactive — no update, no pass (the car's headlights also stay off then, so the dry frame's scene pass "
+        "is cheaper). On llvmpipe only the ratios mean something.",
         markdown_table(["budget", "streaks drawn", "pass", "streak pass ms", "frame ms", "pass / dry frame"],
                        gpu_rows),
         "## Drawn density against the physical density, in the view",

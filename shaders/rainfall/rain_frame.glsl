@@ -21,7 +21,7 @@ layout(std140) uniform RainFrame {
     uint u_splash_count;           // whole splash periods of t, mod 2^32
     vec3 u_splash_off;             // m, (−lo) mod ext in the world frame (x, z)
     float u_splash_tau;            // the fraction
-    vec3 u_cam_vel;                // m/s, world (streak.vert)
+    vec3 u_cam_vel;                // m/s, world (streak_record.vert)
     // The lights that reach the boxes (effect.py _lights), as common/lighting.glsl reads them (frame.glsl's
     // members of the same names): they change with the frame too.
     int u_light_count;

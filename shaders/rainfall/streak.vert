@@ -1,114 +1,40 @@
 #version 330 core
-// Rain streaks (rain_core/effects/rainfall/): one instance per drop, a screen-aligned quad around the drop's path
-// relative to the camera during the exposure; the drop itself (rainfall/drops.glsl) has no stored state. Keep in
-// step with the NumPy twin streaks.streak_geometry.
-#include "rainfall/drop.glsl"
-#include "rainfall/drops.glsl"
+// Rain streaks (rain_core/effects/rainfall/), second pass: one instance per drop, the quad of its streak record
+// (rainfall/streak_record.vert wrote them; a culled drop's has r_head.w = 0).
+in vec4 r_head;   // px from the view centre at the drop now, then its clip z and w
+in vec4 r_tail;   // the same where it was, relative to the camera, when the shutter opened
+in vec2 r_half;   // px: half extents of the coverage profile + 0.5 (across, along)
+in vec4 r_color;  // pre-exposed radiance, opacity
 
-uniform float u_exposure_s;         // s
-uniform float u_near;               // m
-uniform vec3 u_box_fade[LAYERS];    // m
-uniform float u_box_fade_bottom[LAYERS];  // m (0: a hard floor below the ground)
-uniform float u_layer_rho[LAYERS];  // instances per m³
-uniform float u_shape_area[10];     // side-view area factor at D = 1, 2, 2.5, … 6 mm
-uniform float u_shape_width[10];
-uniform float u_width_floor_px;
-uniform float u_width_max_px;
-uniform float u_alpha_max;
-uniform float u_alpha_spread;       // constants.SPREAD_ALPHA
-uniform float u_stretch_max;        // constants.STRETCH_MAX
+uniform vec2 u_viewport;  // px
 
 out vec2 v_local;   // px from the quad centre: (across, along)
 out vec2 v_half;    // px: half extents of the coverage profile + 0.5
 flat out vec4 v_color;  // pre-exposed radiance, opacity
 
-float rain_membership(int k, vec3 p) {
-    vec3 a = clamp((p - u_box_lo[k]) / u_box_fade[k], 0.0, 1.0);
-    vec3 b = clamp((u_box_lo[k] + u_box_ext[k] - p) / u_box_fade[k], 0.0, 1.0);
-    float fb = u_box_fade_bottom[k];
-    a.y = fb > 0.0 ? clamp((p.y - u_box_lo[k].y) / fb, 0.0, 1.0) : (p.y >= u_box_lo[k].y ? 1.0 : 0.0);
-    return a.x * a.y * a.z * b.x * b.y * b.z;
-}
-
-float shape_lookup(float table[10], float d_mm) {
-    float x = d_mm <= 2.0 ? d_mm - 1.0 : 1.0 + (d_mm - 2.0) * 2.0;
-    x = clamp(x, 0.0, 9.0);
-    int i = min(int(floor(x)), 8);
-    return mix(table[i], table[i + 1], x - float(i));
-}
-
-void cull() {
-    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
-    v_local = vec2(0.0);
-    v_half = vec2(1.0);
-    v_color = vec4(0.0);
-}
-
 void main() {
-    RainDrop drop = rain_drop(gl_InstanceID);
-    if (!drop.drawn) { cull(); return; }
-    vec3 head = drop.pos;
-    float m_own = rain_membership(drop.layer, head);
-    float density = 0.0;
-    for (int k = 0; k < LAYERS; ++k) density += u_layer_rho[k] * rain_membership(k, head);
-    density = max(density, u_layer_rho[LAYERS - 1]);
-    float weight = max(drop.r, u_thin.z) * m_own / density;  // real drops this one stands for
-    if (weight <= 0.0) { cull(); return; }
-    vec3 u = drop.vel;
-    // The streak: where the drop is now, and where it was relative to the camera when the shutter opened.
-    vec3 a_w = head;
-    vec3 b_w = head + (u_cam_vel - u) * u_exposure_s;
-    vec4 ca = u_view_proj * vec4(a_w, 1.0);
-    vec4 cb = u_view_proj * vec4(b_w, 1.0);
-    float wmin = u_near * 1.01;
-    if (ca.w < wmin && cb.w < wmin) { cull(); return; }
-    if (ca.w < wmin) ca = mix(ca, cb, (wmin - ca.w) / (cb.w - ca.w));
-    if (cb.w < wmin) cb = mix(cb, ca, (wmin - cb.w) / (ca.w - cb.w));
-    // Both ends beyond one side of the view (a margin for the width): nothing to draw, skip the lighting.
-    float m = 1.0 + (u_width_max_px + 2.0) / (0.5 * min(u_viewport.x, u_viewport.y));
-    if ((ca.x > m * ca.w && cb.x > m * cb.w) || (ca.x < -m * ca.w && cb.x < -m * cb.w) ||
-        (ca.y > m * ca.w && cb.y > m * cb.w) || (ca.y < -m * ca.w && cb.y < -m * cb.w)) { cull(); return; }
-    if (rain_occluded(head)) { cull(); return; }  // after the view test: it reads textures
-    vec2 sa = ca.xy / ca.w * 0.5 * u_viewport;
-    vec2 sb = cb.xy / cb.w * 0.5 * u_viewport;
+    if (r_head.w <= 0.0) {
+        gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+        v_local = vec2(0.0);
+        v_half = vec2(1.0);
+        v_color = vec4(0.0);
+        return;
+    }
+    vec2 sa = r_head.xy;
+    vec2 sb = r_tail.xy;
     vec2 dir = sb - sa;
     float len = length(dir);
     vec2 t = len > 1e-4 ? dir / len : vec2(0.0, 1.0);
     vec2 n = vec2(-t.y, t.x);
-    // Light budget in px² of full coverage: the drop's projected area times its weight. Coverage (optics.
-    // streak_coverage): a pixel on the path is covered A·(τ/T)/(pixel area) on average over the exposure, so
-    // α = A / (w·(ℓ + h)), h the drop's own chord along the motion (area / true width), w ≥ the 1 px floor.
-    float d_m = drop.d_mm * 1e-3;
-    float d_px = d_m * u_focal_px / ca.w;
-    float area_f = shape_lookup(u_shape_area, drop.d_mm);
-    float width_f = shape_lookup(u_shape_width, drop.d_mm);
-    float area_px = 0.78539816 * d_px * d_px * area_f * weight * u_brightness;
-    float h_px = 0.78539816 * d_px * area_f / width_f;
-    float len_h = len + h_px;
-    float w_px = max(d_px * width_f, u_width_floor_px);
-    float alpha = area_px / (w_px * len_h);
-    if (alpha > u_alpha_spread) {
-        // Compensation: spread like the drops it stands for — first longer along the motion (up to
-        // u_stretch_max × the footprint: a line of rain, not a fleck), then wider up to u_width_max_px, then
-        // brighter up to u_alpha_max (twin: rain_core.effects.rainfall.streaks).
-        float need = area_px / u_alpha_spread;
-        len_h = clamp(need / w_px, len_h, u_stretch_max * len_h);
-        w_px = min(max(need / len_h, w_px), u_width_max_px);
-        alpha = min(area_px / (w_px * len_h), u_alpha_max);
-    }
     // Quad corner (triangle strip): across ±1, along ±1 (−1 at the head).
     int c = gl_VertexID;
     float across = (c & 1) == 0 ? -1.0 : 1.0;
     float along = c < 2 ? -1.0 : 1.0;
-    vec2 half_ext = vec2(0.5 * w_px + 0.5, 0.5 * len_h + 0.5);
     vec2 centre = 0.5 * (sa + sb);
-    vec2 pos = centre + t * along * half_ext.y + n * across * half_ext.x;
-    vec4 cc = along < 0.0 ? ca : cb;
-    gl_Position = vec4(pos / (0.5 * u_viewport) * cc.w, cc.z, cc.w);
-    v_local = vec2(across * half_ext.x, along * half_ext.y);
-    v_half = half_ext;
-    vec3 to_eye = u_camera_pos - head;
-    float dist = length(to_eye);
-    vec3 radiance = apply_atmosphere_dir(rain_drop_radiance(head, to_eye / max(dist, 1e-4)), dist, -to_eye / max(dist, 1e-4));
-    v_color = vec4(radiance * u_exposure, alpha);
+    vec2 pos = centre + t * along * r_half.y + n * across * r_half.x;
+    vec2 cc = along < 0.0 ? r_head.zw : r_tail.zw;
+    gl_Position = vec4(pos / (0.5 * u_viewport) * cc.y, cc.x, cc.y);
+    v_local = vec2(across * r_half.x, along * r_half.y);
+    v_half = r_half;
+    v_color = r_color;
 }

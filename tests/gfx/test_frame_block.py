@@ -178,7 +178,7 @@ def test_scene_programs_read_the_block_and_rainfall_keeps_its_own_lights(gl_ctx)
         # The rain's programs keep their own light list (the lights that reach its boxes): not the frame block's,
         # and not plain uniforms either, but members of the rain's own per-frame block (rain_frame.glsl).
         rainfall = next(e for e in scene.effects if e.name == "rainfall")
-        streak = rainfall.streak_prog
+        streak = rainfall.record_prog  # the streaks' drop work: their frame values
         assert streak["FrameBlock"].size == BLOCK_BYTES_OWN_LIGHTS  # FRAME_OWN_LIGHTS: no lights in the block
         assert streak.get("u_light_pos", None) is None and streak.get("u_light_count", None) is None
         assert streak["RainFrame"].size == RAIN_FRAME_BYTES

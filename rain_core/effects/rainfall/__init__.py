@@ -87,9 +87,12 @@ Cost and skipping
 -----------------
 R = 0 after the ramp → ``active`` is False: no update, no pass. Switched off (or a zero budget), ``observe``
 forgets the history, so switching back on starts at the set rate. Per frame the CPU computes the boxes, the
-ramp, the thinning and ~60 uniforms; the GPU draws the environment map (64×32 texels), then one instanced quad
-per instance (culled in the vertex shader, before any lighting, when thinned out, outside the view, or
-occluded) and one billboard per splash slot. Nothing is uploaded per frame but uniforms (what changes every
+ramp, the thinning and ~60 uniforms; the GPU draws the environment map (64×32 texels), then the streaks in
+two passes: a transform-feedback pass (``streak_record.vert``, one vertex per instance, nothing rasterised)
+finds each drop, culls it before any lighting when thinned out, outside the view or occluded, lights it and
+writes its streak record (56 bytes: ends, half extents, colour; GPU memory, never uploaded); one instanced quad
+per record (``streak.vert``) draws it. A drop's work thus runs once, not at each of its quad's 4 corners. Then
+one billboard per splash slot. Nothing is uploaded per frame but uniforms (what changes every
 frame, the lights that reach the boxes included, in one uniform block, ``rain_block.RainFrame``, shared by
 both programs). Texture units: ``units.RAINFALL_DROPS`` (drop table), ``RAINFALL_ENV`` (environment),
 ``RAINFALL_OCCLUDER`` and ``RAINFALL_OCCLUDER_COARSE`` (roof maps), ``RAINFALL_ROAD_HEIGHT`` (puddles, for the

@@ -45,7 +45,8 @@ INSTANCE_RATE_MM_H = 28.0  # mm/h: instance diameters follow Marshall–Palmer's
 MAX_VEHICLES = 8  # vehicles (nearest first) whose bodies cull drops in the shader
 SPLASH_PERIOD_S = 0.3125  # s, each splash slot has one impact per period (≥ the longest splash life)
 
-# --- streak drawing --- (keep the NumPy twin, ``streaks.streak_geometry``, in step with shaders/rainfall/streak.vert).
+# --- streak drawing --- (keep the NumPy twin, ``streaks.streak_geometry``, in step with
+# shaders/rainfall/streak_record.vert).
 WIDTH_FLOOR_PX = 1.0  # px, narrowest streak; thinner drops get less opacity instead
 # A drawn instance stands for many real drops (its weight), spread through the volume around it. Their light is
 # spread first: a streak above SPREAD_ALPHA gets longer along its motion (up to STRETCH_MAX × its footprint: the

@@ -1,6 +1,7 @@
 """The GL side of the rainfall: ``RainfallEffect`` sets the few uniforms ``RainfallSim`` computes per frame, draws
-the environment a drop shows (``units.RAINFALL_ENV``), then one instanced streak quad per drop instance and one
-billboard per splash slot; nothing per drop is uploaded (package docstring). Static inputs, uploaded once: the
+the environment a drop shows (``units.RAINFALL_ENV``), then the streaks in two passes (a transform-feedback pass
+writes each drop instance's streak record on the GPU, then one instanced quad per record) and one billboard per
+splash slot; nothing per drop is uploaded (package docstring). Static inputs, uploaded once: the
 drop table (``units.RAINFALL_DROPS``), the roof maps (``units.RAINFALL_OCCLUDER``, ``RAINFALL_OCCLUDER_COARSE``)
 and the road's height map for the splash kinds (``units.RAINFALL_ROAD_HEIGHT``)."""
 
@@ -50,6 +51,11 @@ from rain_core.gfx.uniforms import owned_uniforms, set_uniforms
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
 PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
+# A drop's streak record (rainfall/streak_record.vert's outputs, rainfall/streak.vert's per-instance inputs): head
+# and tail (px from the view centre, clip z, clip w; w = 0 for a culled drop), half extents (px), colour and opacity.
+RECORD_VARYINGS = ("r_head", "r_tail", "r_half", "r_color")
+RECORD_FORMAT = "4f 4f 2f 4f/i"
+RECORD_BYTES = 56
 
 
 @functools.cache
@@ -98,10 +104,16 @@ class RainfallEffect(Effect):
         self.settings = settings if settings is not None else Settings()
         self.seed = int(seed)
         layers = {"LAYERS": len(LAYER_SCALES)}
-        self.streak_prog = self.shaders.program("rainfall/streak.vert", "rainfall/streak.frag", defines=layers)
+        # The streaks: a drop's work (find, cull, light) once per drop in the record pass, not at each of its
+        # quad's 4 corners (on llvmpipe a quarter of the vertex work; on any GPU a quarter of the heavy invocations).
+        self.record_prog = self.shaders.program("rainfall/streak_record.vert", defines=layers,
+                                                varyings=RECORD_VARYINGS)
+        self.streak_prog = self.shaders.program("rainfall/streak.vert", "rainfall/streak.frag")
+        self._record_vao = ctx.vertex_array(self.record_prog, [])
+        self._records: moderngl.Buffer | None = None  # RECORD_BYTES per drop instance (_streak_records)
+        self._streak_vao: moderngl.VertexArray | None = None
         self.splash_prog = self.shaders.program("rainfall/splash.vert", "rainfall/splash.frag", defines=layers)
         self.env_prog = self.shaders.program("common/fullscreen.vert", "rainfall/env.frag")
-        self._streak_vao = ctx.vertex_array(self.streak_prog, [])
         self._env_vao = ctx.vertex_array(self.env_prog, [])
         self._env_tex = ctx.texture(ENV_SIZE, 4, dtype="f2")
         self._env_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
@@ -114,7 +126,7 @@ class RainfallEffect(Effect):
         # each draw (another rainfall effect on the context binds its own there).
         self._frame_buffer = ctx.buffer(reserve=RAIN_FRAME_BYTES)
         self._frame_data: bytes | None = None
-        for prog in (self.streak_prog, self.splash_prog):
+        for prog in (self.record_prog, self.splash_prog):
             _bind_rain_frame_block(prog)
         self.sim: RainfallSim | None = None
         self._world = None
@@ -477,8 +489,7 @@ class RainfallEffect(Effect):
         bound = False  # whether the streaks' draw bound this context's frame block
         try:
             if self.sim.capacity and upd.drawn_expected > 0.0:
-                self._use(self.streak_prog, rc, upd, frame_pairs, self._streak_pairs(rc, s))
-                self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
+                self._draw_streaks(rc, upd, frame_pairs, s)
                 bound = True
             if s.rainfall.splashes and upd.splashes and upd.splash_accept > 0.0:
                 own = (("u_splash_accept", upd.splash_accept), ("u_splash_weight", upd.splash_weight),
@@ -489,6 +500,50 @@ class RainfallEffect(Effect):
             rc.hdr.fbo.depth_mask = True
             ctx.disable(moderngl.BLEND)
             ctx.blend_func = moderngl.DEFAULT_BLENDING
+
+    def _streak_records(self) -> moderngl.Buffer:
+        """The records' buffer, for the sim's capacity (made again when it changes), with the quads' vertex array."""
+        size = max(1, self.sim.capacity) * RECORD_BYTES
+        if self._records is None or self._records.size != size:
+            self._release_records()
+            self._records = self.ctx.buffer(reserve=size)
+            self._streak_vao = self.ctx.vertex_array(self.streak_prog,
+                                                     [(self._records, RECORD_FORMAT, *RECORD_VARYINGS)])
+        return self._records
+
+    def _release_records(self) -> None:
+        for obj in (self._streak_vao, self._records):
+            if obj is not None:
+                obj.release()
+        self._records = self._streak_vao = None
+
+    def _write_records(self, rc, upd: RainUpdate, frame_pairs, s) -> moderngl.Buffer:
+        """Write every drop instance's streak record for rc's view (transform feedback, nothing rasterised)."""
+        records = self._streak_records()
+        self._use(self.record_prog, rc, upd, frame_pairs, self._streak_pairs(rc, s))
+        self._record_vao.transform(records, moderngl.POINTS, vertices=self.sim.capacity)
+        return records
+
+    def _draw_streaks(self, rc, upd: RainUpdate, frame_pairs, s) -> None:
+        """The streak records for rc's view, then their quads into the bound framebuffer with the caller's
+        blending and depth state."""
+        self._write_records(rc, upd, frame_pairs, s)
+        size = rc.size
+        owned_uniforms(self.streak_prog).update_for(
+            "viewport", size, lambda: {"u_viewport": (float(size[0]), float(size[1]))})
+        self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
+
+    def read_streaks(self, rc) -> np.ndarray:
+        """Test probe: every drop instance's streak record as the GPU writes it for rc's view at the last update,
+        (capacity, 14) float32 (RECORD_VARYINGS: head, tail, half extents, colour; head w = 0: culled)."""
+        upd = self.last_update
+        s = self._settings(rc.frame)
+        frame_pairs, block = self._frame_values(upd, rc, s, self._lights(rc, upd.boxes))
+        self._use_frame_block(block)
+        self._env_tex.use(units.RAINFALL_ENV)
+        self._bind_static()
+        records = self._write_records(rc, upd, frame_pairs, s)
+        return np.frombuffer(records.read(), np.float32).reshape(-1, RECORD_BYTES // 4)[:self.sim.capacity].copy()
 
     def read_drops(self, shift_z: float = 0.0, around_z: float = 0.0) -> np.ndarray:
         """Test probe: every instance's (x, y, z in the frame shifted by shift_z, flags) as the GPU computes it
@@ -530,7 +585,8 @@ class RainfallEffect(Effect):
                 obj.release()
         self._static_tex = {}
         self._table_tex = None
-        for obj in (self._streak_vao, self._splash_vao, self._env_vao, self._env_fbo, self._env_tex,
+        self._release_records()
+        for obj in (self._record_vao, self._splash_vao, self._env_vao, self._env_fbo, self._env_tex,
                     self._frame_buffer):
             obj.release()
         if self._owns_shaders:
@@ -549,7 +605,6 @@ class RainfallEffect(Effect):
         s = self._settings(rc.frame)
         frame_pairs, block = self._frame_values(upd, rc, s, self._lights(rc, upd.boxes))
         self._use_frame_block(block)
-        self._use(self.streak_prog, rc, upd, frame_pairs, self._streak_pairs(rc, s))
         self._env_tex.use(units.RAINFALL_ENV)  # colour only, but never another pass's texture on that unit
         self._bind_static()
         target.fbo.use()
@@ -557,6 +612,6 @@ class RainfallEffect(Effect):
         rc.ctx.disable(moderngl.CULL_FACE)
         target.fbo.depth_mask = False
         try:
-            self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
+            self._draw_streaks(rc, upd, frame_pairs, s)
         finally:
             target.fbo.depth_mask = True

@@ -121,6 +121,7 @@ def streak_coverage(light_px2, length_px, height_px, width_px):
     The drop covers area A of the image plane at each instant; a pixel on its path is covered for the fraction
     τ/T of the exposure in which the drop is over it, so the pixel's mean coverage is A·(τ/T)/(pixel area), and
     the streak's footprint is width × (length + height): α = A / (w·(ℓ + h)). Its integral over the image is A
-    whatever the motion (light is conserved). Twin of the vertex shader's formula (shaders/rainfall/streak.vert)."""
+    whatever the motion (light is conserved). Twin of the streak record's formula
+    (shaders/rainfall/streak_record.vert)."""
     return np.asarray(light_px2, dtype=np.float64) / (np.asarray(width_px) * (np.asarray(length_px)
                                                                             + np.asarray(height_px)))

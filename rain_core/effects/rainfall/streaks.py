@@ -1,5 +1,5 @@
-"""The NumPy twin of the streak shader (``shaders/rainfall/streak.vert``): what the camera sees of each drop, in
-float64, for tests and the benchmark's light budget. Keep the two in step."""
+"""The NumPy twin of the streak shader (``shaders/rainfall/streak_record.vert``): what the camera sees of each
+drop, in float64, for tests and the benchmark's light budget. Keep the two in step."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ class StreakCamera:
 
 def streak_geometry(sim: RainfallSim, index, time_s: float | None, cam: StreakCamera,
                     brightness: float = 1.0) -> dict[str, np.ndarray]:
-    """The streaks of the instances ``index`` as ``shaders/rainfall/streak.vert`` draws them, in float64.
+    """The streaks of the instances ``index`` as ``shaders/rainfall/streak_record.vert`` writes them, in float64.
 
     Returns arrays: ``visible`` (bool), ``head``/``tail`` (n, 3) m in the wrapped frame (the drop now, and where
     it was relative to the camera when the shutter opened), ``head_px``/``tail_px`` (n, 2) px from the image

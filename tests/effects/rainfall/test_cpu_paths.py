@@ -239,7 +239,7 @@ def _check_programs(effect, rc):
                   u_shape_width=effect._shape_width)
     splash = dict(common, **effect.splash_uniforms(upd, rc.shift_z))
     checked = 0
-    for prog, values in ((effect.streak_prog, streak), (effect.splash_prog, splash)):
+    for prog, values in ((effect.record_prog, streak), (effect.splash_prog, splash)):
         for name, value in values.items():
             if name == "u_seed_key" or name == "u_splash_key" or name == "u_splash_count" or name == "u_epoch":
                 want = struct.pack("=I", value)
@@ -250,6 +250,8 @@ def _check_programs(effect, rc):
                 assert got[:len(want)] == want, name
                 checked += 1
     assert checked > 40
+    # The quads' program (the records' second pass) reads the viewport alone.
+    assert _uniform_bytes(effect.streak_prog, "u_viewport") == _as_bytes(common["u_viewport"])
     # The RainFrame block (std140, drops.glsl) holds the rest: placed here word by word from the dict forms.
     block = np.zeros(RAIN_FRAME_BYTES // 4, np.float32)
     words = block.view(np.uint32)
@@ -270,7 +272,7 @@ def _check_programs(effect, rc):
     for k in range(3):
         block[100 + 128 * k: 228 + 128 * k] = np.frombuffer(lights[k], np.float32)
     assert effect._frame_buffer.read() == block.tobytes()
-    for prog in (effect.streak_prog, effect.splash_prog):
+    for prog in (effect.record_prog, effect.splash_prog):
         assert prog["RainFrame"].binding == RAIN_FRAME_BINDING
         assert prog["RainFrame"].size == RAIN_FRAME_BYTES
         for name in ("u_light_pos", "u_light_dir", "u_light_color", "u_light_count"):
@@ -287,7 +289,7 @@ def test_programs_hold_this_frames_uniforms_through_live_changes(gl_ctx, shaders
     culled = []  # frames where some lights did not reach the boxes: their filtered list differs from the frame's
     other_settings = rain.settings(rate=3.0, mode="chase", budget=2000, container_m=25.0)
     other, other_effect = rain.scene(gl_ctx, shaders, other_settings, seed=9)
-    assert other_effect.streak_prog is effect.streak_prog  # one shader library: shared programs
+    assert other_effect.record_prog is effect.record_prog  # one shader library: shared programs
     try:
         changes = [lambda: None, lambda: setattr(s.rainfall, "container_m", 70.0),
                    lambda: setattr(s.camera, "mode", "chase"), lambda: setattr(s.rainfall, "enabled", False),

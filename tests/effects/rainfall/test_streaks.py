@@ -110,6 +110,40 @@ def test_shader_draws_the_twins_streaks(gl_ctx, shaders, rain):
     assert np.median(from_horizontal) < 30.0
 
 
+def test_streak_records_are_the_twins_streaks(gl_ctx, shaders, rain):
+    """The record pass (streak_record.vert, once per drop) writes, drop by drop, the streak of the NumPy twin:
+    the ends in px, the half extents (width and length with the drop's chord and the compensation's stretch, plus
+    the 0.5 px margin) and the opacity; it culls only what the twin leaves out or what lies beyond the view."""
+    s = rain.settings(rate=8.0, mode="driver", budget=4000, container_m=16.0, splashes=False)
+    scene, effect = rain.scene(gl_ctx, shaders, s, size=(320, 180))
+    scene.ego.speed_m_s = 15.0
+    for _ in range(3):
+        scene.step(1.0 / 60.0)
+        frame = scene.render()
+    rc = scene.renderer.render_context(frame)
+    rec = effect.read_streaks(rc)
+    g = streak_geometry(effect.sim, None, frame.time_s, effect.streak_camera(rc))
+    drawn = rec[:, 3] > 0.0
+    assert drawn.sum() > 300
+    assert not np.any(drawn & ~g["visible"])  # nothing the twin culls
+    # The twin's drops whose whole streak lies well inside the view are drawn (none is under a roof here).
+    half = 0.5 * np.asarray(rc.size, np.float64)
+    inside = g["visible"] & np.all(np.abs(g["head_px"]) < 0.8 * half, axis=1) & np.all(
+        np.abs(g["tail_px"]) < 0.8 * half, axis=1)
+    assert inside.sum() > 200 and np.all(drawn[inside])
+    k = drawn
+    scale = 1e-4 * np.maximum(1.0, np.abs(g["head_px"][k]).max(axis=1))[:, None]  # float32 against float64
+    assert np.all(np.abs(rec[k, 0:2] - g["head_px"][k]) <= 0.01 + scale)
+    assert np.all(np.abs(rec[k, 4:6] - g["tail_px"][k]) <= 0.01 + scale)
+    np.testing.assert_allclose(rec[k, 8], 0.5 * g["width_px"][k] + 0.5, rtol=1e-3)
+    np.testing.assert_allclose(rec[k, 9], 0.5 * g["length_px"][k] + 0.5, rtol=1e-3)
+    np.testing.assert_allclose(rec[k, 13], g["alpha"][k], rtol=2e-3)
+    assert np.all(rec[k, 10:13] > 0.0)  # lit: the sky in each drop
+    # Clip w is the drop's distance along the view: ahead of the near plane for both ends.
+    assert np.all(rec[k, 3] >= 1.01 * frame.camera.near_m * (1 - 1e-6))
+    assert np.all(rec[k, 7] >= 1.01 * frame.camera.near_m * (1 - 1e-6))
+
+
 def test_drops_in_a_headlight_beam_glow(gl_ctx, shaders, rain):
     from rain_core.camera import Camera
 
