@@ -268,6 +268,8 @@ class RainfallEffect(Effect):
             vehicles=tuple(frame.vehicles))
         upd = self.sim.advance(inp)
         self._sync_table()
+        if self.sim.capacity:
+            self._streak_records()  # made before the frame's first draw: made after, it waits for the queued draws
         self.camera_velocity_m_s = v_cam
         if frame.time_s > (self._prev_cam[1] if self._prev_cam is not None else -math.inf):
             self._prev_cam = (np.asarray(frame.camera.position, dtype=np.float64).copy(), frame.time_s)
