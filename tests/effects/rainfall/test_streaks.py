@@ -8,6 +8,7 @@ import numpy as np
 
 from rain_core import physics
 from rain_core.effects.rainfall import RainfallSim, StreakCamera, streak_geometry
+from rain_core.effects.rainfall.effect import RECORD_BYTES
 
 # --- what the camera sees ---------------------------------------------------------------------------------------
 
@@ -142,6 +143,14 @@ def test_streak_records_are_the_twins_streaks(gl_ctx, shaders, rain):
     # Clip w is the drop's distance along the view: ahead of the near plane for both ends.
     assert np.all(rec[k, 3] >= 1.01 * frame.camera.near_m * (1 - 1e-6))
     assert np.all(rec[k, 7] >= 1.01 * frame.camera.near_m * (1 - 1e-6))
+    # A budget changed live: the records follow the new capacity from the next frame on, and so does the picture.
+    s.quality.particle_budget = 9000
+    scene.step(1.0 / 60.0)
+    frame = scene.render()
+    rc = scene.renderer.render_context(frame)
+    assert effect.sim.capacity == 9000 and effect._records.size == 9000 * RECORD_BYTES
+    more = effect.read_streaks(rc)
+    assert len(more) == 9000 and (more[:, 3] > 0.0).sum() > 2 * drawn.sum() * 0.8
 
 
 def test_drops_in_a_headlight_beam_glow(gl_ctx, shaders, rain):
