@@ -32,6 +32,11 @@ Method (also printed in the header):
   real (the header names the driver). "rain GPU ms" in the summary is the sum over the rain's own effects
   (``RAIN_EFFECTS``: streaks and splashes, spray, drips, windshield, ripples); the wet road and the atmosphere
   are rows of their own.
+* ``--pass-wall`` puts each pass's wall time between a ``ctx.finish()`` before it and one after it in the GPU
+  columns instead (no timer queries): what the pass costs the device. On llvmpipe that is the honest per-pass
+  figure: it does a draw's vertex work when the draw is issued, and its timer queries misplace it (at 1M streaks
+  they gave the drips' pass ~500 ms of the streaks'). The CPU columns leave the waits out, but each pass then
+  starts on the caches the wait left cold: not comparable with a run without it.
 * Clock (``--clock``): by default the main thread's CPU time (``time.thread_time_ns``), so time the process
   spent waiting for a core — this machine is shared — and llvmpipe's own rasterizer threads do not count;
   ``--clock wall`` uses wall time. "ms inside GL" is then the main thread's CPU time inside the driver; the
@@ -74,6 +79,7 @@ measures another checkout when run as a file from that checkout's root:
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -387,12 +393,15 @@ def _effect_of(pass_name: str) -> str:
 def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 0.0, frames: int = 30,
                  warmup: int = 8, gpu_timing: bool = True, dt_s: float = 1.0 / 30.0, seed: int = 1,
                  counter: GLCounter | None = None, ripples_backend: str = "auto", overrides=(),
-                 py_frames: int = 3, draw: bool = True) -> dict:
+                 py_frames: int = 3, draw: bool = True, pass_wall: bool = False) -> dict:
     """Render ``warmup + frames`` frames of one case; medians over the last ``frames``. ``ripples_backend``:
     the ripples effect's solver ("auto" times the paths on this machine; on llvmpipe it picks numpy32).
     ``overrides``: (settings path, value) pairs set on top of the heavy-rain settings (``--set``). ``py_frames``:
     frames traced after the timed ones for the Python lines and calls (``trace_python``; 0: none). ``draw``
     False: frames nobody looks at (``Renderer.render(frame, draw=False)``: the updates and the state stages).
+    ``pass_wall``: each pass's wall time between a ``ctx.finish()`` before it and one after it, as its "GPU ms"
+    (``--pass-wall``; the CPU columns leave the waits out, but each pass then starts on cold caches: not comparable
+    with a run without it).
 
     Returns {"rows": {name: {cpu_ms, gl_ms, gl_calls, queries, upload_kb, uniform_kb, read_kb, gpu_ms, gpu_share}},
     "frame": {…the same for the whole frame…, wall_ms}, "passes": [pass names in order], …}. Rows are the
@@ -408,13 +417,34 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
     original_timed = Renderer._timed
     clock = counter.clock_ns
 
+    walls: dict[str, float] = {}  # --pass-wall: this frame's pass → wall ms between the finishes around it
+    frame_waited = [0]  # --pass-wall: ns this frame's finishes took on this thread (not the frame's CPU)
+
+    def walled(name, fn, waited):
+        def wait():  # neither a GL call of the pass nor its CPU time
+            counter.bucket = "finish"
+            c0 = clock()
+            ctx.finish()
+            waited[0] += clock() - c0
+            frame_waited[0] += clock() - c0
+            counter.bucket = name
+
+        def run():
+            wait()
+            w0 = time.perf_counter()
+            fn()
+            wait()
+            walls[name] = walls.get(name, 0.0) + (time.perf_counter() - w0) * 1e3
+        return run
+
     def timed(self, name, fn):
         saved, counter.bucket = counter.bucket, name
+        waited = [0]  # ns the finishes took on this thread (--pass-wall)
         t0 = clock()
         try:
-            return original_timed(self, name, fn)
+            return original_timed(self, name, walled(name, fn, waited) if pass_wall else fn)
         finally:
-            counter.pass_ms[name] = counter.pass_ms.get(name, 0.0) + (clock() - t0) * 1e-6
+            counter.pass_ms[name] = counter.pass_ms.get(name, 0.0) + (clock() - t0 - waited[0]) * 1e-6
             counter.bucket = saved
 
     Renderer._timed = timed
@@ -437,6 +467,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
         order: list[str] = []
         for index in range(warmup + frames):
             counter.reset()
+            walls.clear()
+            frame_waited[0] = 0
             counter.bucket = STEP_BUCKET
             wall0 = time.perf_counter()
             process0 = time.process_time_ns()
@@ -453,8 +485,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
             counter.bucket = BETWEEN_BUCKET
             if index < warmup:
                 continue
-            _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6, (t2 - t1) * 1e-6, wall,
-                     process)
+            _collect(samples, order, scene.renderer.stats, counter, (t1 - t0) * 1e-6,
+                     (t2 - t1 - frame_waited[0]) * 1e-6, wall, process, walls if pass_wall else None)
 
         def run_frame() -> None:  # one more frame of the case, its calls and lines sorted as the timed ones'
             counter.reset()
@@ -483,7 +515,8 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
     return {"size": tuple(size), "budget": int(budget), "speed_kmh": float(speed_kmh), "frames": frames,
             "ripples_backend": ripples_backend, "ripples_solver": solver, "skip_draws": counter.skip_draws,
             "drawn": bool(draw),
-            "warmup": warmup, "dt_s": float(dt_s), "gpu_timing": gpu_timing, "overhead_ns": counter.overhead_ns,
+            "warmup": warmup, "dt_s": float(dt_s), "gpu_timing": gpu_timing or pass_wall,
+            "gpu_source": "finish" if pass_wall else "timer queries", "overhead_ns": counter.overhead_ns,
             "clock": counter.clock,
             "passes": order,
             "rows": rows, "frame": frame}
@@ -500,11 +533,14 @@ def _preload_kernels() -> None:
 
 
 def _collect(samples, order, stats, counter: GLCounter, step_ms: float, render_ms: float, wall_ms: float,
-             process_ms: float) -> None:
+             process_ms: float, walls: dict | None = None) -> None:
     """Add one frame's figures to ``samples`` (name → column → list); ``process_ms``: the CPU time of all the
-    process's threads over the frame (step, render and finish)."""
+    process's threads over the frame (step, render and finish); ``walls``: pass → wall ms between the finishes
+    around it (``--pass-wall``), the passes' "GPU ms" instead of their timer queries'."""
     ovh_ms = counter.overhead_ns * 1e-6
     tallies = counter.tallies
+    if walls is not None:
+        stats = [dataclasses.replace(s, gpu_ms=walls.get(s.name, 0.0)) for s in stats]
     total_gpu = sum(s.gpu_ms for s in stats if s.ran and s.gpu_ms is not None) or math.nan
 
     def row(tally: Tally, cpu_ms: float) -> dict:
@@ -731,9 +767,14 @@ def header(args, overhead_ns: float, renderer: str = "?") -> str:
                "range the rounds' lowest and highest" if getattr(args, "rounds", 1) > 1 else "")
             + (f"; Python lines and calls: {args.py_frames} more frames traced (sys.settrace), each pass's median, "
                "the bench's own wrappers left out" if getattr(args, "py_frames", 0) else "")
-            + ". GL calls exclude timer queries; GPU ms = the pass's timer-query time, "
-            "GPU % its share of the frame's (on llvmpipe, which emulates the GPU on the CPU and defers draws, "
-            "compare ratios only); rain GPU ms = " + " + ".join(RAIN_EFFECTS) + ".\n")
+            + ". GL calls exclude timer queries; "
+            + ("GPU ms = the pass's wall time between a ctx.finish() before it and one after it (--pass-wall: "
+               "what the pass costs the device, its vertex work included, which llvmpipe does when a draw is issued "
+               "and its timer queries misplace; the CPU columns leave the waits out but run cold: not comparable), "
+               if getattr(args, "pass_wall", False) else
+               "GPU ms = the pass's timer-query time (on llvmpipe, which emulates the GPU on the CPU and defers "
+               "draws, compare ratios only; --pass-wall for each pass's wall time), ")
+            + "GPU % its share of the frame's; rain GPU ms = " + " + ".join(RAIN_EFFECTS) + ".\n")
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -790,6 +831,10 @@ def parse_args(argv=None) -> argparse.Namespace:
     p.add_argument("--skip-draws", action="store_true",
                    help="count the draws without making them: the CPU figures without llvmpipe's vertex work on "
                         "this thread (pixels meaningless; see the module docstring)")
+    p.add_argument("--pass-wall", action="store_true",
+                   help="each pass's wall time between two ctx.finish() in the GPU columns, instead of timer "
+                        "queries: what each pass costs llvmpipe, vertex work included (the CPU columns then run "
+                        "cold: not comparable)")
     p.add_argument("--undrawn", action="store_true",
                    help="frames nobody looks at (Session.step(draw=False), a headless run's frames before its "
                         "screenshot): the simulations and their state stages, no view drawn")
@@ -814,6 +859,10 @@ def parse_args(argv=None) -> argparse.Namespace:
         p.error(f"--py-frames must be in [0, 100], got {args.py_frames}")
     if not 1 <= args.rounds <= 100:
         p.error(f"--rounds must be in [1, 100], got {args.rounds}")
+    if args.pass_wall and args.skip_draws:
+        p.error("--pass-wall times the draws that --skip-draws leaves out: give one of them")
+    if args.pass_wall:
+        args.gpu_timing = False  # the finishes time the passes; no timer queries beside them
     if args.overrides:  # validated here, before any frame is drawn
         from rain_core.settings import Settings, SettingsError
 
@@ -845,7 +894,7 @@ def main(argv=None) -> int:
                 result = measure_case(ctx, args.size, budget, speed, args.frames, args.warmup, args.gpu_timing,
                                       counter=counter, ripples_backend=args.ripples_backend,
                                       overrides=args.overrides, py_frames=args.py_frames, dt_s=1.0 / args.fps,
-                                      draw=not args.undrawn)
+                                      draw=not args.undrawn, pass_wall=args.pass_wall)
                 rounds[(speed, budget)].append(result)
                 if args.rounds > 1:
                     print(f"round {index + 1}/{args.rounds}, {case_label(result)}: "

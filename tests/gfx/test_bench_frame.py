@@ -12,6 +12,7 @@ import pytest
 from rain_core.bench.frame import (
     GLCounter,
     case_table,
+    header,
     heavy_rain_settings,
     measure_case,
     parse_args,
@@ -127,6 +128,32 @@ def test_skip_draws_counts_draws_without_making_them(gl_ctx):
     assert result["rows"]["scene"]["gl_calls"] > 0 and result["frame"]["cpu_ms"] > 0.0
     for obj in (vao, prog, fbo):
         obj.release()
+
+
+def test_pass_wall_times_each_pass_between_two_finishes(gl_ctx):
+    """--pass-wall: each pass's "GPU ms" is its wall time between a ctx.finish() before and after it (no timer
+    queries); the waits are neither GL calls of the passes nor their CPU, so those columns count what a run
+    without it counts. It cannot be combined with --skip-draws."""
+    cases = {}
+    for wall in (False, True):
+        with GLCounter() as counter:
+            cases[wall] = measure_case(gl_ctx, (48, 27), budget=2000, speed_kmh=100.0, frames=2, warmup=1,
+                                       gpu_timing=False, counter=counter, ripples_backend="numpy32",
+                                       pass_wall=wall)
+    timed = cases[True]
+    assert timed["gpu_source"] == "finish" and timed["gpu_timing"] and not cases[False]["gpu_timing"]
+    passes = [n for n in timed["passes"] if n in timed["rows"] and not n.startswith(("effect: ", "sim: ", "renderer"))]
+    walls = [timed["rows"][n]["gpu_ms"] for n in passes]
+    assert all(math.isfinite(w) and w >= 0.0 for w in walls)
+    assert timed["rows"]["scene"]["gpu_ms"] > 0.0 and timed["rows"]["rainfall.transparent"]["gpu_ms"] > 0.0
+    assert sum(walls) <= timed["frame"]["wall_ms"]  # the passes lie within the frame
+    for key in ("gl_calls", "upload_kb"):
+        assert timed["frame"][key] == cases[False]["frame"][key], key
+    with pytest.raises(SystemExit):
+        parse_args(["--pass-wall", "--skip-draws"])
+    args = parse_args(["--pass-wall"])
+    assert args.gpu_timing is False  # the finishes time the passes
+    assert "wall time between a ctx.finish()" in header(args, 0.0)
 
 
 def test_skip_draws_resolves_auto_with_the_draws_made(gl_ctx, monkeypatch, tmp_path):
