@@ -106,7 +106,8 @@ convex pieces), ``sim`` (``RainfallSim``: the per-frame uniforms, and the twin o
 ``measure`` (weighted counts for tests and the benchmark), ``streaks`` (the NumPy twin of the streak shader),
 ``optics`` (the drop's optics: the env.frag quadrature and its twin, the streak coverage), ``box_uniforms`` and
 ``rain_block`` (the per-frame uniforms and block packed from floats) —
-all NumPy only, no GL — and ``effect`` (``RainfallEffect``, the GL side, imported on first use).
+all NumPy only, no GL — and ``effect`` (``RainfallEffect``, the GL side, imported on first use) with
+``streak_pass`` (``StreakPass``: the streaks' record and quad passes and the records' buffer).
 """
 
 from __future__ import annotations

@@ -41,6 +41,7 @@ from rain_core.effects.rainfall.rain_block import (
 )
 from rain_core.effects.rainfall.shape import SHAPE_DIAMETERS_MM, drop_shape_factors
 from rain_core.effects.rainfall.sim import SPLASH_V_M_S, RainfallSim, RainInput, RainUpdate, box_offsets, splash_clock
+from rain_core.effects.rainfall.streak_pass import StreakPass
 from rain_core.effects.rainfall.streaks import StreakCamera
 from rain_core.effects.rainfall.vehicle_fate import vehicle_pose_floats, vehicle_shape_pairs, vehicle_uniforms
 from rain_core.gfx import units
@@ -51,11 +52,6 @@ from rain_core.gfx.uniforms import owned_uniforms, set_uniforms
 ENV_SIZE = (64, 32)  # texels of the drop's environment map (equirectangular, rainfall/env.frag)
 OPEN_M = -1e4  # m, the roof height the shader reads where the maps say −inf (open sky)
 PROBE_WIDTH = 1024  # texels per row of the debug drop probe (read_drops)
-# A drop's streak record (rainfall/streak_record.vert's outputs, rainfall/streak.vert's per-instance inputs): head
-# and tail (px from the view centre, clip z, clip w; w = 0 for a culled drop), half extents (px), colour and opacity.
-RECORD_VARYINGS = ("r_head", "r_tail", "r_half", "r_color")
-RECORD_FORMAT = "4f 4f 2f 4f/i"
-RECORD_BYTES = 56
 
 
 @functools.cache
@@ -104,14 +100,9 @@ class RainfallEffect(Effect):
         self.settings = settings if settings is not None else Settings()
         self.seed = int(seed)
         layers = {"LAYERS": len(LAYER_SCALES)}
-        # The streaks: a drop's work (find, cull, light) once per drop in the record pass, not at each of its
-        # quad's 4 corners: a quarter of the heavy invocations (the streak pass 2.1-2.8x faster on llvmpipe).
-        self.record_prog = self.shaders.program("rainfall/streak_record.vert", defines=layers,
-                                                varyings=RECORD_VARYINGS)
-        self.streak_prog = self.shaders.program("rainfall/streak.vert", "rainfall/streak.frag")
-        self._record_vao = ctx.vertex_array(self.record_prog, [])
-        self._records: moderngl.Buffer | None = None  # RECORD_BYTES per drop instance (_streak_records)
-        self._streak_vao: moderngl.VertexArray | None = None
+        self.streaks = StreakPass(ctx, self.shaders, layers)  # each drop's record once, then its quad
+        self.record_prog = self.streaks.record_prog  # the drop uniforms
+        self.streak_prog = self.streaks.quad_prog
         self.splash_prog = self.shaders.program("rainfall/splash.vert", "rainfall/splash.frag", defines=layers)
         self.env_prog = self.shaders.program("common/fullscreen.vert", "rainfall/env.frag")
         self._env_vao = ctx.vertex_array(self.env_prog, [])
@@ -269,7 +260,7 @@ class RainfallEffect(Effect):
         upd = self.sim.advance(inp)
         self._sync_table()
         if self.sim.capacity:
-            self._streak_records()  # made before the frame's first draw: made after, it waits for the queued draws
+            self.streaks.reserve(self.sim.capacity)  # before the frame's first draw (StreakPass.reserve)
         self.camera_velocity_m_s = v_cam
         if frame.time_s > (self._prev_cam[1] if self._prev_cam is not None else -math.inf):
             self._prev_cam = (np.asarray(frame.camera.position, dtype=np.float64).copy(), frame.time_s)
@@ -503,49 +494,34 @@ class RainfallEffect(Effect):
             ctx.disable(moderngl.BLEND)
             ctx.blend_func = moderngl.DEFAULT_BLENDING
 
-    def _streak_records(self) -> moderngl.Buffer:
-        """The records' buffer, for the sim's capacity (made again when it changes), with the quads' vertex array."""
-        size = max(1, self.sim.capacity) * RECORD_BYTES
-        if self._records is None or self._records.size != size:
-            self._release_records()
-            self._records = self.ctx.buffer(reserve=size)
-            self._streak_vao = self.ctx.vertex_array(self.streak_prog,
-                                                     [(self._records, RECORD_FORMAT, *RECORD_VARYINGS)])
-        return self._records
+    def _bind_own_frame(self, rc, upd: RainUpdate, s) -> list:
+        """Bind this effect's per-frame block, drop environment, table and roof maps for a view other than the
+        update's (a label image, a probe); returns the frame's plain uniform pairs (_frame_values)."""
+        frame_pairs, block = self._frame_values(upd, rc, s, self._lights(rc, upd.boxes))
+        self._use_frame_block(block)
+        self._env_tex.use(units.RAINFALL_ENV)  # colour only for a label, but never another pass's texture there
+        self._bind_static()
+        return frame_pairs
 
-    def _release_records(self) -> None:
-        for obj in (self._streak_vao, self._records):
-            if obj is not None:
-                obj.release()
-        self._records = self._streak_vao = None
-
-    def _write_records(self, rc, upd: RainUpdate, frame_pairs, s) -> moderngl.Buffer:
-        """Write every drop instance's streak record for rc's view (transform feedback, nothing rasterised)."""
-        records = self._streak_records()
+    def _write_records(self, rc, upd: RainUpdate, frame_pairs, s) -> None:
+        """Every drop instance's streak record for rc's view (StreakPass.write, its uniforms written here)."""
         self._use(self.record_prog, rc, upd, frame_pairs, self._streak_pairs(rc, s))
-        self._record_vao.transform(records, moderngl.POINTS, vertices=self.sim.capacity)
-        return records
+        self.streaks.write(self.sim.capacity)
 
     def _draw_streaks(self, rc, upd: RainUpdate, frame_pairs, s) -> None:
         """The streak records for rc's view, then their quads into the bound framebuffer with the caller's
         blending and depth state."""
         self._write_records(rc, upd, frame_pairs, s)
-        size = rc.size
-        owned_uniforms(self.streak_prog).update_for(
-            "viewport", size, lambda: {"u_viewport": (float(size[0]), float(size[1]))})
-        self._streak_vao.render(moderngl.TRIANGLE_STRIP, vertices=4, instances=self.sim.capacity)
+        self.streaks.draw(self.sim.capacity, rc.size)
 
     def read_streaks(self, rc) -> np.ndarray:
         """Test probe: every drop instance's streak record as the GPU writes it for rc's view at the last update,
-        (capacity, 14) float32 (RECORD_VARYINGS: head, tail, half extents, colour; head w = 0: culled)."""
+        (capacity, 14) float32 (streak_pass.RECORD_VARYINGS: head, tail, half extents, colour; head w = 0:
+        culled)."""
         upd = self.last_update
         s = self._settings(rc.frame)
-        frame_pairs, block = self._frame_values(upd, rc, s, self._lights(rc, upd.boxes))
-        self._use_frame_block(block)
-        self._env_tex.use(units.RAINFALL_ENV)
-        self._bind_static()
-        records = self._write_records(rc, upd, frame_pairs, s)
-        return np.frombuffer(records.read(), np.float32).reshape(-1, RECORD_BYTES // 4)[:self.sim.capacity].copy()
+        self._write_records(rc, upd, self._bind_own_frame(rc, upd, s), s)
+        return self.streaks.read(self.sim.capacity)
 
     def read_drops(self, shift_z: float = 0.0, around_z: float = 0.0) -> np.ndarray:
         """Test probe: every instance's (x, y, z in the frame shifted by shift_z, flags) as the GPU computes it
@@ -587,8 +563,8 @@ class RainfallEffect(Effect):
                 obj.release()
         self._static_tex = {}
         self._table_tex = None
-        self._release_records()
-        for obj in (self._record_vao, self._splash_vao, self._env_vao, self._env_fbo, self._env_tex,
+        self.streaks.release()
+        for obj in (self._splash_vao, self._env_vao, self._env_fbo, self._env_tex,
                     self._frame_buffer):
             obj.release()
         if self._owns_shaders:
@@ -605,10 +581,7 @@ class RainfallEffect(Effect):
         if not self.sim.capacity or upd.drawn_expected <= 0.0:
             return
         s = self._settings(rc.frame)
-        frame_pairs, block = self._frame_values(upd, rc, s, self._lights(rc, upd.boxes))
-        self._use_frame_block(block)
-        self._env_tex.use(units.RAINFALL_ENV)  # colour only, but never another pass's texture on that unit
-        self._bind_static()
+        frame_pairs = self._bind_own_frame(rc, upd, s)
         target.fbo.use()
         rc.ctx.enable(moderngl.DEPTH_TEST)
         rc.ctx.disable(moderngl.CULL_FACE)

@@ -8,7 +8,7 @@ import numpy as np
 
 from rain_core import physics
 from rain_core.effects.rainfall import RainfallSim, StreakCamera, streak_geometry
-from rain_core.effects.rainfall.effect import RECORD_BYTES
+from rain_core.effects.rainfall.streak_pass import RECORD_BYTES
 
 # --- what the camera sees ---------------------------------------------------------------------------------------
 
@@ -148,7 +148,7 @@ def test_streak_records_are_the_twins_streaks(gl_ctx, shaders, rain):
     scene.step(1.0 / 60.0)
     frame = scene.render()
     rc = scene.renderer.render_context(frame)
-    assert effect.sim.capacity == 9000 and effect._records.size == 9000 * RECORD_BYTES
+    assert effect.sim.capacity == 9000 and effect.streaks.records.size == 9000 * RECORD_BYTES
     more = effect.read_streaks(rc)
     assert len(more) == 9000 and (more[:, 3] > 0.0).sum() > 2 * drawn.sum() * 0.8
 
