@@ -1,5 +1,6 @@
 #version 330 core
-// Glow, step 2: one direction of a separable Gaussian blur (normalised discrete weights, edges clamped).
+// Glow, step 2: one direction of a separable Gaussian blur (normalised discrete weights, edges clamped). Alpha
+// (glow_down's least kept light of the block) is carried through unblurred.
 uniform sampler2D u_src;
 uniform ivec2 u_step;      // (1, 0) horizontal, (0, 1) vertical
 uniform float u_sigma_px;  // standard deviation in texels of this target
@@ -17,5 +18,5 @@ void main() {
         sum += w * texelFetch(u_src, clamp(p + k * u_step, ivec2(0), hi), 0).rgb;
         wsum += w;
     }
-    f_color = vec4(sum / wsum, 1.0);
+    f_color = vec4(sum / wsum, texelFetch(u_src, p, 0).a);
 }

@@ -14,7 +14,8 @@ uniform int u_scatter_count;       // lights (nearest first) traced per pixel
 uniform int u_scatter_samples;     // quadrature nodes per light
 uniform float u_scatter_per_m;     // σ_s (1/m): scattering coefficient of the rain + haze, × the user's scale
 uniform float u_scatter_max_m;     // where rays into the sky stop (m)
-uniform float u_scatter_skip;      // exposed radiance a pixel's skipped lights may add up to, together
+uniform float u_scatter_skip;      // exposed radiance a pixel's skipped lights may add up to, together …
+uniform float u_scatter_skip_relative;  // … plus this share of the light the pixel keeps (u_glow's alpha; 0: none)
 out vec4 f_color;
 
 // The part [ta, tb] of the ray eye + t·dir inside light i's cone (cos_outer > 0: a convex, single-nappe cone);
@@ -124,7 +125,11 @@ void main() {
     float k = min(u_glow_strength, 1.0 / max(w, 1e-6));
     vec3 glow = k > 0.0 ? k * texture(u_glow, uv).rgb : vec3(0.0);
     vec3 scatter = vec3(0.0);
+    // What the skipped lights may add: a fixed amount, below an 8-bit step on the darkest pixel, and a share of
+    // the pixel's own light (the least its glow block keeps), below one on any pixel of the tone map's curve.
     float budget = u_scatter_skip;
+    if (u_scatter_skip_relative > 0.0)
+        budget += u_scatter_skip_relative * texelFetch(u_glow, pixel / u_glow_factor, 0).a;
     for (int i = 0; i < min(u_scatter_count, u_light_count); ++i) {
         scatter += light_inscatter(i, u_camera_pos, dir, dist, budget);
     }

@@ -25,7 +25,12 @@ from rain_core.effects.atmosphere.model import (
     atmosphere_uniforms,
     medium_extinction_per_m,
 )
-from rain_core.effects.atmosphere.scattering import SCATTER_MAX_M, SCATTER_SAMPLES, SCATTER_SKIP
+from rain_core.effects.atmosphere.scattering import (
+    SCATTER_MAX_M,
+    SCATTER_SAMPLES,
+    SCATTER_SKIP,
+    SCATTER_SKIP_RELATIVE,
+)
 from rain_core.gfx import units
 from rain_core.gfx.effect import Effect
 from rain_core.gfx.frame import Frame, RenderContext
@@ -42,7 +47,8 @@ class AtmosphereEffect(Effect):
     ``frame.settings.atmosphere`` each frame (``settings`` only stands in for frames without settings; ``seed``
     is unused: nothing here is random); shaders default to the renderer's library. After ``update`` the frame's
     model is in ``self.state`` (None while the effect is idle). ``scatter_skip``: the exposed radiance a pixel's
-    skipped lights may add up to (``scattering.SCATTER_SKIP``; 0: every light traced).
+    skipped lights may add up to (``scattering.SCATTER_SKIP``; 0: every light traced), and ``scatter_skip_relative``
+    the share of the pixel's own light they may add on top (``scattering.SCATTER_SKIP_RELATIVE``; 0: none).
     """
 
     name = "atmosphere"
@@ -67,6 +73,7 @@ class AtmosphereEffect(Effect):
         self._hdr_fbo = ColorView(ctx)  # the HDR colour without its depth (the pass samples that depth)
         self._depth_sampler = depth_value_sampler(ctx)
         self.scatter_skip = SCATTER_SKIP
+        self.scatter_skip_relative = SCATTER_SKIP_RELATIVE
 
     # --- per frame ------------------------------------------------------------------------------------------
     def _section(self, frame) -> AtmosphereSection:
@@ -169,19 +176,23 @@ class AtmosphereEffect(Effect):
         rc.hdr.depth.use(units.ATMOSPHERE_DEPTH)
         a, b = self._glow_targets(rc.size, self._glow_factor)
         glowed = self.state.glow_strength > 0.0
-        if glowed:
-            self._glow(rc, a, b)
+        # The glow's first step also finds each block's least kept light, which lets the in-scatter skip a share
+        # of it: made whenever lights are traced, blurred only for a halo.
+        relative = self.scatter_skip_relative if self._scatter_count > 0 else 0.0
+        if glowed or relative > 0.0:
+            self._glow(rc, a, b, blur=glowed)
         prog, vao, owned = self._program(rc, "atmosphere/composite.frag")
-        self._frame_uniforms(prog, owned, rc, bind=not glowed)
+        self._frame_uniforms(prog, owned, rc, bind=not (glowed or relative > 0.0))
         a.color.use(units.ATMOSPHERE_GLOW)
         # Only this effect writes these names in its programs: made and compared only when what they are made of
         # changes (the key holds every value that is not a constant).
         key = (self._glow_factor, self.state.glow_strength, self._scatter_count, self.state.scatter_per_m,
-               self.scatter_skip)
+               self.scatter_skip, relative)
         owned.update_for("composite", key, lambda: {
             "u_glow": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH, "u_glow_factor": key[0],
             "u_glow_strength": key[1], "u_scatter_count": key[2], "u_scatter_samples": SCATTER_SAMPLES,
-            "u_scatter_per_m": key[3], "u_scatter_max_m": SCATTER_MAX_M, "u_scatter_skip": key[4]})
+            "u_scatter_per_m": key[3], "u_scatter_max_m": SCATTER_MAX_M, "u_scatter_skip": key[4],
+            "u_scatter_skip_relative": key[5]})
         # The composite reads the scene's depth, so it writes through a framebuffer without that depth attached.
         self._hdr_fbo.fbo(rc.hdr.color).use()
         ctx.enable(moderngl.BLEND)
@@ -193,16 +204,20 @@ class AtmosphereEffect(Effect):
         self._depth_sampler.clear(units.ATMOSPHERE_DEPTH)
         rc.hdr.fbo.use()
 
-    def _glow(self, rc: RenderContext, a: RenderTarget, b: RenderTarget) -> None:
-        """c·w box-averaged into ``a``, then blurred a → b → a."""
+    def _glow(self, rc: RenderContext, a: RenderTarget, b: RenderTarget, blur: bool = True) -> None:
+        """c·w box-averaged into ``a`` (and each block's least kept light in its alpha), then, with ``blur``,
+        blurred a → b → a."""
         down, down_vao, owned = self._program(rc, "atmosphere/glow_down.frag")
         self._frame_uniforms(down, owned, rc)
         rc.hdr.color.use(units.ATMOSPHERE_GLOW)
-        factor = self._glow_factor
-        owned.update_for("glow_down", factor, lambda: {"u_color": units.ATMOSPHERE_GLOW,
-                                                       "u_depth": units.ATMOSPHERE_DEPTH, "u_factor": factor})
+        factor, strength = self._glow_factor, self.state.glow_strength
+        owned.update_for("glow_down", (factor, strength), lambda: {
+            "u_color": units.ATMOSPHERE_GLOW, "u_depth": units.ATMOSPHERE_DEPTH, "u_factor": factor,
+            "u_glow_strength": strength})
         a.fbo.use()
         down_vao.render(moderngl.TRIANGLES, vertices=3)
+        if not blur:
+            return
         sigma = min(self.glow_sigma_px / self._glow_factor, MAX_BLUR_RADIUS / 3.0)
         radius = blur_radius(sigma)
         for axis, step, src, dst in ((0, (1, 0), a, b), (1, (0, 1), b, a)):

@@ -23,6 +23,11 @@ SCATTER_MAX_M = 300.0  # m, where rays into the sky stop gathering light
 # tone map applies (the exposure's correction: ±3 EV automatic, ±4 EV compensation by hand): a quarter of an
 # 8-bit step at most, so a skipped light changes no displayed pixel by more than rounding does.
 SCATTER_SKIP = 0.25 / 255.0 / (6.4 * 2.0**4)
+# On top of that, a share of the pixel's own light (what it keeps of its exposed radiance, its dimmest channel, the
+# least of its glow block): the display value moves at most 72.9 8-bit steps per unit of relative change of
+# exposed radiance (L·dV/dL of the ACES fit then sRGB, steepest at L ≈ 0.17; the exposure's stops scale L and leave
+# it as it is). A quarter of a step again, less the half float's rounding of the stored light (2^-11).
+SCATTER_SKIP_RELATIVE = 0.25 / 72.9 * (1.0 - 2.0**-10)
 
 
 def _spot(light, to_light) -> np.ndarray:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from rain_core.camera import look_at
 from rain_core.effects import atmosphere as atm
@@ -26,17 +27,25 @@ LOW_BEAM = Light(np.array([1.0, 0.7, 590.0]), np.array([0.0, -0.026, -1.0]) / np
                  150.0, low_beam=True)
 
 
-def _render_lit(gl_ctx, shaders, kit, lights, hour, *, scale=1.0, skip=None):
+def _render_lit(gl_ctx, shaders, kit, lights, hour, *, scale=1.0, skip=None, relative=None, glow=0.0, out=None,
+                near_box=False):
     """The pre-exposed HDR image (bottom row first) of a far box under ``lights`` alone, in 20 mm/h rain at
-    ``hour``, no glow, ``scale`` × the light scattering; ``skip``: the effect's scatter_skip (None: its own).
-    Returns (image, the effect's state, the render context)."""
-    world = kit.world([kit.box((0.0, -50.0, -3000.0), (1.0, 1.0, 1.0), (0.1, 0.1, 0.1))])
+    ``hour``, ``glow`` (the setting; 0: none), ``scale`` × the light scattering; ``skip`` and ``relative``: the
+    effect's scatter_skip and scatter_skip_relative (None: its own). Returns (image, the effect's state, the render
+    context); ``out`` (a dict) also gets the glow target's alpha ("kept", bottom row first) and "factor";
+    ``near_box``: a dark box in view too, 20 m ahead (edges against the sky)."""
+    parts = [kit.box((0.0, -50.0, -3000.0), (1.0, 1.0, 1.0), (0.1, 0.1, 0.1))]
+    if near_box:
+        parts.append(kit.box((0.0, 2.0, 585.0), (3.0, 2.0, 1.0), (0.02, 0.02, 0.02)))
+    world = kit.world(parts)
     settings = Settings()
-    settings.atmosphere.glow = 0.0
+    settings.atmosphere.glow = glow
     settings.atmosphere.light_scattering = scale
     r = kit.renderer(gl_ctx, shaders, world, SIZE)
     if skip is not None:
         r.effects[0].scatter_skip = skip
+    if relative is not None:
+        r.effects[0].scatter_skip_relative = relative
     original = r.render_context
 
     def with_lights(frame, *args, **kwargs):
@@ -49,6 +58,11 @@ def _render_lit(gl_ctx, shaders, kit, lights, hour, *, scale=1.0, skip=None):
     r.render(frame)
     image = kit.bottom_first(r)[0]
     state, rc = r.effects[0].state, r.render_context(frame)
+    if out is not None:
+        glow_target = r.effects[0]._targets[2][0]
+        w, h = glow_target.color.size
+        texels = np.frombuffer(glow_target.color.read(), dtype=np.float16).reshape(h, w, 4)
+        out.update(kept=texels[..., 3].astype(np.float64), factor=r.effects[0]._glow_factor)
     kit.release(r)
     return image, state, rc
 
@@ -82,9 +96,55 @@ def test_skipped_lights_change_no_pixel_by_more_than_the_skip_budget(gl_ctx, sha
     half = renderer_module.float_target
     monkeypatch.setattr(renderer_module, "float_target",
                         lambda ctx, size, components=4, dtype="f2", **kw: half(ctx, size, components, "f4", **kw))
-    exact, skipped, exact_again = (_render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, skip=skip)[0]
-                                   for skip in (0.0, SCATTER_SKIP, 0.0))
+    exact, skipped, exact_again = (
+        _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, skip=skip, relative=0.0)[0]
+        for skip in (0.0, SCATTER_SKIP, 0.0))
     np.testing.assert_array_equal(exact_again, exact)  # the budget is the effect's: set back, nothing skipped
     change = np.abs(skipped - exact)
     assert (change > 0).mean() > 0.05  # lights were skipped
     assert change.max() <= SCATTER_SKIP
+
+
+def test_each_glow_block_holds_the_least_light_its_pixels_keep(gl_ctx, shaders, kit):
+    """The glow's first step writes, per block of its pixels, the least light a pixel keeps after the composite
+    (its dimmest channel × (1 − k·w)), and the blur carries it through: all of it without a halo (k = 0), less
+    with one, never more than the darkest pixel of the block (the sky's edge against the box included)."""
+    pre = _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, scale=0.0, near_box=True)[0]  # nothing traced, no glow:
+    # no post pass, the scene as the composite finds it
+    for glow in (0.0, 1.0):
+        out = {}
+        _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, glow=glow, out=out, near_box=True)
+        f, kept = out["factor"], out["kept"]
+        h, w = kept.shape
+        dim = np.full((h * f, w * f), np.inf)
+        dim[:SIZE[1], :SIZE[0]] = pre.min(axis=-1)
+        block_min = dim.reshape(h, f, w, f).min(axis=(1, 3))
+        assert f > 1 and np.ptp(block_min) > 0.1 * block_min.max()  # blocks of several pixels, sky and box
+        if glow == 0.0:
+            np.testing.assert_allclose(kept, block_min, rtol=2.0**-11)  # (a half float's rounding)
+        else:
+            assert np.all(kept <= block_min * (1.0 + 2.0**-11))
+            assert (kept < 0.99 * block_min).mean() > 0.5  # the halo's share moved away
+
+
+@pytest.mark.parametrize("glow", [0.0, 1.0])
+def test_lights_skipped_for_a_share_of_the_pixels_own_light_change_it_by_at_most_that_share(
+        gl_ctx, shaders, kit, monkeypatch, glow):
+    """On top of the fixed budget, a light is skipped when its bound fits in ``scatter_skip_relative`` of the light
+    the pixel keeps (its glow block's least, the dimmest channel): no pixel changes by more than the fixed budget
+    plus that share of its own value, and more pixels skip than with the fixed budget alone (by day the pixels
+    are bright). With the glow drawn or not (then its first step runs for the share alone)."""
+    from rain_core.effects.atmosphere.scattering import SCATTER_SKIP, SCATTER_SKIP_RELATIVE
+    from rain_core.gfx import renderer as renderer_module
+
+    half = renderer_module.float_target
+    monkeypatch.setattr(renderer_module, "float_target",
+                        lambda ctx, size, components=4, dtype="f2", **kw: half(ctx, size, components, "f4", **kw))
+    exact, fixed, shared = (
+        _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, skip=skip, relative=relative, glow=glow)[0]
+        for skip, relative in ((0.0, 0.0), (SCATTER_SKIP, 0.0), (SCATTER_SKIP, SCATTER_SKIP_RELATIVE)))
+    change = np.abs(shared - exact)
+    allowed = SCATTER_SKIP + SCATTER_SKIP_RELATIVE * exact.min(axis=-1, keepdims=True)
+    assert np.all(change <= allowed * (1.0 + 1e-5))
+    assert (change > 0).mean() > (np.abs(fixed - exact) > 0).mean() + 0.05  # the share skips more
+    assert change.max() > SCATTER_SKIP  # … lights the fixed budget alone would have traced
