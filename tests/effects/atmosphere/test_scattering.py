@@ -109,8 +109,8 @@ def test_each_glow_block_holds_the_least_light_its_pixels_keep(gl_ctx, shaders, 
     """The glow's first step writes, per block of its pixels, the least light a pixel keeps after the composite
     (its dimmest channel × (1 − k·w)), and the blur carries it through: all of it without a halo (k = 0), less
     with one, never more than the darkest pixel of the block (the sky's edge against the box included)."""
-    pre = _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, scale=0.0, near_box=True)[0]  # nothing traced, no glow:
-    # no post pass, the scene as the composite finds it
+    # Nothing traced and no glow: no post pass, the scene as the composite finds it.
+    pre = _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, scale=0.0, near_box=True)[0]
     for glow in (0.0, 1.0):
         out = {}
         _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, glow=glow, out=out, near_box=True)
