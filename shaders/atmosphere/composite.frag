@@ -70,21 +70,23 @@ vec3 light_inscatter(int i, vec3 eye, vec3 dir, float t_max, inout float budget)
     float range = abs(u_light_pos[i].w);  // negative marks a low-beam headlight (spot_factor)
     vec3 rel = lp - eye;
     float t0 = dot(rel, dir);
-    float h = max(length(rel - t0 * dir), 0.15);  // a lamp head is ~0.3 m across: no singular core
+    float h_ray = length(rel - t0 * dir);  // the ray's true distance from the lamp
+    float h = max(h_ray, 0.15);  // a lamp head is ~0.3 m across: no singular core
     if (h >= range) return vec3(0.0);
     float half_chord = sqrt(range * range - h * h);
     float ta = max(0.0, t0 - half_chord);
     float tb = min(t_max, t0 + half_chord);
     if (tb <= ta || !cone_interval(i, eye, dir, ta, tb)) return vec3(0.0);
-    float tha = atan((ta - t0) / h);
-    float thb = atan((tb - t0) / h);
     // An upper bound of the quadrature below, from its factors' bounds on [ta, tb]: spot and window ≤ 1, the
-    // attenuation ≤ exp(−β(ta + h_ray)) (t ≥ ta, r ≥ h_ray, the ray's true distance from the lamp), the phase at
-    // most its largest at the ends (each lobe is monotonic in μ = −sin θ; any μ where h was raised to 0.15 m).
+    // attenuation ≤ exp(−β(ta + h_ray)) (t ≥ ta, r ≥ h_ray), the phase at most its largest at the ends (each
+    // lobe is monotonic in μ = −sin θ, and sin(atan x) = x / √(1 + x²); any μ where h was raised to 0.15 m).
     // A light whose bound fits in what is left of the pixel's budget is skipped and its bound spent.
-    float h_ray = length(rel - t0 * dir);
+    float xa = (ta - t0) / h, xb = (tb - t0) / h;
+    float tha = atan(xa);
+    float thb = atan(xb);
     bool true_h = h_ray >= 0.15;
-    float mu_lo = true_h ? -sin(thb) : -1.0, mu_hi = true_h ? -sin(tha) : 1.0;
+    float mu_lo = true_h ? -xb * inversesqrt(1.0 + xb * xb) : -1.0;
+    float mu_hi = true_h ? -xa * inversesqrt(1.0 + xa * xa) : 1.0;
     float phase_hi = mix(max(atmosphere_phase(mu_lo, u_phase_g), atmosphere_phase(mu_hi, u_phase_g)),
                          max(atmosphere_phase(mu_lo, u_phase_back_g), atmosphere_phase(mu_hi, u_phase_back_g)),
                          u_phase_back_weight);
