@@ -380,6 +380,21 @@ def parse_override(text: str) -> tuple[str, object]:
     return path.strip(), value
 
 
+def check_overrides(p: argparse.ArgumentParser, overrides) -> None:
+    """``--set``'s (path, value) pairs validated before any frame is drawn: a parser error naming the setting."""
+    if not overrides:
+        return
+    from rain_core.settings import Settings, SettingsError
+
+    if any(path == "quality.render_scale" for path, _ in overrides):
+        p.error("--set quality.render_scale: it scales a window's frame; the bench draws --size (pass a smaller "
+                "--size instead)")
+    try:
+        with_overrides(Settings(), overrides)
+    except SettingsError as exc:
+        p.error(f"--set: {exc}")
+
+
 class _Brake:
     """A drive input that holds the car still (the parked case)."""
 
@@ -863,16 +878,7 @@ def parse_args(argv=None) -> argparse.Namespace:
         p.error("--pass-wall times the draws that --skip-draws leaves out: give one of them")
     if args.pass_wall:
         args.gpu_timing = False  # the finishes time the passes; no timer queries beside them
-    if args.overrides:  # validated here, before any frame is drawn
-        from rain_core.settings import Settings, SettingsError
-
-        if any(path == "quality.render_scale" for path, _ in args.overrides):
-            p.error("--set quality.render_scale: it scales a window's frame; the bench draws --size (pass a "
-                    "smaller --size instead)")
-        try:
-            with_overrides(Settings(), args.overrides)
-        except SettingsError as exc:
-            p.error(f"--set: {exc}")
+    check_overrides(p, args.overrides)
     return args
 
 

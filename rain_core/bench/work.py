@@ -41,6 +41,7 @@ from rain_core.bench.frame import (
     _Brake,
     _effect_of,
     _preload_kernels,
+    check_overrides,
     gl_description,
     heavy_rain_settings,
     parse_budgets,
@@ -207,13 +208,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     args.warmup = args.warmup if args.warmup is not None else (4 if args.quick else 30)
     if not 1 <= args.frames <= 100 or not 0 <= args.warmup <= 10_000:
         p.error(f"--frames must be in [1, 100] and --warmup in [0, 10000], got {args.frames} and {args.warmup}")
-    if args.overrides:  # validated here, before any frame is drawn
-        from rain_core.settings import Settings, SettingsError
-
-        try:
-            with_overrides(Settings(), args.overrides)
-        except SettingsError as exc:
-            p.error(f"--set: {exc}")
+    check_overrides(p, args.overrides)
     return args
 
 
