@@ -15,7 +15,12 @@ SIZE = (64, 36)
 
 @pytest.fixture(scope="module")
 def rainy(gl_ctx):
-    return count_case(gl_ctx, SIZE, budget=3000, speed_kmh=100.0, frames=2, warmup=3)
+    # Made before the per-test fixture that makes the shared context current (a module's fixtures come first):
+    # current here too, and no GL error left behind.
+    with gl_ctx:
+        result = count_case(gl_ctx, SIZE, budget=3000, speed_kmh=100.0, frames=2, warmup=3)
+        assert gl_ctx.error == "GL_NO_ERROR"
+    return result
 
 
 def test_full_screen_passes_write_each_pixel_once(rainy):
