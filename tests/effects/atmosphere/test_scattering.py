@@ -148,3 +148,19 @@ def test_lights_skipped_for_a_share_of_the_pixels_own_light_change_it_by_at_most
     assert np.all(change <= allowed * (1.0 + 1e-5))
     assert (change > 0).mean() > (np.abs(fixed - exact) > 0).mean() + 0.05  # the share skips more
     assert change.max() > SCATTER_SKIP  # … lights the fixed budget alone would have traced
+
+
+def test_the_pixels_share_is_a_quarter_step_where_the_tone_map_is_steepest():
+    """SCATTER_SKIP_RELATIVE: a relative change of the exposed radiance by that share moves a displayed 8-bit
+    value by at most a quarter of a step, wherever the value lies on the tone map's curve (shaders/core/
+    tonemap.frag: the ACES fit, then sRGB; the exposure's stops scale L and leave L·dV/dL as it is)."""
+    from rain_core.effects.atmosphere.scattering import SCATTER_SKIP_RELATIVE
+
+    L = np.logspace(-7.0, 4.0, 400_001)
+    aces = np.clip((L * (2.51 * L + 0.03)) / (L * (2.43 * L + 0.59) + 0.14), 0.0, 1.0)
+    shown = 255.0 * np.where(aces < 0.0031308, 12.92 * aces, 1.055 * aces ** (1.0 / 2.4) - 0.055)
+    steps_per_relative_change = np.gradient(shown, np.log(L))  # L·dV/dL
+    steepest = steps_per_relative_change.max()
+    assert 72.0 < steepest < 74.0
+    assert SCATTER_SKIP_RELATIVE * steepest <= 0.25
+    assert SCATTER_SKIP_RELATIVE * steepest > 0.24  # … and not far below it: the skips it allows are not wasted
