@@ -401,6 +401,22 @@ class _Brake:
     throttle, brake, steer, reverse = 0.0, 1.0, 0.0, False
 
 
+def heavy_rain_case(ctx, size, budget: int, speed_kmh: float, seed: int = 1, overrides=(), gpu_timing=False):
+    """A case's scene: ``heavy_rain_settings(budget)`` and ``overrides`` at ``size`` px, the ego car parked (braked)
+    or driven at ``speed_kmh`` km/h by the autopilot, the cached kernels loaded. Returns (scene, the drive input
+    each ``scene.step`` takes)."""
+    from rain_core.scene import Scene
+
+    scene = Scene(ctx, size, settings=with_overrides(heavy_rain_settings(budget), overrides), seed=seed,
+                  gpu_timing=gpu_timing)
+    _preload_kernels()
+    speed = speed_kmh / 3.6
+    scene.ego.speed_m_s = speed
+    if speed > 0.0:
+        scene.autopilot.target_speed_m_s = speed
+    return scene, (_Brake() if speed == 0.0 else None)
+
+
 def _effect_of(pass_name: str) -> str:
     return pass_name.split(".", 1)[0] if "." in pass_name else pass_name
 
@@ -423,7 +439,6 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
     renderer's passes, the scene's step, what the renderer does between passes, and effect totals
     ("effect: NAME")."""
     from rain_core.gfx.renderer import Renderer
-    from rain_core.scene import Scene
 
     own_counter = counter is None
     counter = counter or GLCounter()
@@ -467,17 +482,10 @@ def measure_case(ctx, size=(320, 180), budget: int = 50_000, speed_kmh: float = 
     # (a tree before undrawn frames has no draw argument: measured drawn only)
     render = (lambda: scene.render()) if draw else (lambda: scene.render(draw=False))
     try:
-        scene = Scene(ctx, size, settings=with_overrides(heavy_rain_settings(budget), overrides), seed=seed,
-                      gpu_timing=gpu_timing)
-        _preload_kernels()
+        scene, drive = heavy_rain_case(ctx, size, budget, speed_kmh, seed, overrides, gpu_timing)
         for effect in scene.effects:
             if effect.name == "ripples":
                 effect.backend = ripples_backend  # read when the field is built, on the first active frame
-        speed = speed_kmh / 3.6
-        scene.ego.speed_m_s = speed
-        drive = _Brake() if speed == 0.0 else None
-        if speed > 0.0:
-            scene.autopilot.target_speed_m_s = speed
         samples: dict[str, dict[str, list]] = defaultdict(lambda: defaultdict(list))
         order: list[str] = []
         for index in range(warmup + frames):

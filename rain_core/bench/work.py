@@ -38,16 +38,13 @@ from rain_core.bench.frame import (
     RAIN_EFFECTS,
     RAIN_MM_H,
     SPEEDS_KMH,
-    _Brake,
     _effect_of,
-    _preload_kernels,
     check_overrides,
     gl_description,
-    heavy_rain_settings,
+    heavy_rain_case,
     parse_budgets,
     parse_override,
     parse_size,
-    with_overrides,
 )
 
 BUDGETS = (50_000, 1_000_000)
@@ -63,8 +60,6 @@ def count_case(ctx, size=(1920, 1080), budget: int = 50_000, speed_kmh: float = 
     "screens"}} (passes in order, then "effect: NAME", the rain's sum and the whole frame; medians over the drawn
     frames), "passes": [...], "streak_instances": the rainfall's drop instances, ...}."""
     from rain_core.gfx.renderer import Renderer
-    from rain_core.scene import Scene
-
     queries: dict[str, object] = {}
     counts: dict[str, list[tuple[int, int]]] = {}
     order: list[str] = []
@@ -91,14 +86,7 @@ def count_case(ctx, size=(1920, 1080), budget: int = 50_000, speed_kmh: float = 
     Renderer._timed = timed
     scene = None
     try:
-        scene = Scene(ctx, size, settings=with_overrides(heavy_rain_settings(budget), overrides), seed=seed,
-                      gpu_timing=False)
-        _preload_kernels()
-        speed = speed_kmh / 3.6
-        scene.ego.speed_m_s = speed
-        drive = _Brake() if speed == 0.0 else None
-        if speed > 0.0:
-            scene.autopilot.target_speed_m_s = speed
+        scene, drive = heavy_rain_case(ctx, size, budget, speed_kmh, seed, overrides)
         for _ in range(warmup):
             scene.step(DT_S, drive)
             scene.render(draw=False)

@@ -20,7 +20,7 @@ uniform float u_alpha_max;
 uniform float u_alpha_spread;       // constants.SPREAD_ALPHA
 uniform float u_stretch_max;        // constants.STRETCH_MAX
 
-// The streak record (RECORD_FORMAT in effect.py); a culled drop writes r_head.w = 0.
+// The streak record (streak_pass.RECORD_FORMAT); a culled drop writes r_head.w = 0.
 out vec4 r_head;   // px from the view centre at the drop now, then its clip z and w
 out vec4 r_tail;   // the same where it was, relative to the camera, when the shutter opened
 out vec2 r_half;   // px: half extents of the coverage profile + 0.5 (across, along)

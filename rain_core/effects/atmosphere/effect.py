@@ -179,10 +179,11 @@ class AtmosphereEffect(Effect):
         # The glow's first step also finds each block's least kept light, which lets the in-scatter skip a share
         # of it: made whenever lights are traced, blurred only for a halo.
         relative = self.scatter_skip_relative if self._scatter_count > 0 else 0.0
-        if glowed or relative > 0.0:
+        down = glowed or relative > 0.0
+        if down:
             self._glow(rc, a, b, blur=glowed)
         prog, vao, owned = self._program(rc, "atmosphere/composite.frag")
-        self._frame_uniforms(prog, owned, rc, bind=not (glowed or relative > 0.0))
+        self._frame_uniforms(prog, owned, rc, bind=not down)
         a.color.use(units.ATMOSPHERE_GLOW)
         # Only this effect writes these names in its programs: made and compared only when what they are made of
         # changes (the key holds every value that is not a constant).

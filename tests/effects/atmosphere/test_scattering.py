@@ -27,6 +27,17 @@ LOW_BEAM = Light(np.array([1.0, 0.7, 590.0]), np.array([0.0, -0.026, -1.0]) / np
                  150.0, low_beam=True)
 
 
+@pytest.fixture
+def float32_frame(monkeypatch):
+    """The renderer's HDR frame in float32 instead of half floats, so that changes as small as the skip budgets
+    show."""
+    from rain_core.gfx import renderer as renderer_module
+
+    half = renderer_module.float_target
+    monkeypatch.setattr(renderer_module, "float_target",
+                        lambda ctx, size, components=4, dtype="f2", **kw: half(ctx, size, components, "f4", **kw))
+
+
 def _render_lit(gl_ctx, shaders, kit, lights, hour, *, scale=1.0, skip=None, relative=None, glow=0.0, out=None,
                 near_box=False):
     """The pre-exposed HDR image (bottom row first) of a far box under ``lights`` alone, in 20 mm/h rain at
@@ -86,16 +97,11 @@ def test_light_scattering_matches_single_scattering_reference(gl_ctx, shaders, k
     assert np.abs(y_gl[~lit]).max() < 0.02 * y_ref.max()
 
 
-def test_skipped_lights_change_no_pixel_by_more_than_the_skip_budget(gl_ctx, shaders, kit, monkeypatch):
+def test_skipped_lights_change_no_pixel_by_more_than_the_skip_budget(gl_ctx, shaders, kit, float32_frame):
     """The composite skips a light whose bound on its quadrature fits in what is left of the pixel's budget
     (``scatter_skip``, SCATTER_SKIP of exposed radiance): at noon, away from the beams, lights are skipped (pixels
     change), and none changes by more than the budget. A float32 target, so that changes this small show."""
     from rain_core.effects.atmosphere.scattering import SCATTER_SKIP
-    from rain_core.gfx import renderer as renderer_module
-
-    half = renderer_module.float_target
-    monkeypatch.setattr(renderer_module, "float_target",
-                        lambda ctx, size, components=4, dtype="f2", **kw: half(ctx, size, components, "f4", **kw))
     exact, skipped, exact_again = (
         _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, skip=skip, relative=0.0)[0]
         for skip in (0.0, SCATTER_SKIP, 0.0))
@@ -129,17 +135,12 @@ def test_each_glow_block_holds_the_least_light_its_pixels_keep(gl_ctx, shaders, 
 
 @pytest.mark.parametrize("glow", [0.0, 1.0])
 def test_lights_skipped_for_a_share_of_the_pixels_own_light_change_it_by_at_most_that_share(
-        gl_ctx, shaders, kit, monkeypatch, glow):
+        gl_ctx, shaders, kit, float32_frame, glow):
     """On top of the fixed budget, a light is skipped when its bound fits in ``scatter_skip_relative`` of the light
     the pixel keeps (its glow block's least, the dimmest channel): no pixel changes by more than the fixed budget
     plus that share of its own value, and more pixels skip than with the fixed budget alone (by day the pixels
     are bright). With the glow drawn or not (then its first step runs for the share alone)."""
     from rain_core.effects.atmosphere.scattering import SCATTER_SKIP, SCATTER_SKIP_RELATIVE
-    from rain_core.gfx import renderer as renderer_module
-
-    half = renderer_module.float_target
-    monkeypatch.setattr(renderer_module, "float_target",
-                        lambda ctx, size, components=4, dtype="f2", **kw: half(ctx, size, components, "f4", **kw))
     exact, fixed, shared = (
         _render_lit(gl_ctx, shaders, kit, [LAMP, LOW_BEAM], 12.0, skip=skip, relative=relative, glow=glow)[0]
         for skip, relative in ((0.0, 0.0), (SCATTER_SKIP, 0.0), (SCATTER_SKIP, SCATTER_SKIP_RELATIVE)))
