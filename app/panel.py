@@ -11,6 +11,7 @@ hides it, F1 shows the keys (``app.controls.KEY_HELP``).
 
 from __future__ import annotations
 
+import functools
 from collections import deque
 
 import numpy as np
@@ -53,6 +54,7 @@ EXTRA_FIELDS = {"ripples": ("quality.ripple_grid",),
 UNIT_SUFFIXES = ("_mm_h", "_m_s", "_per_km", "_deg", "_s", "_m")
 
 
+@functools.cache  # (FieldInfo is frozen: the panel asks for each widget's label every frame)
 def field_label(info) -> str:
     """"fov_deg" with unit "deg" → "fov (deg)": the unit is shown once, in brackets."""
     name = info.path.split(".")[1]
@@ -69,10 +71,12 @@ _ASCII = {"→": "->", "←": "<-", "≈": "~", "…": "...", "×": "x", "β": "
           "‰": " per mille", "’": "'", "“": '"', "”": '"', "α": "alpha", "θ": "theta", "λ": "lambda"}
 
 
+_ASCII_TABLE = str.maketrans(_ASCII)
+
+
 def ascii_text(text: str) -> str:
     """``text`` with the usual symbols spelled in ASCII (→ "->", ≈ "~", × "x", …); anything else → '?'."""
-    out = "".join(_ASCII.get(ch, ch) for ch in str(text))
-    return out.encode("ascii", "replace").decode("ascii")
+    return str(text).translate(_ASCII_TABLE).encode("ascii", "replace").decode("ascii")
 
 
 def preset_in_use(settings) -> str:
