@@ -454,6 +454,34 @@ def test_render_restores_gl_state(ctx, layer, fbo):
         release_fbo(other, fbo)
 
 
+def test_vertices_go_in_writes_mesas_driver_thread_queues(ctx, layer, fbo, monkeypatch):
+    # Drawn behind the frame's draws, a write too large for the driver thread's queue waited for it to do them:
+    # ~5 ms of the main thread a frame in the window on llvmpipe (python -m rain_core.bench panel).
+    from rain_core.gfx.driver import QUEUED_WRITE_BYTES
+
+    sizes = []
+    write = moderngl.Buffer.write
+
+    def spy(self, data, offset=0):
+        sizes.append(memoryview(data).nbytes)
+        return write(self, data, offset=offset)
+
+    monkeypatch.setattr(moderngl.Buffer, "write", spy)
+
+    def many_widgets():
+        imgui.set_next_window_pos((0, 0))
+        imgui.set_next_window_size((W, H))
+        imgui.begin("More")
+        for k in range(40):
+            imgui.text(f"line {k} of text to draw")
+        imgui.end()
+
+    draw(ctx, layer, fbo, build=many_widgets)
+    assert sum(sizes) > 4 * QUEUED_WRITE_BYTES  # several pieces' worth of vertices
+    assert max(sizes) <= QUEUED_WRITE_BYTES
+    assert (read_rgba(fbo)[..., 3] > 0).mean() > 0.9  # and drawn
+
+
 def test_render_without_framebuffer_target_raises(ctx, layer, monkeypatch):
     monkeypatch.setattr(ctx, "fbo", None)  # a standalone context before any framebuffer.use()
     layer.new_frame(1 / 60)

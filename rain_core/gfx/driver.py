@@ -17,6 +17,10 @@ from collections.abc import MutableMapping
 import moderngl
 
 DRIVER_THREAD_OPTION = "mesa_glthread"  # Mesa's driconf option (a boolean: exactly "true" or "false")
+# Bytes a buffer write may carry and still be queued: Mesa's thread copies a write into its command queue when the
+# command (a small header and the data) fits its largest command, 8 KiB; a larger one waits for the thread to
+# finish everything queued, and the calling thread runs what was not yet handed over itself.
+QUEUED_WRITE_BYTES = 4096
 _WORKER_NAME = re.compile(r"(.*:)?gl\d+")  # Mesa names the thread "<process>:gl0" (Linux task names)
 
 
@@ -69,3 +73,12 @@ def describe_driver(ctx: moderngl.Context) -> str:
     else:
         thread = "on" if threads else "off"
     return f"{renderer}, {version[mesa:]}, driver thread {thread}"
+
+
+def write_queued(buffer: moderngl.Buffer, data, offset: int = 0) -> None:
+    """``buffer.write(data, offset)`` (bytes) in pieces of at most QUEUED_WRITE_BYTES, each queued by Mesa's driver
+    thread: a write after the frame's draws (the Rain Manager's vertices) then never waits for that thread to do
+    the frame's draws. Where the writes come before any draw (the effects' uploads) one write is as good."""
+    view = memoryview(data).cast("B")
+    for start in range(0, len(view), QUEUED_WRITE_BYTES):
+        buffer.write(view[start:start + QUEUED_WRITE_BYTES], offset=offset + start)

@@ -113,3 +113,30 @@ def test_this_process_lists_mesas_driver_thread(gl_ctx):
         pytest.skip("needs Mesa, Linux's thread names and the thread asked for (mesa_glthread=true)")
     assert threads >= 1
     assert describe_driver(gl_ctx).endswith("driver thread on")
+
+
+@pytest.mark.parametrize("size, offset", [(0, 0), (5, 0), (driver.QUEUED_WRITE_BYTES, 8),
+                                          (3 * driver.QUEUED_WRITE_BYTES + 7, 4)])
+def test_queued_writes_come_in_pieces_mesas_thread_queues(gl_ctx, monkeypatch, size, offset):
+    import numpy as np
+
+    data = np.random.default_rng(size).integers(0, 256, size, dtype=np.uint8)
+    buffer = gl_ctx.buffer(reserve=offset + size + 16)
+    buffer.write(b"\xab" * (offset + size + 16))
+    pieces = []
+    write = type(buffer).write
+
+    def spy(self, piece, offset=0):
+        pieces.append((len(piece), offset))
+        return write(self, piece, offset=offset)
+
+    monkeypatch.setattr(type(buffer), "write", spy)
+    driver.write_queued(buffer, data, offset=offset)
+    monkeypatch.undo()
+    assert all(n <= driver.QUEUED_WRITE_BYTES for n, _ in pieces)
+    assert sum(n for n, _ in pieces) == size
+    assert [o for _, o in pieces] == [offset + k * driver.QUEUED_WRITE_BYTES for k in range(len(pieces))]
+    back = np.frombuffer(buffer.read(), np.uint8)
+    assert np.array_equal(back[offset:offset + size], data)
+    assert (back[:offset] == 0xAB).all() and (back[offset + size:] == 0xAB).all()  # nothing else written
+    buffer.release()
