@@ -12,6 +12,7 @@ hides it, F1 shows the keys (``app.controls.KEY_HELP``).
 from __future__ import annotations
 
 import functools
+import time
 from collections import deque
 
 import numpy as np
@@ -93,6 +94,15 @@ def preset_in_use(settings) -> str:
                 "custom")
 
 
+def frame_rows(pass_table, step_ms: float, panel_ms: float) -> list[tuple[str, float, float | None]]:
+    """(row, CPU ms, GPU ms or None) of the Performance section's summary: the scene's step (``step_ms``: the ego
+    car, the traffic, the weather), each effect and built-in pass (``effect_totals``), the Rain Manager itself
+    (``panel_ms``, its last frame) and the frame's CPU in all."""
+    rows = [("step: cars, weather", float(step_ms), None), *effect_totals(pass_table),
+            ("Rain Manager (this panel)", float(panel_ms), None)]
+    return [*rows, ("frame, CPU in all", sum(cpu for _, cpu, _ in rows), None)]
+
+
 def effect_totals(pass_table) -> list[tuple[str, float, float | None]]:
     """(effect, CPU ms, GPU ms or None) per effect from a renderer's ``pass_table()``: an effect's passes
     ("rainfall.update", "rainfall.transparent") summed, a built-in pass ("scene", "shadow") on its own, skipped
@@ -123,6 +133,9 @@ class RainManagerPanel:
         self.cameras = None  # the app's CameraModes, when there is a window
         self.errors: dict[str, str] = {}
         self.frame_ms = deque(maxlen=120)
+        # The last draw's CPU time on this thread (ms: its widgets and its GL calls). Not wall time: drawn behind the
+        # frame's draws, a write may wait for the GL driver's thread to take the frame in (~0.2 s on llvmpipe).
+        self.own_cpu_ms = 0.0
         self._ctx = ctx
         self._height_view = None  # RGBA8 texture of the ripple heights, made when first shown
         self._driver: str | None = None  # the GL driver in words (describe_driver), for the performance section
@@ -273,7 +286,7 @@ class RainManagerPanel:
                  | imgui.TableFlags_.sizing_fixed_fit.value | imgui.TableFlags_.scroll_x.value)
         table = renderer.pass_table()
         line = imgui.get_text_line_height_with_spacing() + 2.0
-        totals = effect_totals(table)
+        totals = frame_rows(table, self.scene.step_cpu_ms, self.own_cpu_ms)
         if imgui.begin_table("effects", 3, flags, imgui.ImVec2(0.0, line * (len(totals) + 2) + 14.0)):
             for title in ("effect", "CPU ms", "GPU ms"):
                 imgui.table_setup_column(title)
@@ -401,6 +414,7 @@ class RainManagerPanel:
 
     def draw(self, dt_s: float, fbo) -> None:
         """Build and draw one frame of the panel into ``fbo`` (nothing but the help, if open, while hidden)."""
+        t0 = time.thread_time()
         self.frame_ms.append(dt_s * 1e3)
         self.open_sections = []
         layer = self.layer
@@ -411,3 +425,4 @@ class RainManagerPanel:
         # GPU timer queries only while the table is on screen: they add work to every pass.
         self.scene.renderer.gpu_timing = performance
         layer.render(fbo)
+        self.own_cpu_ms = (time.thread_time() - t0) * 1e3

@@ -5,6 +5,8 @@ The app, the headless runs and the benchmarks all drive the same ``Scene``, so w
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from rain_core import checks, layout
@@ -53,6 +55,7 @@ class Scene:
         self.storm = Storm(seed=self.seed)  # lightning: weather like the rain, drawn by the lightning effect
         self.time_s = 0.0
         self.last_dt_s = 0.0
+        self.step_cpu_ms = 0.0  # the last step's CPU time (ms)
         self.chase = ChaseRig()
         self.effects = default_effects(ctx, self.settings, self.seed) if effects is None else list(effects)
         self.renderer = Renderer(ctx, size, self.world, effects=self.effects, gpu_timing=gpu_timing)
@@ -63,7 +66,9 @@ class Scene:
             self.traffic = Traffic(count=count, seed=self.seed + int(self.settings.traffic.seed), ego=self.ego)
 
     def step(self, dt_s: float, drive=None) -> None:
-        """Advance the scene by dt_s seconds (clamped to [0, MAX_FRAME_DT_S]; non-finite → ValueError)."""
+        """Advance the scene by dt_s seconds (clamped to [0, MAX_FRAME_DT_S]; non-finite → ValueError). Its CPU
+        time (ms, wall clock, as the renderer's passes take theirs) is ``step_cpu_ms``."""
+        t0 = time.perf_counter()
         dt_s = checks.time_step(dt_s)
         self.weather.apply_settings(self.settings)
         self.weather_state = self.weather.step(dt_s, self.settings.rain.rate_mm_h)
@@ -76,6 +81,7 @@ class Scene:
         self.traffic.step(dt_s)
         self.time_s += dt_s
         self.last_dt_s = dt_s
+        self.step_cpu_ms = (time.perf_counter() - t0) * 1e3
 
     @property
     def vehicles(self) -> list:

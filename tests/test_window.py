@@ -117,6 +117,7 @@ def test_performance_table_turns_gpu_timing_on_only_while_shown(gl_ctx):
         scene.render()
     assert scene.renderer.gpu_timing and scene.renderer.timing_source != "none"
     assert any(gpu is not None for _n, ran, _c, gpu, _t in scene.renderer.pass_table() if ran)
+    assert scene.step_cpu_ms > 0.0 and panel.own_cpu_ms > 0.0  # the summary's step and panel rows
     panel.layer.shutdown()
     scene.renderer.gpu_timing = False  # what a closed section does
     scene.render()
@@ -131,6 +132,15 @@ def test_effect_totals_sum_each_effects_passes():
              ("rainfall.transparent", True, 0.5, 1.5, ""), ("spray", False, 0.0, None, ""),
              ("ripples.update", True, 0.25, None, "numpy32")]
     assert effect_totals(table) == [("rainfall", 1.5, 2.0), ("scene", 2.0, 3.0), ("ripples", 0.25, None)]
+
+
+def test_frame_rows_add_the_step_and_the_panel_to_the_effects():
+    from app.panel import frame_rows
+
+    table = [("rainfall.update", True, 1.0, 0.5, ""), ("scene", True, 2.0, 3.0, ""), ("spray", False, 0.0, None, "")]
+    rows = frame_rows(table, step_ms=0.25, panel_ms=0.5)
+    assert rows == [("step: cars, weather", 0.25, None), ("rainfall", 1.0, 0.5), ("scene", 2.0, 3.0),
+                    ("Rain Manager (this panel)", 0.5, None), ("frame, CPU in all", 3.75, None)]
 
 
 def _panel_frame(gl_ctx, panel, scene, size):
