@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import json
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 
@@ -63,3 +65,25 @@ def write_output(out_dir: str, name: str, markdown: str) -> Path:
     target = path / f"{name}.md"
     target.write_text(markdown + "\n")
     return target
+
+
+def write_tables(out_dir: str | Path, name: str, markdown: str, data) -> None:
+    """NAME.md (the tables) and NAME.json (``data``, the results in full) in ``out_dir``, and where they went."""
+    target = write_output(out_dir, name, markdown)
+    (target.parent / f"{name}.json").write_text(json.dumps(data, indent=1) + "\n")
+    print(f"\nwrote {target} and {target.parent / f'{name}.json'}")
+
+
+@contextmanager
+def headless_run(out_dir: str | Path):
+    """(output folder, headless GL context) for a benchmark's run: the folder made first (a bad one fails before
+    the long work), the context released after."""
+    from rain_core.gl import create_headless_context
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ctx = create_headless_context()
+    try:
+        yield out, ctx
+    finally:
+        ctx.release()

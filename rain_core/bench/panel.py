@@ -21,12 +21,10 @@ imports ``imgui_bundle``, a dependency of the package; the core imports nothing 
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
-from pathlib import Path
 
-from rain_core.bench._common import markdown_table
+from rain_core.bench._common import headless_run, markdown_table, write_tables
 from rain_core.bench.frame import CLOCKS, GLCounter, gl_description, heavy_rain_case, parse_size
 
 STATES = ("hidden", "rain", "every section")
@@ -104,24 +102,14 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 
 def main(argv=None) -> int:
-    from rain_core.gl import create_headless_context
-
     args = parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)  # before the long work: a bad folder fails now
-    ctx = create_headless_context()
-    try:
+    with headless_run(args.out) as (out, ctx):
         head = (f"# The Rain Manager's CPU per frame\n\nWindow {args.size[0]}x{args.size[1]}, over a heavy-rain frame "
                 f"({SPEED_KMH:.0f} km/h); medians of {args.frames} frames after {args.warmup}; {gl_description(ctx)}.")
         print(head, flush=True)
         results = [measure_state(ctx, state, args.size, args.frames, args.warmup) for state in STATES]
-    finally:
-        ctx.release()
-    md = head + "\n\n" + table(results)
     print("\n" + table(results))
-    (out / "panel.md").write_text(md + "\n")
-    (out / "panel.json").write_text(json.dumps(results, indent=1) + "\n")
-    print(f"\nwrote {out / 'panel.md'} and {out / 'panel.json'}")
+    write_tables(out, "panel", head + "\n\n" + table(results), results)
     return 0
 
 

@@ -29,11 +29,10 @@ parked or at 100 km/h): ``--warmup`` frames stepped undrawn (the simulations and
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
-from pathlib import Path
 
+from rain_core.bench._common import headless_run, write_tables
 from rain_core.bench.frame import (
     RAIN_EFFECTS,
     RAIN_MM_H,
@@ -201,13 +200,8 @@ def parse_args(argv=None) -> argparse.Namespace:
 
 
 def main(argv=None) -> int:
-    from rain_core.gl import create_headless_context
-
     args = parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)  # before the long work: a bad folder fails now
-    ctx = create_headless_context()
-    try:
+    with headless_run(args.out) as (out, ctx):
         head = header(args, gl_description(ctx))
         print(head, flush=True)
         results = []
@@ -216,14 +210,10 @@ def main(argv=None) -> int:
                 results.append(count_case(ctx, args.size, budget, speed, args.frames, args.warmup,
                                           overrides=args.overrides))
                 print(f"## {case_label(results[-1])}\n\n{case_table(results[-1])}\n", flush=True)
-    finally:
-        ctx.release()
     md = (head + "\n## Summary\n\n" + summary_table(results) + "\n\n"
           + "\n\n".join(f"## {case_label(r)}\n\n{case_table(r)}" for r in results))
     print("## Summary\n\n" + summary_table(results))
-    (out / "work.md").write_text(md + "\n")
-    (out / "work.json").write_text(json.dumps(results, indent=1) + "\n")
-    print(f"\nwrote {out / 'work.md'} and {out / 'work.json'}")
+    write_tables(out, "work", md, results)
     return 0
 
 
