@@ -77,8 +77,9 @@ def describe_driver(ctx: moderngl.Context) -> str:
 
 def write_queued(buffer: moderngl.Buffer, data, offset: int = 0) -> None:
     """``buffer.write(data, offset)`` (bytes) in pieces of at most QUEUED_WRITE_BYTES, each queued by Mesa's driver
-    thread: a write after the frame's draws (the Rain Manager's vertices) then never waits for that thread to do
-    the frame's draws. Where the writes come before any draw (the effects' uploads) one write is as good."""
+    thread: a write after the frame's draws (the Rain Manager's vertices) then never has the calling thread do the
+    draws not yet handed over (it may still sleep while the thread's queue is full). Where the writes come before
+    any draw (the effects' uploads) one write is as good."""
     view = memoryview(data).cast("B")
     for start in range(0, len(view), QUEUED_WRITE_BYTES):
         buffer.write(view[start:start + QUEUED_WRITE_BYTES], offset=offset + start)
