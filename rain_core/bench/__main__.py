@@ -3,14 +3,38 @@
 from __future__ import annotations
 
 import importlib
+import os
 import pkgutil
 import sys
+import tempfile
+from pathlib import Path
 
 import rain_core.bench as _pkg
 
 
 def available() -> list[str]:
     return sorted(m.name for m in pkgutil.iter_modules(_pkg.__path__) if not m.name.startswith("_"))
+
+
+def out_folder_problem(argv: list[str]) -> str | None:
+    """Why the folder a run's ``--out`` names (``--out DIR`` or ``--out=DIR``; every benchmark's default is
+    bench_out) cannot take its tables, or None. The folder is made now, with its parents, and a file written in it
+    and removed: before any long work, and as a message, not a traceback."""
+    value = "bench_out"
+    for i, arg in enumerate(argv):
+        if arg == "--out" and i + 1 < len(argv):
+            value = argv[i + 1]
+        elif arg.startswith("--out="):
+            value = arg[len("--out="):]
+    try:
+        folder = Path(value)
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".rainroad-check-", dir=folder)
+    except (OSError, ValueError) as exc:  # (ValueError: a NUL in the name)
+        return f"--out {value!r}: cannot write the tables there ({getattr(exc, 'strerror', None) or exc})"
+    os.close(fd)
+    os.unlink(probe)
+    return None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -21,6 +45,10 @@ def main(argv: list[str] | None = None) -> int:
         return 0 if argv else 2
     name, rest = argv[0], argv[1:]
     targets = names if name == "all" else [name]
+    problem = None if {"-h", "--help"} & set(rest) or not set(targets) <= set(names) else out_folder_problem(rest)
+    if problem:
+        print(f"rain_core.bench: {problem}", file=sys.stderr)
+        return 2
     for target in targets:
         if target not in names:
             print(f"rain_core.bench: unknown benchmark {target!r}; choose from {', '.join(names)}", file=sys.stderr)
