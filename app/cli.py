@@ -10,20 +10,22 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import re
-import stat
 import sys
-import tempfile
 from pathlib import Path
 
 from rain_core.checks import quote
+from rain_core.path_checks import (  # noqa: F401  (the checks were here first: app.cli's names stay)
+    NAME_MAX_BYTES,
+    PATH_MAX_BYTES,
+    check_input_file,
+    check_output_file,
+    check_output_folder,
+)
 
 CAMERA_MODES = ("driver", "chase", "free", "glass")
 WINDOW_BACKENDS = ("pyglet", "glfw", "sdl2", "pygame2", "pyqt5", "pyside2", "tk", "headless")
 MAX_SIZE = 8192
-NAME_MAX_BYTES = 255  # longest file or folder name (one path component) on the usual file systems
-PATH_MAX_BYTES = 4095  # longest whole path (Linux PATH_MAX less the terminating NUL)
 
 # ASCII only (no Unicode digits, no underscores): a decimal number, or inf / nan so that they get the range message.
 _NUMBER = re.compile(r"\s*[+-]?(\d+\.?\d*(e[+-]?\d+)?|\.\d+(e[+-]?\d+)?|inf|infinity|nan)\s*", re.ASCII | re.I)
@@ -164,91 +166,6 @@ def join_negative_values(parser: argparse.ArgumentParser, argv: list[str]) -> li
         out.append(tok)
         i += 1
     return out
-
-
-def _name_problem(path: Path) -> str | None:
-    """Why ``path`` cannot be a file name on this system (too long), or None."""
-    raw = os.fsencode(path)
-    if len(raw) > PATH_MAX_BYTES:
-        return f"the path is {len(raw)} bytes long, at most {PATH_MAX_BYTES} are allowed"
-    for part in path.parts:
-        size = len(os.fsencode(part))
-        if size > NAME_MAX_BYTES:
-            return f"the name {quote(part)} is {size} bytes long, at most {NAME_MAX_BYTES} are allowed"
-    return None
-
-
-def _probe_folder(folder: Path) -> str | None:
-    """Why no file can be created in ``folder`` (missing, not a folder, not writable), or None.
-
-    The check creates and removes a hidden temporary file: permission bits alone do not tell (root, read-only
-    mounts, /proc).
-    """
-    try:
-        if not folder.exists():
-            return f"folder {folder} does not exist"
-        if not folder.is_dir():
-            return f"{folder} is not a folder"
-        fd, probe = tempfile.mkstemp(prefix=".rainroad-check-", dir=folder)
-    except OSError as exc:
-        return f"cannot write in folder {folder}: {exc.strerror or exc}"
-    os.close(fd)
-    os.unlink(probe)
-    return None
-
-
-def check_output_file(path: Path, suffix: str = ".png") -> str | None:
-    """Why a ``suffix`` file cannot be written at ``path``, or None. Creates nothing (a probe file is removed)."""
-    if path.suffix.lower() != suffix:
-        return f"must end in {suffix}, got {quote(str(path))}"
-    problem = _name_problem(path)
-    if problem:
-        return problem
-    try:
-        st = path.stat()
-    except (FileNotFoundError, NotADirectoryError):  # the folder checks below say which
-        st = None
-    except OSError as exc:
-        return f"cannot use {path}: {exc.strerror or exc}"
-    if st is not None:
-        if stat.S_ISDIR(st.st_mode):
-            return f"{path} is a folder; name a {suffix} file"
-        if not stat.S_ISREG(st.st_mode):
-            return f"{path} exists and is not a regular file"
-        try:
-            with open(path, "ab"):  # opens for writing without changing the file
-                pass
-        except OSError as exc:
-            return f"cannot write {path}: {exc.strerror or exc}"
-        return None
-    return _probe_folder(path.parent)
-
-
-def check_output_folder(folder: Path) -> str | None:
-    """Why frames cannot be written into ``folder`` (created later if missing, in an existing folder), or None."""
-    problem = _name_problem(folder)
-    if problem:
-        return problem
-    try:
-        exists = folder.exists()
-    except OSError as exc:
-        return f"cannot use {folder}: {exc.strerror or exc}"
-    if exists and not folder.is_dir():
-        return f"{folder} exists and is not a folder"
-    return _probe_folder(folder if exists else folder.parent)
-
-
-def check_input_file(path: Path) -> str | None:
-    """Why ``path`` cannot be read as a file, or None."""
-    problem = _name_problem(path)
-    if problem:
-        return problem
-    try:
-        if not path.is_file():
-            return f"no such file: {path}" if not path.exists() else f"{path} is not a file"
-    except OSError as exc:
-        return f"cannot read {path}: {exc.strerror or exc}"
-    return None
 
 
 def check_record(args) -> str | None:

@@ -15,7 +15,7 @@ def test_a_folder_that_cannot_be_made_is_refused_before_any_work(tmp_path, capsy
     args = [a.replace("{bad}", str(blocker / "out")) for a in argv]
     assert main(["physics", *args]) == 2
     err = capsys.readouterr().err
-    assert "--out" in err and "cannot write the tables there" in err and "Traceback" not in err
+    assert "--out" in err and "cannot make it" in err and "Traceback" not in err
     assert not (tmp_path / "physics.md").exists()
 
 
@@ -38,3 +38,9 @@ def test_help_and_unknown_names_are_not_checked(tmp_path, capsys):
     assert "usage" in capsys.readouterr().out
     assert main(["nosuch", "--out", str(blocker / "x")]) == 2
     assert "unknown benchmark 'nosuch'" in capsys.readouterr().err
+
+
+def test_a_name_too_long_is_said_as_the_command_line_says_it(tmp_path):
+    problem = out_folder_problem(["--out", str(tmp_path / ("a" * 300))])
+    assert problem is not None and "is 300 bytes long, at most 255 are allowed" in problem
+    assert list(tmp_path.iterdir()) == []  # nothing made

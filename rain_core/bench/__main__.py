@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import importlib
-import os
 import pkgutil
 import sys
-import tempfile
 from pathlib import Path
 
 import rain_core.bench as _pkg
+from rain_core import checks
+from rain_core.path_checks import check_output_folder, name_problem
 
 
 def available() -> list[str]:
@@ -18,23 +18,25 @@ def available() -> list[str]:
 
 def out_folder_problem(argv: list[str]) -> str | None:
     """Why the folder a run's ``--out`` names (``--out DIR`` or ``--out=DIR``; every benchmark's default is
-    bench_out) cannot take its tables, or None. The folder is made now, with its parents, and a file written in it
-    and removed: before any long work, and as a message, not a traceback."""
+    bench_out) cannot take its tables, or None: made now, with its parents, then checked as the command line checks
+    its output folders (``path_checks.check_output_folder``). Before any long work, and as a message, not a
+    traceback."""
     value = "bench_out"
     for i, arg in enumerate(argv):
         if arg == "--out" and i + 1 < len(argv):
             value = argv[i + 1]
         elif arg.startswith("--out="):
             value = arg[len("--out="):]
-    try:
-        folder = Path(value)
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(prefix=".rainroad-check-", dir=folder)
-    except (OSError, ValueError) as exc:  # (ValueError: a NUL in the name)
-        return f"--out {value!r}: cannot write the tables there ({getattr(exc, 'strerror', None) or exc})"
-    os.close(fd)
-    os.unlink(probe)
-    return None
+    folder = Path(value)
+    problem = name_problem(folder)  # (a name too long: said as the command line says it, before mkdir fails on it)
+    if problem is None:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except (OSError, ValueError) as exc:  # (ValueError: a NUL in the name)
+            problem = f"cannot make it ({getattr(exc, 'strerror', None) or exc})"
+        else:
+            problem = check_output_folder(folder)
+    return None if problem is None else f"--out {checks.quote(value)}: {problem}"
 
 
 def main(argv: list[str] | None = None) -> int:
